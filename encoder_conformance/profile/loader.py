@@ -1,0 +1,286 @@
+"""Load device profiles from YAML: strict validation, ``extends:`` and EDS merging.
+
+Every problem is reported as ``file:line: key.path: what is wrong; how to fix`` through
+ProfileError; callers never see a pydantic or YAML traceback.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import BaseModel, ValidationError
+
+from ..errors import ProfileError
+from . import model
+
+PROFILE_SUFFIXES = (".yaml", ".yml")
+DEFAULT_PROFILE_DIR = Path(__file__).resolve().parents[2] / "device_profiles"
+
+
+@dataclass(frozen=True)
+class LoadedProfile:
+    """A validated profile plus where it came from (for the report header)."""
+
+    profile: model.DeviceProfile
+    path: Path
+    sha256: str
+    chain: tuple[Path, ...]  # the file and every file it extends, child first
+
+
+def _all_field_names() -> set[str]:
+    names: set[str] = set()
+    for obj in vars(model).values():
+        if isinstance(obj, type) and issubclass(obj, BaseModel):
+            names.update(obj.model_fields)
+    return names
+
+
+_FIELD_NAMES = _all_field_names()
+
+
+def _parse_index(key: Any) -> Any:
+    """Accept 0x6001 (int), '0x6001', '6001h' and '6001' as an object index."""
+    if isinstance(key, int):
+        return key
+    if isinstance(key, str):
+        text = key.strip().lower()
+        try:
+            if text.endswith("h"):
+                return int(text[:-1], 16)
+            if text.startswith("0x"):
+                return int(text, 16)
+            return int(text, 16)
+        except ValueError:
+            return key
+    return key
+
+
+def _normalise_keys(data: dict[str, Any]) -> dict[str, Any]:
+    """Object indices and sub-indices become ints, so 'extends' merges by number."""
+    objects = data.get("objects")
+    if isinstance(objects, dict):
+        fixed: dict[Any, Any] = {}
+        for key, obj in objects.items():
+            if isinstance(obj, dict) and isinstance(obj.get("subs"), dict):
+                obj = {**obj, "subs": {_parse_sub(k): v for k, v in obj["subs"].items()}}
+            fixed[_parse_index(key)] = obj
+        data = {**data, "objects": fixed}
+    return data
+
+
+def _parse_sub(key: Any) -> Any:
+    if isinstance(key, str):
+        try:
+            return int(key.strip().lower().rstrip("h"), 0)
+        except ValueError:
+            return key
+    return key
+
+
+def _line_map(text: str) -> dict[tuple[Any, ...], int]:
+    """Key path -> 1-based line, from the YAML node graph (indices parsed as numbers)."""
+    lines: dict[tuple[Any, ...], int] = {}
+
+    def walk(node: yaml.Node, path: tuple[Any, ...]) -> None:
+        if isinstance(node, yaml.MappingNode):
+            for key_node, value_node in node.value:
+                key: Any = key_node.value
+                if len(path) in (1, 3) and path[:1] == ("objects",) or path[-1:] == ("subs",):
+                    key = _parse_index(key) if path == ("objects",) else _parse_sub(key)
+                lines[(*path, key)] = key_node.start_mark.line + 1
+                walk(value_node, (*path, key))
+        elif isinstance(node, yaml.SequenceNode):
+            for i, item in enumerate(node.value):
+                lines[(*path, i)] = item.start_mark.line + 1
+                walk(item, (*path, i))
+
+    try:
+        root = yaml.compose(text)
+    except yaml.YAMLError:
+        return lines
+    if root is not None:
+        walk(root, ())
+    return lines
+
+
+def _format_path(loc: tuple[Any, ...]) -> str:
+    parts: list[str] = []
+    for i, part in enumerate(loc):
+        if isinstance(part, int) and i == 1 and loc[0] == "objects":
+            parts.append(f"0x{part:04X}")
+        else:
+            parts.append(str(part))
+    return ".".join(parts) or "(top level)"
+
+
+def _hint(error: dict[str, Any]) -> str:
+    kind = error["type"]
+    field = error["loc"][-1] if error["loc"] else ""
+    if kind == "extra_forbidden":
+        close = difflib.get_close_matches(str(field), _FIELD_NAMES, n=1)
+        return f"unknown key{'; did you mean ' + repr(close[0]) + '?' if close else '; remove it'}"
+    if kind == "missing":
+        return "required key is missing; add it"
+    return error["msg"]
+
+
+def _clean_loc(loc: tuple[Any, ...]) -> tuple[Any, ...]:
+    """Drop pydantic's union/function markers from a location."""
+    return tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p.startswith("function-"))))
+
+
+def _read_yaml(path: Path) -> tuple[dict[str, Any], str]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ProfileError(str(path), [f"cannot read the file: {exc.strerror}"]) from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise ProfileError(str(path), [f"{where}not valid YAML: {problem}"]) from None
+    if not isinstance(data, dict):
+        raise ProfileError(str(path), ["the file must hold a mapping (key: value pairs) at the top level"])
+    return _normalise_keys(data), text
+
+
+def deep_merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
+    """Merge ``override`` into ``base``: mappings merge, other values replace, null deletes."""
+    merged = dict(base)
+    for key, value in override.items():
+        if value is None and key in merged and key not in ("default", "min", "max", "notes", "effect"):
+            del merged[key]
+        elif isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key] = deep_merge(merged[key], value)
+        else:
+            merged[key] = value
+    return merged
+
+
+def find_profile(name_or_path: str, search_dirs: list[Path] | None = None) -> Path:
+    """Resolve a profile id ('wachendorff-wdga-mt') or a path to a file."""
+    candidate = Path(name_or_path)
+    if candidate.suffix in PROFILE_SUFFIXES or candidate.exists():
+        if candidate.is_file():
+            return candidate
+        raise ProfileError(name_or_path, ["no such file; give a profile id or the path of a .yaml file"])
+    dirs = search_dirs or [DEFAULT_PROFILE_DIR]
+    for directory in dirs:
+        for suffix in PROFILE_SUFFIXES:
+            path = directory / f"{name_or_path}{suffix}"
+            if path.is_file():
+                return path
+    known = ", ".join(p.id for p in iter_profile_ids(dirs))
+    raise ProfileError(name_or_path, [f"no profile with this id in {', '.join(map(str, dirs))}; known: {known}"])
+
+
+@dataclass(frozen=True)
+class ProfileRef:
+    id: str
+    path: Path
+    abstract: bool
+
+
+def iter_profile_ids(dirs: list[Path] | None = None) -> Iterator[ProfileRef]:
+    """Every profile file in the given directories (ids from the file names)."""
+    for directory in dirs or [DEFAULT_PROFILE_DIR]:
+        for path in sorted(directory.glob("*.yaml")):
+            try:
+                data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+            except (OSError, yaml.YAMLError):
+                data = {}
+            yield ProfileRef(path.stem, path, bool(isinstance(data, dict) and data.get("abstract")))
+
+
+def _resolve_raw(path: Path, seen: tuple[Path, ...]) -> tuple[dict[str, Any], tuple[Path, ...], list[str]]:
+    """Raw merged data of ``path`` with its extends chain, plus the chain and texts."""
+    path = path.resolve()
+    if path in seen:
+        cycle = " -> ".join(p.name for p in (*seen, path))
+        raise ProfileError(str(path), [f"extends: circular chain {cycle}; remove one of the links"])
+    data, text = _read_yaml(path)
+    texts = [text]
+    chain: tuple[Path, ...] = (path,)
+    parent_name = data.pop("extends", None)
+    if parent_name is not None:
+        if not isinstance(parent_name, str):
+            raise ProfileError(str(path), ["extends: must be a profile id or a file name (a string)"])
+        parent_path = _parent_path(path, parent_name)
+        parent, parent_chain, parent_texts = _resolve_raw(parent_path, (*seen, path))
+        parent.pop("abstract", None)
+        data = deep_merge(parent, data)
+        chain += parent_chain
+        texts += parent_texts
+    eds_name = data.get("eds")
+    if eds_name:
+        data = _merge_eds(path, data, eds_name)
+    return data, chain, texts
+
+
+def _parent_path(path: Path, parent_name: str) -> Path:
+    if parent_name.endswith(PROFILE_SUFFIXES):
+        candidate = path.parent / parent_name
+        if candidate.is_file():
+            return candidate
+        raise ProfileError(str(path), [f"extends: file {parent_name!r} not found next to the profile"])
+    try:
+        return find_profile(parent_name, [path.parent, DEFAULT_PROFILE_DIR])
+    except ProfileError:
+        raise ProfileError(
+            str(path), [f"extends: no profile {parent_name!r} in {path.parent}; check the id (the file name)"]
+        ) from None
+
+
+def _merge_eds(path: Path, data: dict[str, Any], eds_name: str) -> dict[str, Any]:
+    from .eds import objects_from_eds  # canopen's EDS parser is only needed here
+
+    eds_path = (path.parent / eds_name).resolve()
+    try:
+        eds_objects = objects_from_eds(eds_path)
+    except (OSError, ValueError) as exc:
+        raise ProfileError(str(path), [f"eds: cannot import {eds_path}: {exc}"]) from None
+    return {**data, "objects": deep_merge(eds_objects, data.get("objects") or {})}
+
+
+def load_profile(name_or_path: str | Path, search_dirs: list[Path] | None = None) -> LoadedProfile:
+    """Load, merge and validate a profile; raises ProfileError listing every problem."""
+    path = find_profile(str(name_or_path), search_dirs)
+    data, chain, _ = _resolve_raw(path, ())
+    schema = data.get("schema_version")
+    if schema != model.SCHEMA_VERSION:
+        raise ProfileError(
+            str(path),
+            [f"schema_version: is {schema!r}; this tool reads schema_version {model.SCHEMA_VERSION}"],
+        )
+    try:
+        profile = model.DeviceProfile.model_validate(data)
+    except ValidationError as exc:
+        raise ProfileError(str(path), _describe(exc, chain)) from None
+    digest = hashlib.sha256()
+    for link in chain:
+        digest.update(link.read_bytes())
+    return LoadedProfile(profile=profile, path=path, sha256=digest.hexdigest(), chain=chain)
+
+
+def _describe(exc: ValidationError, chain: tuple[Path, ...]) -> list[str]:
+    """One line per validation error, naming the file (and line) that holds the key."""
+    maps = [(p, _line_map(p.read_text(encoding="utf-8"))) for p in chain]
+    problems: list[str] = []
+    for error in exc.errors():
+        loc = _clean_loc(tuple(error["loc"]))
+        where = ""
+        for depth in range(len(loc), 0, -1):
+            hit = next(((p, lines[loc[:depth]]) for p, lines in maps if loc[:depth] in lines), None)
+            if hit:
+                where = f"{hit[0].name}:{hit[1]}: "
+                break
+        problems.append(f"{where}{_format_path(loc)}: {_hint(error)}")
+    return problems

@@ -1,0 +1,362 @@
+"""Device profile model: what a device must look like and how it may deviate.
+
+A profile is data (YAML under device_profiles/). It is validated strictly: unknown keys,
+wrong types and missing fields are errors (see loader.py for the messages). The model is
+immutable once loaded.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from . import datatypes
+from .quirks import EFFECTS
+
+SCHEMA_VERSION = 1
+
+Access = Literal["ro", "wo", "rw", "rwr", "rww", "const"]
+Persistence = Literal[
+    "none",  # read-only, dynamic or constant: nothing to persist
+    "volatile",  # lost at reset, cannot be stored
+    "store_all",  # kept only after 1010h sub 1 (or the sub named by the group below)
+    "store_comm",  # 1010h sub 2
+    "store_app",  # 1010h sub 3
+    "store_manufacturer",  # 1010h sub 4 (or another manufacturer sub)
+    "auto",  # written to non-volatile memory by the device itself on every write
+    "manufacturer_store",  # stored by a manufacturer-specific object (see the quirks)
+]
+
+_NODEID_EXPR = re.compile(r"^\$NODEID\s*\+\s*(0x[0-9A-Fa-f]+|\d+)$|^(0x[0-9A-Fa-f]+|\d+)\s*\+\s*\$NODEID$")
+_ACCESS_ALIASES = {"co": "const", "c": "const", "r": "ro", "w": "wo"}
+
+
+class StrictModel(BaseModel):
+    """Base: unknown keys are errors, values are not silently coerced, instances are frozen."""
+
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True)
+
+
+def _access(value: Any) -> Any:
+    if isinstance(value, str):
+        return _ACCESS_ALIASES.get(value.strip().lower(), value.strip().lower())
+    return value
+
+
+def resolve_node_id_expression(value: int | str | None, node_id: int) -> int | str | None:
+    """Turn '$NODEID+0x180' into an int for ``node_id``; other values pass through."""
+    if isinstance(value, str):
+        match = _NODEID_EXPR.match(value.strip())
+        if match:
+            return int(match.group(1) or match.group(2), 0) + node_id
+    return value
+
+
+def is_node_id_expression(value: object) -> bool:
+    """True if ``value`` is a '$NODEID+offset' formula."""
+    return isinstance(value, str) and bool(_NODEID_EXPR.match(value.strip()))
+
+
+class EntrySpec(StrictModel):
+    """One value in the object dictionary (a VAR, or one sub-index of a RECORD/ARRAY)."""
+
+    name: str
+    type: str
+    access: Annotated[Access, Field(description="ro, wo, rw, rwr, rww or const (co)")]
+    default: int | str | None = Field(
+        default=None,
+        description="factory default the device must show; '$NODEID+0x180' formulas allowed; "
+        "null for dynamic or per-unit values",
+    )
+    dynamic: bool = Field(default=False, description="value changes at run time (default not checked)")
+    per_unit: bool = Field(default=False, description="value differs per unit, e.g. a serial number")
+    min: int | None = None
+    max: int | None = None
+    pdo_mappable: bool = False
+    persisted_by: Persistence = "none"
+    manual: str | None = Field(default=None, description="manual section/table the facts come from")
+    notes: str | None = None
+
+    _check_access = field_validator("access", mode="before")(_access)
+
+    @field_validator("type")
+    @classmethod
+    def _known_type(cls, value: str) -> str:
+        return datatypes.canonical_name(value)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> EntrySpec:
+        if self.default is not None and (self.dynamic or self.per_unit):
+            raise ValueError("give either a default or dynamic/per_unit: true, not both")
+        limits = datatypes.value_range(self.type)
+        if isinstance(self.default, str) and self.type not in datatypes.STRING_TYPES:
+            if not is_node_id_expression(self.default):
+                raise ValueError(
+                    f"default {self.default!r} is a string but type {self.type} is numeric; "
+                    "write a number or a '$NODEID+0x180' formula"
+                )
+        if limits and isinstance(self.default, int) and not limits[0] <= self.default <= limits[1]:
+            raise ValueError(f"default {self.default} does not fit {self.type} ({limits[0]}..{limits[1]})")
+        if self.min is not None and self.max is not None and self.min > self.max:
+            raise ValueError(f"min {self.min} is greater than max {self.max}")
+        return self
+
+    @property
+    def checks_default(self) -> bool:
+        """True when the device's value right after restore-defaults must equal ``default``."""
+        return self.default is not None and self.access != "wo"
+
+    @property
+    def readable(self) -> bool:
+        return self.access != "wo"
+
+    @property
+    def writable(self) -> bool:
+        return self.access in ("wo", "rw", "rwr", "rww")
+
+
+class ObjectSpec(StrictModel):
+    """One index: either a plain VAR (type/access given) or a RECORD/ARRAY (subs given)."""
+
+    name: str
+    manual: str = Field(description="manual section/table the facts come from")
+    kind: Literal["var", "record", "array"] | None = None
+    subs: dict[int, EntrySpec] | None = None
+    # VAR fields, only when there are no subs
+    type: str | None = None
+    access: Access | None = None
+    default: int | str | None = None
+    dynamic: bool = False
+    per_unit: bool = False
+    min: int | None = None
+    max: int | None = None
+    pdo_mappable: bool = False
+    persisted_by: Persistence = "none"
+    notes: str | None = None
+
+    _check_access = field_validator("access", mode="before")(_access)
+
+    @model_validator(mode="after")
+    def _var_or_record(self) -> ObjectSpec:
+        if self.subs is None:
+            if self.kind not in (None, "var"):
+                raise ValueError(f"kind {self.kind!r} needs 'subs'")
+            if self.type is None or self.access is None:
+                raise ValueError("a VAR object needs 'type' and 'access' (or give 'subs' for a record/array)")
+            EntrySpec(**self._var_fields())  # validates the VAR fields as an entry
+        else:
+            if self.kind == "var":
+                raise ValueError("kind 'var' cannot have 'subs'")
+            given = [k for k, v in self._var_fields().items() if k not in ("name", "manual") and v]
+            if given:
+                raise ValueError(f"{', '.join(given)} belong(s) to the sub-indices when 'subs' is given")
+            if not self.subs:
+                raise ValueError("'subs' is empty")
+            for sub in self.subs:
+                if not 0 <= sub <= 0xFF:
+                    raise ValueError(f"sub-index {sub} is outside 0..255")
+        return self
+
+    def _var_fields(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "type": self.type,
+            "access": self.access,
+            "default": self.default,
+            "dynamic": self.dynamic,
+            "per_unit": self.per_unit,
+            "min": self.min,
+            "max": self.max,
+            "pdo_mappable": self.pdo_mappable,
+            "persisted_by": self.persisted_by,
+            "manual": self.manual,
+            "notes": self.notes,
+        }
+
+    @property
+    def object_kind(self) -> Literal["var", "record", "array"]:
+        if self.subs is None:
+            return "var"
+        return self.kind or "record"
+
+    def entries(self) -> dict[int, EntrySpec]:
+        """Sub-index -> entry; a VAR is sub-index 0. Entries inherit the object's manual reference."""
+        if self.subs is None:
+            return {0: EntrySpec(**self._var_fields())}
+        return {
+            sub: entry if entry.manual else entry.model_copy(update={"manual": self.manual})
+            for sub, entry in sorted(self.subs.items())
+        }
+
+
+class RevisionRange(StrictModel):
+    """Accepted 1018h sub 3 values, inclusive."""
+
+    min: int = 0
+    max: int = 0xFFFFFFFF
+
+
+class Identity(StrictModel):
+    vendor_name: str
+    product_name: str
+    vendor_id: int | None = Field(description="1018h sub 1; null if the device has no 1018h")
+    product_code: int | None = None
+    revision: RevisionRange | None = None
+    device_type: int | None = Field(description="1000h value; null if the manual does not give it")
+    device_name: str | None = Field(default=None, description="1008h text, if the manual gives it")
+    manual: str = Field(description="title, document number and edition of the source manual")
+
+
+class BusDefaults(StrictModel):
+    node_id: int = Field(ge=1, le=127, description="node-id the device has on delivery")
+    bitrate: int | Literal["auto"] = Field(description="bit rate on delivery, or 'auto' for detection")
+    bitrates: list[int] = Field(description="bit rates the device supports, bit/s")
+    node_id_set_by: list[Literal["sdo", "lss", "switches", "fixed", "other"]]
+    bitrate_set_by: list[Literal["sdo", "lss", "switches", "fixed", "auto", "other"]]
+    manual: str
+
+
+LssService = Literal[
+    "switch_global",
+    "switch_selective",
+    "configure_node_id",
+    "configure_bit_timing",
+    "activate_bit_timing",
+    "store_configuration",
+    "inquire_identity",
+    "inquire_node_id",
+    "identify_remote_slave",
+    "identify_non_configured",
+    "fastscan",
+]
+
+
+class CamCapability(StrictModel):
+    channels: int = Field(ge=1, le=254)
+    cams_per_channel: int = Field(ge=1, le=8)
+
+
+class Capabilities(StrictModel):
+    """What the device implements. Tests needing a capability the profile lacks are skipped."""
+
+    cia406: bool = Field(description="implements the CiA 406 encoder object range (6000h...)")
+    encoder_class: Literal["C1", "C2", "C3"] | None = None
+    encoder: bool = Field(default=True, description="false for devices that are not encoders (drives)")
+    multiturn: bool = False
+    heartbeat_producer: bool
+    heartbeat_consumer_entries: int = 0
+    node_guarding: bool = False
+    emcy: bool = True
+    sync_consumer: bool = True
+    segmented_sdo: bool = True
+    block_sdo: bool = False
+    store_subindices: list[int] = Field(default_factory=list, description="1010h subs that store")
+    restore_subindices: list[int] = Field(default_factory=list, description="1011h subs that restore")
+    tpdos: int = Field(ge=0, le=512)
+    rpdos: int = Field(default=0, ge=0, le=512)
+    tpdo_transmission_types: list[int] = Field(
+        default_factory=lambda: [*range(0, 241), 252, 253, 254, 255],
+        description="accepted 18xxh sub 2 values",
+    )
+    lss: list[LssService] = Field(default_factory=list)
+    scaling: bool = False
+    preset: bool = False
+    speed: bool = False
+    work_area: bool = False
+    cam: CamCapability | None = None
+
+
+class HeartbeatTolerance(StrictModel):
+    abs_ms: float = Field(default=2.0, gt=0)
+    rel: float = Field(default=0.10, gt=0, lt=1)
+
+    def allowed_ms(self, period_ms: float) -> float:
+        """Per-interval tolerance: max(abs, rel * period)."""
+        return max(self.abs_ms, self.rel * period_ms)
+
+
+class Timing(StrictModel):
+    bootup_max_ms: float = Field(gt=0, description="reset/power-on to boot-up message")
+    sdo_response_max_ms: float = Field(gt=0)
+    nmt_settle_ms: float = Field(default=100, gt=0, description="NMT command to new state visible")
+    store_max_ms: float = Field(default=1000, gt=0)
+    heartbeat_test_period_ms: int = Field(default=50, ge=1, description="1017h value used by the tests")
+    heartbeat_intervals: int = Field(default=20, ge=20, description="intervals measured per check")
+    heartbeat_tolerance: HeartbeatTolerance = HeartbeatTolerance()
+    manual: str | None = None
+
+
+class Quirk(StrictModel):
+    """A documented deviation of this device from the CiA texts (or an ambiguity we resolved)."""
+
+    title: str
+    manual: str = Field(description="manual section that documents the behaviour")
+    deviates_from: str | None = Field(default=None, description="the CiA clause the device departs from")
+    description: str
+    effect: str | None = Field(default=None, description="behaviour the simulator and suites act on")
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("effect")
+    @classmethod
+    def _known_effect(cls, value: str | None) -> str | None:
+        if value is not None and value not in EFFECTS:
+            known = ", ".join(sorted(EFFECTS))
+            raise ValueError(f"unknown quirk effect {value!r}; known effects: {known}")
+        return value
+
+
+class SimulatorSpec(StrictModel):
+    """Values the simulated twin uses where the manual leaves them per unit."""
+
+    serial_number: int = 1
+    revision_number: int = 0
+    hardware_version: str = ""
+    software_version: str = ""
+    bootup_delay_ms: float = Field(default=5, ge=0)
+    values: dict[str, int | str] = Field(
+        default_factory=dict, description="object key ('0x6002' or '0x1018.3') -> value for per-unit entries"
+    )
+
+
+class DeviceProfile(StrictModel):
+    schema_version: Literal[1]
+    id: str = Field(pattern=r"^[a-z0-9][a-z0-9._-]*$")
+    title: str
+    abstract: bool = Field(default=False, description="a base for 'extends:', not a device of its own")
+    eds: str | None = Field(default=None, description="EDS file (relative to the profile) to take objects from")
+    identity: Identity
+    bus: BusDefaults
+    capabilities: Capabilities
+    timing: Timing
+    objects: dict[int, ObjectSpec] = Field(default_factory=dict)
+    quirks: dict[str, Quirk] = Field(default_factory=dict)
+    simulator: SimulatorSpec = SimulatorSpec()
+
+    @model_validator(mode="after")
+    def _indices_in_range(self) -> DeviceProfile:
+        for index in self.objects:
+            if not 0x1000 <= index <= 0xFFFF:
+                raise ValueError(f"object index 0x{index:04X} is outside 0x1000..0xFFFF")
+        return self
+
+    def entry(self, index: int, sub: int = 0) -> EntrySpec | None:
+        """The expected entry at index/sub, or None if the profile does not declare it."""
+        obj = self.objects.get(index)
+        return None if obj is None else obj.entries().get(sub)
+
+    def quirk_with_effect(self, effect: str) -> tuple[str, Quirk] | None:
+        """The (id, quirk) that declares ``effect``, if any."""
+        for quirk_id, quirk in self.quirks.items():
+            if quirk.effect == effect:
+                return quirk_id, quirk
+        return None
+
+    def iter_entries(self) -> list[tuple[int, int, ObjectSpec, EntrySpec]]:
+        """All (index, sub, object, entry) in index order."""
+        return [
+            (index, sub, obj, entry)
+            for index, obj in sorted(self.objects.items())
+            for sub, entry in obj.entries().items()
+        ]

@@ -1,0 +1,63 @@
+"""The quirk effects the simulator and the suites know how to act on.
+
+A profile quirk may name one of these effects (``effect:``) with its parameters
+(``params:``). A quirk without an effect is documentation only: it still appears in the
+report as a documented deviation. Adding an effect means teaching both the simulator
+(encoder_conformance/sim) and the suites about it; list it here with what its params mean.
+"""
+
+from __future__ import annotations
+
+EFFECTS: dict[str, str] = {
+    "silent_until_bus_traffic": (
+        "automatic bit-rate detection: after power-on the device sends nothing (no boot-up) until it "
+        "has seen a frame on the bus. params: {}"
+    ),
+    "cob_ids_follow_node_id_until_store": (
+        "PDO and EMCY COB-IDs follow the node-id only until the first store of the communication "
+        "parameters; restore defaults re-enables the tracking. params: {}"
+    ),
+    "writes_preop_only": (
+        "writes to the listed objects are refused outside pre-operational. "
+        "params: {objects: [index, ...], abort_code: int}"
+    ),
+    "node_id_object": (
+        "node-id is configured through a manufacturer object, effective after reset. "
+        "params: {index: int, subindex: int, persistence: auto|store}"
+    ),
+    "bitrate_object": (
+        "bit rate is configured through a manufacturer object (LSS table codes). "
+        "params: {index: int, subindex: int, persistence: auto|store}"
+    ),
+    "error_register_without_generic_bit": (
+        "1001h shows a specific error bit without bit 0 (generic) that CiA 301 requires. params: {}"
+    ),
+    "transmission_type_255_timer_0_disables": (
+        "a TPDO with transmission type 255 and event timer 0 is not sent at all. params: {}"
+    ),
+    "store_reboots_without_reply": (
+        "the store command is not answered by SDO; the device reboots and sends a boot-up. "
+        "params: {index: int, subindex: int, reboot_ms: number}"
+    ),
+    "writes_need_scaling_bit": (
+        "writes to the listed objects are refused unless 6000h bit 2 (scaling) is set. "
+        "params: {objects: [index, ...], abort_code: int}"
+    ),
+    "abort_code": (
+        "the device answers a situation with a different abort code than CiA 301 names. "
+        "params: {situation: write_ro|read_wo|no_object|no_subindex|length_high|length_low|"
+        "value_high|value_low|wrong_state|store_signature, codes: [int, ...]}"
+    ),
+    "store_object_reads_back": (
+        "1010h/1011h subs read back a value other than the CiA capability word. params: {value: int}"
+    ),
+    "store_automatic": "parameters are stored automatically on every write; 1010h is absent. params: {}",
+    "position_frozen_during_execution": (
+        "the position value does not update while certain writes are processed. "
+        "params: {objects: [index, ...], duration_ms: number}"
+    ),
+    "second_node": (
+        "the device answers on a second node-id as a redundant channel (e.g. WayCon MH). "
+        "params: {node_id_offset: int}"
+    ),
+}
