@@ -149,7 +149,10 @@ class ObjectSpec(StrictModel):
         else:
             if self.kind == "var":
                 raise ValueError("kind 'var' cannot have 'subs'")
-            given = [k for k, v in self._var_fields().items() if k not in ("name", "manual") and v]
+            defaults = {name: info.default for name, info in type(self).model_fields.items()}
+            given = [
+                k for k, v in self._var_fields().items() if k not in ("name", "manual") and v != defaults[k]
+            ]
             if given:
                 raise ValueError(f"{', '.join(given)} belong(s) to the sub-indices when 'subs' is given")
             if not self.subs:

@@ -1,0 +1,157 @@
+"""Command line: ``encoder-conformance run | sim | profile ... | faults``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .errors import ProfileError
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_PROFILE = "wachendorff-wdga-mt"
+
+
+def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
+    import pytest
+
+    argv = [str(REPO_ROOT / "suites"), "--device-profile", args.profile, "-p", "no:cacheprovider"]
+    for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir"):
+        value = getattr(args, option)
+        if value is not None:
+            argv += [f"--{option.replace('_', '-')}", str(value)]
+    if args.allow_destructive:
+        argv.append("--allow-destructive")
+    for fault in args.sim_fault:
+        argv += ["--sim-fault", fault]
+    return int(pytest.main(argv + extra))
+
+
+def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
+    from .sim.serve import serve
+
+    return serve(args.profile, args.listen, args.control, args.node_id, args.fault, args.nvm, args.ready_line)
+
+
+def _cmd_profile_validate(args: argparse.Namespace, extra: list[str]) -> int:
+    from .profile.loader import load_profile
+
+    status = 0
+    for name in args.files:
+        try:
+            loaded = load_profile(name)
+        except ProfileError as exc:
+            print(exc, file=sys.stderr)
+            status = 1
+            continue
+        profile = loaded.profile
+        print(f"{loaded.path}: ok ({profile.id}, {len(profile.iter_entries())} entries, "
+              f"{len(profile.quirks)} quirks, sha256 {loaded.sha256[:12]})")
+    return status
+
+
+def _cmd_profile_list(args: argparse.Namespace, extra: list[str]) -> int:
+    from .profile.loader import iter_profile_ids, load_profile
+
+    for ref in iter_profile_ids():
+        try:
+            title = load_profile(ref.path).profile.title
+        except ProfileError as exc:
+            title = f"INVALID: {exc.problems[0]}"
+        print(f"{ref.id:40s} {'(abstract) ' if ref.abstract else ''}{title}")
+    return 0
+
+
+def _cmd_profile_from_eds(args: argparse.Namespace, extra: list[str]) -> int:
+    from .profile.eds import profile_draft_from_eds, write_profile_draft
+
+    draft, todos = profile_draft_from_eds(Path(args.eds), args.id)
+    out = Path(args.output or f"{draft['id']}.yaml")
+    write_profile_draft(draft, out)
+    print(f"wrote {out} ({len(draft.get('objects', {}))} objects); {len(todos)} things to check:")
+    for todo in todos:
+        print(f"  - {todo}")
+    return 0
+
+
+def _cmd_profile_to_eds(args: argparse.Namespace, extra: list[str]) -> int:
+    from .profile.eds import export_eds
+    from .profile.loader import load_profile
+
+    loaded = load_profile(args.profile)
+    out = Path(args.output or f"{loaded.profile.id}.eds")
+    export_eds(loaded.profile, out, args.node_id)
+    print(f"wrote {out}")
+    return 0
+
+
+def _cmd_faults(args: argparse.Namespace, extra: list[str]) -> int:
+    from .sim.faults import FAULTS
+
+    for name, text in sorted(FAULTS.items()):
+        print(f"{name:32s} {text}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="encoder-conformance", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser("run", help="run the conformance suites (extra arguments go to pytest)")
+    run.add_argument("--profile", default=DEFAULT_PROFILE, help=f"device profile id or file (default {DEFAULT_PROFILE})")
+    run.add_argument("--can-interface", help="python-can interface (pcan, kvaser, socketcan, remote ...)")
+    run.add_argument("--can-channel")
+    run.add_argument("--can-bitrate", type=int)
+    run.add_argument("--node-id", type=int)
+    run.add_argument("--report-dir", help="where to write the reports (default reports/<timestamp>-<profile>)")
+    run.add_argument("--allow-destructive", action="store_true")
+    run.add_argument("--sim-fault", action="append", default=[], help="simulator fault (see 'faults')")
+    run.set_defaults(func=_cmd_run)
+
+    sim = sub.add_parser("sim", help="serve simulated devices on a python-can-remote endpoint")
+    sim.add_argument("--profile", action="append", required=True, help="profile id or file (repeat for more nodes)")
+    sim.add_argument("--listen", default="127.0.0.1:54701", help="HOST:PORT for python-can-remote clients")
+    sim.add_argument("--control", default=None, help="HOST:PORT for the control channel (power cycle ...)")
+    sim.add_argument("--node-id", type=int, action="append", default=[], help="node-id per profile")
+    sim.add_argument("--fault", action="append", default=[], help="inject a named fault (see 'faults')")
+    sim.add_argument("--nvm", type=Path, help="file for the non-volatile memory (default: in memory)")
+    sim.add_argument("--ready-line", action="store_true", help=argparse.SUPPRESS)
+    sim.set_defaults(func=_cmd_sim)
+
+    profile = sub.add_parser("profile", help="validate, list, import from EDS, export to EDS")
+    psub = profile.add_subparsers(dest="profile_command", required=True)
+    validate = psub.add_parser("validate", help="check profile files and print every problem")
+    validate.add_argument("files", nargs="+")
+    validate.set_defaults(func=_cmd_profile_validate)
+    listing = psub.add_parser("list", help="the profiles in device_profiles/")
+    listing.set_defaults(func=_cmd_profile_list)
+    from_eds = psub.add_parser("from-eds", help="write a profile draft from a vendor EDS")
+    from_eds.add_argument("eds")
+    from_eds.add_argument("--id", help="profile id (default from the EDS product name)")
+    from_eds.add_argument("-o", "--output")
+    from_eds.set_defaults(func=_cmd_profile_from_eds)
+    to_eds = psub.add_parser("to-eds", help="export a profile as an EDS")
+    to_eds.add_argument("profile")
+    to_eds.add_argument("-o", "--output")
+    to_eds.add_argument("--node-id", type=int)
+    to_eds.set_defaults(func=_cmd_profile_to_eds)
+
+    faults = sub.add_parser("faults", help="list the simulator's named faults")
+    faults.set_defaults(func=_cmd_faults)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args, extra = parser.parse_known_args(argv)
+    if extra and args.command != "run":
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    try:
+        return args.func(args, extra)
+    except ProfileError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

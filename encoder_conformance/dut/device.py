@@ -1,0 +1,171 @@
+"""The device under test as the suites see it: one object for SDO, NMT, waits and raw frames.
+
+Suites talk only to this class; whether a simulator or a real encoder is on the bus is
+invisible here. Once the device stops answering, ``lost`` is set and every later call fails
+at once with the first reason (labgrid's "broken strategy" pattern).
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+
+import can
+import canopen
+from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
+
+from ..errors import DutLostError
+from ..profile.model import DeviceProfile
+from . import sdo_frames
+from .frames import FrameLog, Mark, format_frames
+
+NMT_COMMANDS = {"start": 0x01, "stop": 0x02, "pre-operational": 0x80, "reset-node": 0x81, "reset-communication": 0x82}
+STATE_NAMES = {0x00: "boot-up", 0x04: "stopped", 0x05: "operational", 0x7F: "pre-operational"}
+
+
+@dataclass(frozen=True)
+class HeartbeatSample:
+    timestamp: float
+    state: int
+    dlc: int
+
+
+class DeviceUnderTest:
+    """A CANopen node on a bus, with waits that take their limits from the profile."""
+
+    def __init__(self, network: canopen.Network, frames: FrameLog, profile: DeviceProfile, node_id: int) -> None:
+        self.network = network
+        self.frames = frames
+        self.profile = profile
+        self.node_id = node_id
+        self.node = canopen.RemoteNode(node_id, canopen.ObjectDictionary())
+        network.add_node(self.node)
+        self.node.sdo.RESPONSE_TIMEOUT = max(0.3, 4 * profile.timing.sdo_response_max_ms / 1000)
+        self.lost: str | None = None
+
+    # -- liveness ------------------------------------------------------------------------
+    def _check_alive(self) -> None:
+        if self.lost:
+            raise DutLostError(f"device stopped answering earlier: {self.lost}")
+
+    def mark_lost(self, reason: str) -> None:
+        self.lost = self.lost or reason
+
+    @property
+    def sdo_timeout(self) -> float:
+        return self.node.sdo.RESPONSE_TIMEOUT
+
+    # -- SDO through canopen (normal access) ------------------------------------------------
+    def read(self, index: int, sub: int = 0) -> bytes:
+        """Upload through canopen's client (expedited or segmented). Aborts raise SdoAbortedError."""
+        self._check_alive()
+        try:
+            return self.node.sdo.upload(index, sub)
+        except SdoCommunicationError as exc:
+            raise self._timeout(f"SDO upload {index:04X}h.{sub:02X}", exc) from None
+
+    def write(self, index: int, sub: int, data: bytes) -> None:
+        self._check_alive()
+        try:
+            self.node.sdo.download(index, sub, data)
+        except SdoCommunicationError as exc:
+            raise self._timeout(f"SDO download {index:04X}h.{sub:02X}", exc) from None
+
+    def read_uint(self, index: int, sub: int = 0) -> int:
+        return int.from_bytes(self.read(index, sub), "little")
+
+    def write_uint(self, index: int, sub: int, value: int, size: int) -> None:
+        self.write(index, sub, value.to_bytes(size, "little"))
+
+    def _timeout(self, what: str, exc: Exception) -> AssertionError:
+        if not self.responds():
+            self.mark_lost(f"no answer to {what}")
+        return AssertionError(f"{what}: {exc}\nlast frames:\n{format_frames(self.frames.last(12))}")
+
+    def responds(self) -> bool:
+        """One raw read of 1000h: does the node answer SDO at all?"""
+        return self.sdo_request(sdo_frames.upload_request(0x1000, 0), check_alive=False) is not None
+
+    # -- raw SDO (byte-exact) ------------------------------------------------------------
+    def sdo_request(self, request: bytes, check_alive: bool = True) -> sdo_frames.SdoResponse | None:
+        """Send one raw SDO request frame; the response frame, or None if none came in time."""
+        if check_alive:
+            self._check_alive()
+        mark = self.frames.mark()
+        self.network.send_message(0x600 + self.node_id, request)
+        reply = self.frames.wait_for(self._is_sdo_response, self.sdo_timeout, after=mark)
+        return None if reply is None else sdo_frames.SdoResponse(bytes(reply.data))
+
+    def _is_sdo_response(self, msg: can.Message) -> bool:
+        return msg.is_rx and msg.arbitration_id == 0x580 + self.node_id and not msg.is_remote_frame
+
+    def expect_abort(self, request: bytes) -> sdo_frames.SdoResponse:
+        """Send a request that must be refused; returns the abort response (asserts one came)."""
+        response = self.sdo_request(request)
+        if response is None:
+            raise AssertionError(
+                f"no SDO response to {request.hex(' ').upper()} within {self.sdo_timeout * 1000:.0f} ms\n"
+                f"last frames:\n{format_frames(self.frames.last(8))}"
+            )
+        return response
+
+    # -- NMT -----------------------------------------------------------------------------
+    def nmt(self, command: str, node_id: int | None = None) -> Mark:
+        """Send an NMT command (to this node, or ``node_id``; 0 = all). Returns a mark before it."""
+        mark = self.frames.mark()
+        target = self.node_id if node_id is None else node_id
+        self.network.send_message(0x000, bytes([NMT_COMMANDS[command], target]))
+        return mark
+
+    def _is_heartbeat(self, msg: can.Message) -> bool:
+        return msg.is_rx and msg.arbitration_id == 0x700 + self.node_id and not msg.is_remote_frame
+
+    def wait_bootup(self, after: Mark, timeout: float | None = None) -> can.Message | None:
+        limit = timeout if timeout is not None else self.profile.timing.bootup_max_ms / 1000
+        return self.frames.wait_for(lambda m: self._is_heartbeat(m) and bytes(m.data) == b"\x00", limit, after)
+
+    def wait_heartbeat(self, after: Mark, timeout: float, state: int | None = None) -> can.Message | None:
+        """Next heartbeat (not boot-up) after ``after``; with ``state``, the next one reporting it."""
+
+        def match(msg: can.Message) -> bool:
+            if not self._is_heartbeat(msg) or not msg.data or msg.data[0] == 0:
+                return False
+            return state is None or msg.data[0] == state
+
+        return self.frames.wait_for(match, timeout, after)
+
+    def heartbeats(self, after: Mark, count: int, timeout: float) -> list[HeartbeatSample]:
+        hits = self.frames.wait_count(lambda m: self._is_heartbeat(m) and bool(m.data), count, timeout, after)
+        return [HeartbeatSample(m.timestamp, m.data[0], m.dlc) for m in hits]
+
+    def frames_from_node(self, after: Mark, duration: float) -> list[can.Message]:
+        """Every frame the node sends in an observation window of ``duration`` seconds."""
+        own = self._own_cob_ids()
+        return self.frames.quiet_period(lambda m: m.is_rx and m.arbitration_id in own, duration, after)
+
+    def _own_cob_ids(self) -> set[int]:
+        base = {0x80, 0x180, 0x280, 0x380, 0x480, 0x580, 0x700}
+        return {b + self.node_id for b in base}
+
+    def is_pdo(self, msg: can.Message) -> bool:
+        return msg.is_rx and msg.arbitration_id in {b + self.node_id for b in (0x180, 0x280, 0x380, 0x480)}
+
+    # -- helpers for state-changing tests ------------------------------------------------
+    def reset_node_and_wait(self) -> can.Message:
+        """NMT reset node; returns the boot-up frame or raises with the trace."""
+        mark = self.nmt("reset-node")
+        boot = self.wait_bootup(mark)
+        if boot is None:
+            raise AssertionError(
+                f"no boot-up (70{self.node_id:X}h... [1] 00) within {self.profile.timing.bootup_max_ms:.0f} ms "
+                f"after reset node\nlast frames:\n{format_frames(self.frames.last(10))}"
+            )
+        return boot
+
+
+def abort_code_of(exc: SdoAbortedError) -> int:
+    return int(exc.code)
+
+
+def u32(value: int) -> bytes:
+    return struct.pack("<I", value)

@@ -1,0 +1,128 @@
+"""Every frame on the bus, in order, with event waits (no fixed sleeps anywhere).
+
+One FrameLog listens on the tester's bus and also records the tester's own transmissions
+(through TracingBus), so traces show both directions. Waits block on a condition variable
+until a matching frame arrives or the timeout expires.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import can
+
+Predicate = Callable[[can.Message], bool]
+
+
+@dataclass(frozen=True)
+class Mark:
+    """A position in the log: 'frames after this point'."""
+
+    seq: int
+    time: float
+
+
+class FrameLog(can.Listener):
+    """Thread-safe, bounded log of frames with waits."""
+
+    def __init__(self, keep: int = 20000) -> None:
+        self._frames: deque[tuple[int, can.Message]] = deque(maxlen=keep)
+        self._seq = 0
+        self._cond = threading.Condition()
+        self._listeners: list[can.Listener] = []
+
+    # can.Listener
+    def on_message_received(self, msg: can.Message) -> None:
+        with self._cond:
+            self._seq += 1
+            self._frames.append((self._seq, msg))
+            self._cond.notify_all()
+            listeners = list(self._listeners)
+        for listener in listeners:
+            listener.on_message_received(msg)
+
+    def record_sent(self, msg: can.Message) -> None:
+        """Called by TracingBus for the tester's own frames."""
+        copy = can.Message(
+            timestamp=time.time(),
+            arbitration_id=msg.arbitration_id,
+            is_extended_id=msg.is_extended_id,
+            is_remote_frame=msg.is_remote_frame,
+            dlc=msg.dlc,
+            data=msg.data,
+            is_rx=False,
+            channel=msg.channel,
+        )
+        self.on_message_received(copy)
+
+    def add_listener(self, listener: can.Listener) -> None:
+        with self._cond:
+            self._listeners.append(listener)
+
+    def remove_listener(self, listener: can.Listener) -> None:
+        with self._cond:
+            if listener in self._listeners:
+                self._listeners.remove(listener)
+
+    def mark(self) -> Mark:
+        with self._cond:
+            return Mark(self._seq, time.monotonic())
+
+    def since(self, mark: Mark, predicate: Predicate | None = None) -> list[can.Message]:
+        with self._cond:
+            return [m for s, m in self._frames if s > mark.seq and (predicate is None or predicate(m))]
+
+    def last(self, count: int = 20) -> list[can.Message]:
+        with self._cond:
+            return [m for _, m in list(self._frames)[-count:]]
+
+    def wait_for(self, predicate: Predicate, timeout: float, after: Mark | None = None) -> can.Message | None:
+        """First frame after ``after`` (default: now) matching ``predicate``, or None on timeout."""
+        start = after or self.mark()
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while True:
+                for seq, msg in self._frames:
+                    if seq > start.seq and predicate(msg):
+                        return msg
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return None
+                self._cond.wait(remaining)
+
+    def wait_count(
+        self, predicate: Predicate, count: int, timeout: float, after: Mark | None = None
+    ) -> list[can.Message]:
+        """Up to ``count`` matching frames after ``after``; returns early once ``count`` are seen."""
+        start = after or self.mark()
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while True:
+                hits = [m for s, m in self._frames if s > start.seq and predicate(m)]
+                remaining = deadline - time.monotonic()
+                if len(hits) >= count or remaining <= 0:
+                    return hits[:count]
+                self._cond.wait(remaining)
+
+    def quiet_period(self, predicate: Predicate, duration: float, after: Mark | None = None) -> list[can.Message]:
+        """Frames matching ``predicate`` within ``duration`` s (an observation window, not a sleep)."""
+        start = after or self.mark()
+        end = time.monotonic() + duration
+        with self._cond:
+            while (remaining := end - time.monotonic()) > 0:
+                self._cond.wait(remaining)
+            return [m for s, m in self._frames if s > start.seq and predicate(m)]
+
+
+def format_frames(frames: list[can.Message]) -> str:
+    """candump-like lines for failure messages."""
+    lines = []
+    for msg in frames:
+        direction = "Rx" if msg.is_rx else "Tx"
+        data = "R" if msg.is_remote_frame else msg.data.hex(" ").upper()
+        lines.append(f"  {msg.timestamp:.4f} {direction} {msg.arbitration_id:03X} [{msg.dlc}] {data}")
+    return "\n".join(lines)

@@ -1,0 +1,75 @@
+"""Byte-exact SDO request builders and response parsers (CiA 301 §7.2.4.3).
+
+Used where canopen's client cannot be trusted for conformance checks (it aborts with index 0,
+retries, hides the raw response; reference/python-stack-measured.md §2.3).
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+
+from canopen.sdo.exceptions import SdoAbortedError
+
+
+def upload_request(index: int, sub: int) -> bytes:
+    return struct.pack("<BHB4x", 0x40, index, sub)
+
+
+def expedited_download_request(index: int, sub: int, data: bytes) -> bytes:
+    if not 1 <= len(data) <= 4:
+        raise ValueError("an expedited download carries 1 to 4 bytes")
+    command = 0x23 | ((4 - len(data)) << 2)
+    return struct.pack("<BHB", command, index, sub) + data.ljust(4, b"\x00")
+
+
+def abort_name(code: int) -> str:
+    """'06010002h (Attempt to write a read only object)' using canopen's abort table."""
+    text = SdoAbortedError.CODES.get(code, "not a CiA 301 abort code")
+    return f"{code:08X}h ({text})"
+
+
+@dataclass(frozen=True)
+class SdoResponse:
+    """A parsed server response frame."""
+
+    raw: bytes
+
+    @property
+    def scs(self) -> int:
+        return self.raw[0] >> 5
+
+    @property
+    def is_abort(self) -> bool:
+        return self.raw[0] == 0x80
+
+    @property
+    def index(self) -> int:
+        return struct.unpack_from("<H", self.raw, 1)[0]
+
+    @property
+    def sub(self) -> int:
+        return self.raw[3]
+
+    @property
+    def abort_code(self) -> int | None:
+        return struct.unpack_from("<I", self.raw, 4)[0] if self.is_abort else None
+
+    @property
+    def expedited_size(self) -> int | None:
+        """Data length of an expedited upload response with size indicated, else None."""
+        if self.scs == 2 and self.raw[0] & 0x03 == 0x03:
+            return 4 - ((self.raw[0] >> 2) & 0x03)
+        return None
+
+    @property
+    def segmented_size(self) -> int | None:
+        """Size announced by a segmented upload initiate response (e=0, s=1)."""
+        if self.scs == 2 and self.raw[0] & 0x03 == 0x01:
+            return struct.unpack_from("<I", self.raw, 4)[0]
+        return None
+
+    def describe(self) -> str:
+        if self.is_abort:
+            return f"abort {abort_name(self.abort_code or 0)} for {self.index:04X}h.{self.sub:02X}"
+        return f"response {self.raw.hex(' ').upper()}"

@@ -1,0 +1,77 @@
+"""Named faults the simulator can be told to commit, to prove that each conformance test can fail.
+
+Each fault is one deliberate deviation from CiA 301 (or from the profile). The simulator asks
+``faults.active(name)`` at the one place where the behaviour is decided. tests/test_fault_matrix.py
+runs the suites against every fault and shows which tests catch it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+FAULTS: dict[str, str] = {
+    # identity
+    "wrong_vendor_id": "1018h sub 1 reads a vendor-id one higher than the profile's",
+    "wrong_device_type": "1000h reads the profile's value with the profile number changed",
+    "wrong_device_name": "1008h reads a different manufacturer device name",
+    # object dictionary / SDO
+    "missing_object": "the last declared object of the profile does not exist (aborts 06020000h)",
+    "wrong_default": "every writable UNSIGNED value starts one higher than its factory default",
+    "wrong_size": "expedited uploads of 32-bit objects carry 2 bytes",
+    "write_ro_accepted": "writes to ro/const objects are confirmed (and ignored)",
+    "wrong_abort_write_ro": "writes to ro/const objects abort with 08000000h instead of 06010002h",
+    "read_wo_allowed": "reads of wo objects return 0 instead of aborting 06010001h",
+    "wrong_abort_no_object": "access to a missing object aborts 06090011h instead of 06020000h",
+    "wrong_abort_no_subindex": "access to a missing sub-index aborts 06020000h instead of 06090011h",
+    "write_rw_ignored": "writes to rw objects are confirmed but the value does not change",
+    "no_sdo_response": "SDO requests are never answered (the device looks dead)",
+    # NMT
+    "no_bootup_after_reset": "no boot-up message after reset node / reset communication",
+    "ignore_start": "NMT start remote node is ignored",
+    "ignore_stop": "NMT stop remote node is ignored",
+    "ignore_broadcast": "NMT commands to node 0 (all nodes) are ignored",
+    "reset_comm_keeps_state": "NMT reset communication is ignored",
+    "reset_node_keeps_values": "NMT reset node does not reload the application parameters",
+    "sdo_in_stopped": "SDO requests are answered in stopped",
+    "pdo_outside_operational": "TPDOs are also sent in pre-operational",
+    "wrong_heartbeat_state": "the heartbeat reports operational (05h) while pre-operational",
+    "respond_to_other_node": "NMT commands addressed to another node-id are obeyed",
+    # heartbeat
+    "heartbeat_slow_20pct": "the heartbeat period is 20 % longer than 1017h says",
+    "heartbeat_jitter": "every 4th heartbeat comes 30 % of the period late",
+    "heartbeat_ignores_zero": "writing 0 to 1017h does not stop the heartbeat",
+    "heartbeat_wrong_dlc": "heartbeat frames carry 2 data bytes",
+    # store / restore
+    "store_not_persisted": "1010h 'save' is confirmed but nothing reaches non-volatile memory",
+    "store_wrong_signature_accepted": "1010h/1011h accept any signature",
+    "restore_ineffective": "1011h 'load' is confirmed but stored values survive the next reset",
+    # emcy
+    "emcy_wrong_cob_id": "EMCY frames are sent on 080h + node-id + 1",
+}
+
+
+class FaultSet:
+    """The faults active in one simulated node."""
+
+    def __init__(self, names: Iterable[str] = ()) -> None:
+        self._active: set[str] = set()
+        for name in names:
+            self.enable(name)
+
+    def enable(self, name: str) -> None:
+        if name not in FAULTS:
+            known = ", ".join(sorted(FAULTS))
+            raise ValueError(f"unknown simulator fault {name!r}; known faults: {known}")
+        self._active.add(name)
+
+    def clear(self) -> None:
+        self._active.clear()
+
+    def active(self, name: str) -> bool:
+        if name not in FAULTS:  # a typo in the simulator must not silently disable a fault
+            raise KeyError(name)
+        return name in self._active
+
+    @property
+    def names(self) -> frozenset[str]:
+        return frozenset(self._active)

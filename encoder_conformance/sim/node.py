@@ -1,0 +1,410 @@
+"""One simulated CANopen node playing a device profile, including its documented quirks.
+
+Frames arrive through ``on_frame`` (from the host's receive thread); everything timed runs on
+the shared DeadlineScheduler; outgoing frames go through the ``send`` function the host gives.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import can
+
+from ..profile.model import DeviceProfile
+from ..profile.od_builder import initial_value
+from . import access as codes
+from .access import NodeObjectAccess
+from .emcy import EmcyProducer
+from .faults import FaultSet
+from .nmt import TARGET, NmtCommand, NmtState, pdo_allowed, sdo_allowed, sync_allowed
+from .nvm import Key, NonVolatileMemory
+from .object_store import SUB_TO_GROUP, ObjectStore
+from .position import EncoderGeometry, Scaling, position_value, unshifted_position
+from .scheduler import DeadlineScheduler, JobHandle
+from .sdo_server import SdoAbort, SdoServer
+from .shaft import Shaft
+from .tpdo import TpdoEngine
+
+log = logging.getLogger(__name__)
+
+Send = Callable[[int, bytes, bool], None]
+
+
+class SimulatedNode:
+    """The twin of one device: NMT, heartbeat, SDO server, TPDOs, EMCY, store/restore, shaft."""
+
+    def __init__(
+        self,
+        profile: DeviceProfile,
+        scheduler: DeadlineScheduler,
+        send: Send,
+        node_id: int | None = None,
+        nvm_path: Path | None = None,
+        faults: FaultSet | None = None,
+    ) -> None:
+        self.profile = profile
+        self.scheduler = scheduler
+        self._send_raw = send
+        self.faults = faults or FaultSet()
+        self.configured_node_id = node_id if node_id is not None else profile.bus.node_id
+        self.node_id = self.configured_node_id
+        self.nvm = NonVolatileMemory(nvm_path)
+        self._preconfigure_node_id()
+        self.store = ObjectStore(profile, self.nvm, self._node_id_at_power_on())
+        self.access = NodeObjectAccess(self)
+        self.sdo = SdoServer(self.access)
+        self.shaft = Shaft()
+        self.lock = threading.RLock()
+        self.state: NmtState | None = None  # None = powered off
+        self.hidden_indices = {max(profile.objects)} if self.faults.active("missing_object") else set()
+        self._awaiting_traffic = False
+        self._heartbeat_job: JobHandle | None = None
+        self._boot_job: JobHandle | None = None
+        self._heartbeat_count = 0
+        self.emcy = EmcyProducer(
+            self.store,
+            self.send,
+            allowed=lambda: self.state in (NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL),
+            node_id=lambda: self.node_id,
+            without_generic_bit=self._quirk("error_register_without_generic_bit") is not None,
+            cob_offset=1 if self.faults.active("emcy_wrong_cob_id") else 0,
+        )
+        self.tpdo = TpdoEngine(
+            scheduler,
+            read=self._read_int,
+            mapped_bytes=self._mapped_bytes,
+            send=lambda cob_id, data: self.send(cob_id, data),
+            count=profile.capabilities.tpdos,
+            timer_zero_disables_255=self._quirk("transmission_type_255_timer_0_disables") is not None,
+        )
+        if self.faults.active("wrong_default"):
+            self._corrupt_defaults()
+
+    # -- helpers -------------------------------------------------------------------------
+    def _quirk(self, effect: str) -> dict | None:
+        found = self.profile.quirk_with_effect(effect)
+        return None if found is None else found[1].params
+
+    def _read_int(self, index: int, sub: int) -> int | None:
+        key = (index, sub)
+        if not self.store.has(key):
+            return None
+        value = self.store.get(key)
+        return value if isinstance(value, int) else None
+
+    def send(self, cob_id: int, data: bytes, extended: bool = False) -> None:
+        if self.state is None:
+            return
+        self._send_raw(cob_id, data, extended)
+
+    def _preconfigure_node_id(self) -> None:
+        """A twin started with --node-id behaves as if configured before delivery."""
+        quirk = self._quirk("node_id_object")
+        if quirk and self.configured_node_id != self.profile.bus.node_id:
+            key = (int(quirk["index"]), int(quirk.get("subindex", 0)))
+            if key not in self.nvm:
+                self.nvm.put_many({key: self.configured_node_id})
+
+    def _node_id_at_power_on(self) -> int:
+        quirk = self._quirk("node_id_object")
+        if quirk:
+            stored = self.nvm.get((int(quirk["index"]), int(quirk.get("subindex", 0))))
+            if isinstance(stored, int) and 1 <= stored <= 127:
+                return stored
+        return self.configured_node_id
+
+    def _corrupt_defaults(self) -> None:
+        for key, entry in self.store.entries.items():
+            value = self.store.get(key)
+            if entry.writable and entry.readable and isinstance(value, int) and entry.type.startswith("UNSIGNED"):
+                if key[0] not in (0x1010, 0x1011):
+                    self.store.set(key, value + 1)
+
+    # -- power and boot ------------------------------------------------------------------
+    def power_on(self) -> None:
+        """Apply power: reload everything from NVM, then boot (or wait for bus traffic)."""
+        with self.lock:
+            self.node_id = self._node_id_at_power_on()
+            self.store.reload(lambda index: True, self.node_id)
+            self.emcy.clear_history()
+            self.state = NmtState.INITIALISING
+            self._awaiting_traffic = self._quirk("silent_until_bus_traffic") is not None
+            if not self._awaiting_traffic:
+                self._schedule_boot(power_on=True)
+
+    def power_off(self) -> None:
+        with self.lock:
+            self._stop_services()
+            self.sdo.reset()
+            self.state = None
+
+    def power_cycle(self) -> None:
+        self.power_off()
+        self.power_on()
+
+    def _stop_services(self) -> None:
+        for job in (self._heartbeat_job, self._boot_job):
+            if job is not None:
+                job.cancel()
+        self._heartbeat_job = self._boot_job = None
+        self.tpdo.stop()
+
+    def _schedule_boot(self, power_on: bool) -> None:
+        delay = self.profile.simulator.bootup_delay_ms / 1000
+        self._boot_job = self.scheduler.call_later(delay, lambda: self._finish_boot(power_on))
+
+    def _finish_boot(self, power_on: bool) -> None:
+        with self.lock:
+            if self.state is not NmtState.INITIALISING:
+                return
+            silent = not power_on and self.faults.active("no_bootup_after_reset")
+            if not silent:
+                self.send(0x700 + self.node_id, b"\x00")
+            self.state = NmtState.PRE_OPERATIONAL
+            self._restart_heartbeat()
+
+    def _reset(self, node: bool) -> None:
+        """NMT reset node (everything) or reset communication (1000h-1FFFh) and boot again."""
+        with self.lock:
+            self._stop_services()
+            self.sdo.reset()
+            self.state = NmtState.INITIALISING
+            self.node_id = self._node_id_at_power_on()
+            if node and not self.faults.active("reset_node_keeps_values"):
+                self.store.reload(lambda index: True, self.node_id)
+            else:
+                self.store.reload(lambda index: 0x1000 <= index <= 0x1FFF, self.node_id)
+            self._schedule_boot(power_on=False)
+
+    # -- heartbeat -----------------------------------------------------------------------
+    def _heartbeat_period_s(self) -> float:
+        value = self._read_int(0x1017, 0) or 0
+        period = value / 1000
+        return period * 1.2 if self.faults.active("heartbeat_slow_20pct") else period
+
+    def _restart_heartbeat(self) -> None:
+        if self._heartbeat_job is not None:
+            self._heartbeat_job.cancel()
+            self._heartbeat_job = None
+        period = self._heartbeat_period_s()
+        if period <= 0 or not self.profile.capabilities.heartbeat_producer:
+            return
+        start = time.monotonic()
+        self._heartbeat_count = 0
+        if self.faults.active("heartbeat_jitter"):
+            self._heartbeat_job = self.scheduler.call_at(start + period, lambda: self._jittered(start, period))
+        else:
+            self._heartbeat_job = self.scheduler.call_at(start + period, self._send_heartbeat, period)
+
+    def _jittered(self, start: float, period: float) -> None:
+        self._send_heartbeat()
+        self._heartbeat_count += 1
+        k = self._heartbeat_count + 1
+        due = start + k * period + (0.3 * period if k % 4 == 0 else 0.0)
+        self._heartbeat_job = self.scheduler.call_at(due, lambda: self._jittered(start, period))
+
+    def _send_heartbeat(self) -> None:
+        state = self.state
+        if state is None or state is NmtState.INITIALISING:
+            return
+        value = int(state)
+        if state is NmtState.PRE_OPERATIONAL and self.faults.active("wrong_heartbeat_state"):
+            value = int(NmtState.OPERATIONAL)
+        payload = bytes([value, 0]) if self.faults.active("heartbeat_wrong_dlc") else bytes([value])
+        self.send(0x700 + self.node_id, payload)
+
+    # -- frame dispatch ------------------------------------------------------------------
+    def on_frame(self, msg: can.Message) -> None:
+        with self.lock:
+            if self.state is None or msg.is_error_frame:
+                return
+            if self._awaiting_traffic:
+                self._awaiting_traffic = False  # bit rate detected from this frame
+                self._schedule_boot(power_on=True)
+                return
+            if self.state is NmtState.INITIALISING:
+                return
+            can_id = msg.arbitration_id
+            if can_id == 0 and not msg.is_extended_id:
+                self._on_nmt(bytes(msg.data))
+            elif can_id == 0x600 + self.node_id and not msg.is_remote_frame:
+                self._on_sdo(bytes(msg.data))
+            elif self._is_sync(msg):
+                if sync_allowed(self.state):
+                    self.tpdo.on_sync()
+
+    def _is_sync(self, msg: can.Message) -> bool:
+        cob = self._read_int(0x1005, 0)
+        cob = 0x80 if cob is None else cob & 0x7FF
+        return msg.arbitration_id == cob and not msg.is_extended_id and not msg.is_remote_frame
+
+    def _on_nmt(self, data: bytes) -> None:
+        if len(data) != 2:
+            return
+        command, target = data
+        if target == 0 and self.faults.active("ignore_broadcast"):
+            return
+        if target not in (0, self.node_id) and not self.faults.active("respond_to_other_node"):
+            return
+        try:
+            cmd = NmtCommand(command)
+        except ValueError:
+            return
+        if cmd is NmtCommand.RESET_NODE:
+            self._reset(node=True)
+        elif cmd is NmtCommand.RESET_COMMUNICATION:
+            if not self.faults.active("reset_comm_keeps_state"):
+                self._reset(node=False)
+        elif not (cmd is NmtCommand.START and self.faults.active("ignore_start")) and not (
+            cmd is NmtCommand.STOP and self.faults.active("ignore_stop")
+        ):
+            self._enter(TARGET[cmd])
+
+    def _enter(self, state: NmtState) -> None:
+        previous, self.state = self.state, state
+        if state is previous:
+            return
+        if pdo_allowed(state) or self.faults.active("pdo_outside_operational") and state is not NmtState.STOPPED:
+            self.tpdo.start()
+        else:
+            self.tpdo.stop()
+        if state is NmtState.STOPPED:
+            self.sdo.reset()  # a transfer in progress cannot continue in stopped
+
+    def _on_sdo(self, data: bytes) -> None:
+        if self.faults.active("no_sdo_response"):
+            return
+        if not sdo_allowed(self.state) and not self.faults.active("sdo_in_stopped"):
+            return
+        response = self.sdo.handle(data)
+        if response is not None:
+            self.send(0x580 + self.node_id, response)
+
+    # -- values seen through SDO and PDO ---------------------------------------------------
+    def _geometry(self) -> EncoderGeometry:
+        steps = self._read_int(0x6501, 0) or int(self.profile.simulator.values.get("steps_per_rev", 4096))
+        revolutions = self._read_int(0x6502, 0) if self.profile.capabilities.multiturn else 1
+        return EncoderGeometry(steps, revolutions or 1)
+
+    def _scaling(self) -> Scaling:
+        params = self._read_int(0x6000, 0) or 0
+        return Scaling(
+            ccw=bool(params & 0x01),
+            enabled=bool(params & 0x04) and self.profile.capabilities.scaling,
+            units_per_rev=self._read_int(0x6001, 0) or 0,
+            total_range=self._read_int(0x6002, 0) or 0,
+            offset=self._signed(self._read_int(0x6509, 0) or 0),
+        )
+
+    @staticmethod
+    def _signed(value: int) -> int:
+        return value - (1 << 32) if value >= 1 << 31 else value
+
+    def position(self) -> int:
+        return position_value(self.shaft.turns(), self._geometry(), self._scaling())
+
+    def current_value(self, key: Key) -> int | str | bytes:
+        """Dynamic entries are computed; the rest come from the store (with identity faults)."""
+        index, sub = key
+        if key in ((0x6004, 0), (0x6008, 0)):
+            return self.position()
+        if key == (0x6030, 1):
+            units = self._scaling().units_per_rev or self._geometry().steps_per_rev
+            return max(-32768, min(32767, round(self.shaft.speed * units)))
+        if key == (0x6500, 0) and self.store.has((0x6000, 0)):
+            return self.store.get((0x6000, 0))
+        value = self.store.get(key)
+        if key == (0x1018, 1) and self.faults.active("wrong_vendor_id") and isinstance(value, int):
+            return (value + 1) & 0xFFFFFFFF
+        if key == (0x1000, 0) and self.faults.active("wrong_device_type") and isinstance(value, int):
+            return (value & 0xFFFF0000) | ((value + 1) & 0xFFFF)
+        if key == (0x1008, 0) and self.faults.active("wrong_device_name"):
+            return f"X{value}"
+        return value
+
+    def encode_current(self, key: Key) -> bytes:
+        value = self.current_value(key)
+        if isinstance(value, bytes):
+            return value
+        if isinstance(value, str):
+            return value.encode("latin-1")
+        size = self.store.size(key)
+        if isinstance(value, int) and size and not self.store.entries[key].type.startswith("REAL"):
+            return (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")  # two's complement
+        return self.store.variable(key).encode_raw(value)
+
+    def _mapped_bytes(self, index: int, sub: int, bits: int) -> bytes:
+        key = (index, sub)
+        if not self.store.has(key):
+            return bytes(bits // 8)
+        return self.encode_current(key).ljust(bits // 8, b"\x00")[: bits // 8]
+
+    # -- writes: gates and effects ---------------------------------------------------------
+    def quirk_write_gate(self, key: Key) -> None:
+        """Profile quirks that refuse a write in the current situation."""
+        gate = self._quirk("writes_preop_only")
+        if gate and key[0] in gate.get("objects", []) and self.state is not NmtState.PRE_OPERATIONAL:
+            raise SdoAbort(int(gate.get("abort_code", codes.WRONG_STATE)))
+
+    def apply_write(self, key: Key, value: int | str | bytes) -> None:
+        index, sub = key
+        if index in (0x1010, 0x1011):
+            self._store_or_restore(index, sub, value)
+            return
+        if index == 0x1003 and sub == 0:
+            if value != 0:
+                raise SdoAbort(codes.VALUE_INVALID)
+            self.emcy.clear_history()
+            return
+        if index == 0x6003 and isinstance(value, int):
+            self._preset(value)
+        self.store.set(key, value)
+        self.store.persist_auto(key)
+        if index == 0x1017:
+            if value == 0 and self.faults.active("heartbeat_ignores_zero"):
+                return
+            self._restart_heartbeat()
+        elif 0x1800 <= index <= 0x1BFF:
+            self.tpdo.reload()
+
+    def _store_or_restore(self, index: int, sub: int, value: object) -> None:
+        storing = index == 0x1010
+        signature = codes.SAVE if storing else codes.LOAD
+        if value != signature and not self.faults.active("store_wrong_signature_accepted"):
+            raise SdoAbort(codes.CANNOT_STORE)
+        group = SUB_TO_GROUP.get(sub, "store_manufacturer")
+        if storing:
+            if not self.faults.active("store_not_persisted"):
+                self.store.store(group)
+        elif not self.faults.active("restore_ineffective"):
+            self.store.restore_defaults(group)
+
+    def _preset(self, preset: int) -> None:
+        scaling = self._scaling()
+        before = unshifted_position(self.shaft.turns(), self._geometry(), scaling)
+        span = scaling.total_range if scaling.enabled and scaling.total_range else self._geometry().range
+        offset = (preset - before) % span if span else preset - before
+        if self.store.has((0x6509, 0)):
+            self.store.set((0x6509, 0), offset)
+
+    # -- control API (used by the control server and in-process tests) ----------------------
+    def default_value(self, key: Key) -> object:
+        return initial_value(self.profile, key[0], key[1], self.store.entries[key], self.node_id)
+
+    def raise_emcy(self, code: int, register_bits: int, info: bytes = b"") -> None:
+        with self.lock:
+            self.emcy.raise_error(code, register_bits, info)
+
+    def describe(self) -> dict[str, object]:
+        return {
+            "profile": self.profile.id,
+            "node_id": self.node_id,
+            "state": None if self.state is None else self.state.name,
+            "faults": sorted(self.faults.names),
+            "position": self.position(),
+        }
+

@@ -1,0 +1,113 @@
+"""The simulated node's object dictionary: current values, encoding, reload from NVM or defaults."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import canopen
+from canopen.objectdictionary import ODVariable
+
+from ..profile import datatypes
+from ..profile.model import DeviceProfile, EntrySpec, resolve_node_id_expression
+from ..profile.od_builder import build_object_dictionary, initial_value
+from .nvm import Key, NonVolatileMemory
+
+STORE_GROUPS: dict[str, Callable[[int], bool]] = {
+    "store_all": lambda index: True,
+    "store_comm": lambda index: 0x1000 <= index <= 0x1FFF,
+    "store_app": lambda index: 0x6000 <= index <= 0x9FFF,
+    "store_manufacturer": lambda index: 0x2000 <= index <= 0x5FFF,
+}
+#: CiA 301 1010h/1011h sub-index -> group it covers (sub 4+ are manufacturer-defined).
+SUB_TO_GROUP = {1: "store_all", 2: "store_comm", 3: "store_app", 4: "store_manufacturer"}
+
+
+class ObjectStore:
+    """Values of every profile entry, with canopen's encode/decode for the wire format."""
+
+    def __init__(self, profile: DeviceProfile, nvm: NonVolatileMemory, node_id: int) -> None:
+        self.profile = profile
+        self.nvm = nvm
+        self.od: canopen.ObjectDictionary = build_object_dictionary(profile, node_id)
+        self.entries: dict[Key, EntrySpec] = {
+            (index, sub): entry for index, sub, _, entry in profile.iter_entries()
+        }
+        self.values: dict[Key, int | str | bytes] = {}
+        self.reload(lambda index: True, node_id)
+
+    # -- lookup --------------------------------------------------------------------------
+    def has_index(self, index: int) -> bool:
+        return index in self.profile.objects
+
+    def has(self, key: Key) -> bool:
+        return key in self.entries
+
+    def variable(self, key: Key) -> ODVariable:
+        obj = self.od[key[0]]
+        return obj if isinstance(obj, ODVariable) else obj[key[1]]
+
+    def size(self, key: Key) -> int | None:
+        """Fixed size in bytes, None for strings/domains."""
+        return datatypes.size_bytes(self.entries[key].type)
+
+    # -- values --------------------------------------------------------------------------
+    def get(self, key: Key) -> int | str | bytes:
+        return self.values[key]
+
+    def set(self, key: Key, value: int | str | bytes) -> None:
+        self.values[key] = value
+
+    def encode(self, key: Key) -> bytes:
+        value = self.values[key]
+        if isinstance(value, bytes):
+            return value
+        if isinstance(value, str):
+            return value.encode("latin-1")
+        return self.variable(key).encode_raw(value)
+
+    def decode(self, key: Key, data: bytes) -> int | str | bytes:
+        entry = self.entries[key]
+        if entry.type == "VISIBLE_STRING":
+            return data.decode("latin-1")
+        if entry.type in datatypes.STRING_TYPES:
+            return bytes(data)
+        return self.variable(key).decode_raw(data)
+
+    # -- persistence ---------------------------------------------------------------------
+    def default_of(self, key: Key, node_id: int) -> int | str:
+        entry = self.entries[key]
+        value = initial_value(self.profile, key[0], key[1], entry, node_id)
+        return value  # type: ignore[return-value]
+
+    def reload(self, in_scope: Callable[[int], bool], node_id: int) -> None:
+        """Set every entry in scope to its stored value, else its (node-id resolved) default."""
+        for key, entry in self.entries.items():
+            if not in_scope(key[0]):
+                continue
+            stored = self.nvm.get(key)
+            if stored is not None and entry.persisted_by != "none":
+                self.values[key] = stored
+            else:
+                self.values[key] = resolve_node_id_expression(self.default_of(key, node_id), node_id)  # type: ignore[assignment]
+
+    def storable_keys(self, group: str) -> list[Key]:
+        """Entries that 1010h with ``group`` writes to NVM."""
+        in_group = STORE_GROUPS[group]
+        return [
+            key
+            for key, entry in self.entries.items()
+            if entry.persisted_by.startswith("store_") and in_group(key[0]) and entry.writable
+        ]
+
+    def store(self, group: str) -> None:
+        keys = self.storable_keys(group)
+        self.nvm.put_many({key: self.values[key] for key in keys if not isinstance(self.values[key], bytes)})
+
+    def restore_defaults(self, group: str) -> None:
+        """Forget stored values of the group; defaults become active at the next reset."""
+        self.nvm.remove_many(self.storable_keys(group))
+
+    def persist_auto(self, key: Key) -> None:
+        """Entries with persisted_by: auto go to NVM on every write."""
+        if self.entries[key].persisted_by == "auto" and not isinstance(self.values[key], bytes):
+            self.nvm.put_many({key: self.values[key]})

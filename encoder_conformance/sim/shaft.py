@@ -1,0 +1,44 @@
+"""A simulated shaft: angle in revolutions, turned by the control API or a constant speed."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+
+class Shaft:
+    """Continuous angle (revolutions, may be negative) moving at ``speed`` rev/s."""
+
+    def __init__(self, turns: float = 0.0) -> None:
+        self._lock = threading.Lock()
+        self._turns = turns
+        self._speed = 0.0
+        self._since = time.monotonic()
+
+    def turns(self) -> float:
+        with self._lock:
+            return self._turns + self._speed * (time.monotonic() - self._since)
+
+    @property
+    def speed(self) -> float:
+        return self._speed
+
+    def _settle(self) -> None:
+        now = time.monotonic()
+        self._turns += self._speed * (now - self._since)
+        self._since = now
+
+    def turn_by(self, revolutions: float) -> None:
+        with self._lock:
+            self._settle()
+            self._turns += revolutions
+
+    def set_turns(self, revolutions: float) -> None:
+        with self._lock:
+            self._settle()
+            self._turns = revolutions
+
+    def set_speed(self, revolutions_per_second: float) -> None:
+        with self._lock:
+            self._settle()
+            self._speed = revolutions_per_second

@@ -1,0 +1,115 @@
+"""Control channel to a simulator (power-cycle, turn the shaft, faults), server and client.
+
+Uses the standard library's multiprocessing.connection (authenticated, pickled tuples) rather
+than a hand-written protocol. The client side imports nothing from the simulator, so the
+fixtures can drive a simulator in another process without the suites knowing it exists.
+"""
+
+from __future__ import annotations
+
+import threading
+from multiprocessing.connection import Client, Connection, Listener
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .sim.host import SimulatorHost
+
+AUTHKEY = b"encoder-conformance-sim"
+
+
+class SimulatorControl:
+    """Client: what the test side may ask of a simulated device."""
+
+    def __init__(self, address: tuple[str, int], node_id: int | None = None) -> None:
+        self._address = address
+        self._node_id = node_id
+        self._lock = threading.Lock()
+        self._conn: Connection = Client(address, authkey=AUTHKEY)
+
+    def _call(self, command: str, *args: Any) -> Any:
+        with self._lock:
+            self._conn.send((command, self._node_id, args))
+            ok, result = self._conn.recv()
+        if not ok:
+            raise RuntimeError(f"simulator refused {command}{args}: {result}")
+        return result
+
+    def power_cycle(self) -> None:
+        self._call("power_cycle")
+
+    def power_off(self) -> None:
+        self._call("power_off")
+
+    def power_on(self) -> None:
+        self._call("power_on")
+
+    def turn_by(self, revolutions: float) -> None:
+        self._call("turn_by", revolutions)
+
+    def set_speed(self, revolutions_per_second: float) -> None:
+        self._call("set_speed", revolutions_per_second)
+
+    def set_faults(self, names: list[str]) -> None:
+        self._call("set_faults", names)
+
+    def raise_emcy(self, code: int, register_bits: int, info: bytes = b"") -> None:
+        self._call("raise_emcy", code, register_bits, info)
+
+    def describe(self) -> dict[str, Any]:
+        return self._call("describe")
+
+    def close(self) -> None:
+        try:
+            self._conn.close()
+        except OSError:
+            pass
+
+
+def _execute(host: SimulatorHost, command: str, node_id: int | None, args: tuple[Any, ...]) -> Any:
+    node = host.node(node_id)
+    actions = {
+        "power_cycle": node.power_cycle,
+        "power_off": node.power_off,
+        "power_on": node.power_on,
+        "turn_by": node.shaft.turn_by,
+        "set_speed": node.shaft.set_speed,
+        "raise_emcy": node.raise_emcy,
+        "describe": node.describe,
+    }
+    if command == "set_faults":
+        node.faults.clear()
+        for name in args[0]:
+            node.faults.enable(name)
+        return None
+    if command not in actions:
+        raise ValueError(f"unknown command {command!r}; known: {', '.join(sorted(actions))}, set_faults")
+    return actions[command](*args)
+
+
+def serve_control(host: SimulatorHost, address: tuple[str, int]) -> tuple[str, int]:
+    """Accept control clients on ``address`` in background threads; returns the bound address."""
+    listener = Listener(address, authkey=AUTHKEY)
+
+    def handle(conn: Connection) -> None:
+        with conn:
+            while True:
+                try:
+                    command, node_id, args = conn.recv()
+                except (EOFError, OSError):
+                    return
+                try:
+                    conn.send((True, _execute(host, command, node_id, args)))
+                except Exception as exc:
+                    conn.send((False, f"{type(exc).__name__}: {exc}"))
+
+    def accept() -> None:
+        while True:
+            try:
+                conn = listener.accept()
+            except (OSError, EOFError):
+                return
+            threading.Thread(target=handle, args=(conn,), daemon=True).start()
+
+    threading.Thread(target=accept, name="sim-control", daemon=True).start()
+    bound = listener.address
+    return bound[0], bound[1]

@@ -1,0 +1,82 @@
+"""Start a simulator in its own process and connect to it (the default for conformance runs).
+
+The child prints one line ``READY {json}`` with the python-can-remote URL and the control
+address once its bus is served; we wait for that line (with a timeout), not for a fixed time.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+
+READY_TIMEOUT_S = 30.0
+
+
+@dataclass
+class SimulatorProcess:
+    process: subprocess.Popen[str]
+    can_url: str
+    control: tuple[str, int]
+    node_id: int
+    log_path: Path | None
+
+    @property
+    def bus_kwargs(self) -> dict[str, object]:
+        return {"interface": "remote", "channel": self.can_url, "receive_own_messages": False}
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+
+
+def start_simulator(
+    profile: str,
+    node_id: int | None = None,
+    faults: list[str] | None = None,
+    nvm_path: Path | None = None,
+    log_path: Path | None = None,
+) -> SimulatorProcess:
+    """Launch ``encoder-conformance sim`` and wait until it reports READY."""
+    command = [sys.executable, "-m", "encoder_conformance", "sim", "--profile", profile,
+               "--listen", "127.0.0.1:0", "--control", "127.0.0.1:0", "--ready-line"]
+    if node_id is not None:
+        command += ["--node-id", str(node_id)]
+    for fault in faults or []:
+        command += ["--fault", fault]
+    if nvm_path is not None:
+        command += ["--nvm", str(nvm_path)]
+    stderr = open(log_path, "w", encoding="utf-8") if log_path else subprocess.DEVNULL  # noqa: SIM115
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True, env=env)
+    line = _read_ready_line(process)
+    if line is None:
+        process.kill()
+        detail = log_path.read_text(encoding="utf-8")[-2000:] if log_path and log_path.exists() else ""
+        raise RuntimeError(f"simulator did not start within {READY_TIMEOUT_S:.0f} s: {' '.join(command)}\n{detail}")
+    info = json.loads(line.split(" ", 1)[1])
+    return SimulatorProcess(process, info["can"], tuple(info["control"]), info["node_id"], log_path)
+
+
+def _read_ready_line(process: subprocess.Popen[str]) -> str | None:
+    result: list[str] = []
+
+    def reader() -> None:
+        assert process.stdout is not None
+        for line in process.stdout:
+            if line.startswith("READY "):
+                result.append(line.strip())
+                return
+
+    thread = threading.Thread(target=reader, daemon=True)
+    thread.start()
+    thread.join(READY_TIMEOUT_S)
+    return result[0] if result else None
