@@ -113,3 +113,19 @@ def serve_control(host: SimulatorHost, address: tuple[str, int]) -> tuple[str, i
     threading.Thread(target=accept, name="sim-control", daemon=True).start()
     bound = listener.address
     return bound[0], bound[1]
+
+
+class LocalControl(SimulatorControl):
+    """Same API for a simulator running in this process (--sim-inprocess, self-tests)."""
+
+    def __init__(self, host: SimulatorHost, node_id: int | None = None) -> None:  # noqa: D107
+        self._host = host
+        self._node_id = node_id
+        self._lock = threading.Lock()
+
+    def _call(self, command: str, *args: Any) -> Any:
+        with self._lock:
+            return _execute(self._host, command, self._node_id, args)
+
+    def close(self) -> None:
+        pass

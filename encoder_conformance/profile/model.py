@@ -151,7 +151,7 @@ class ObjectSpec(StrictModel):
                 raise ValueError("kind 'var' cannot have 'subs'")
             defaults = {name: info.default for name, info in type(self).model_fields.items()}
             given = [
-                k for k, v in self._var_fields().items() if k not in ("name", "manual") and v != defaults[k]
+                k for k, v in self._var_fields().items() if k not in ("name", "manual", "notes") and v != defaults[k]
             ]
             if given:
                 raise ValueError(f"{', '.join(given)} belong(s) to the sub-indices when 'subs' is given")

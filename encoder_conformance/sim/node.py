@@ -14,7 +14,7 @@ from pathlib import Path
 
 import can
 
-from ..profile.model import DeviceProfile
+from ..profile.model import DeviceProfile, resolve_node_id_expression
 from ..profile.od_builder import initial_value
 from . import access as codes
 from .access import NodeObjectAccess
@@ -30,6 +30,13 @@ from .shaft import Shaft
 from .tpdo import TpdoEngine
 
 log = logging.getLogger(__name__)
+
+#: fault that makes the node ignore each state-changing NMT command
+IGNORE_FAULT = {
+    NmtCommand.START: "ignore_start",
+    NmtCommand.STOP: "ignore_stop",
+    NmtCommand.ENTER_PRE_OPERATIONAL: "ignore_enter_preop",
+}
 
 Send = Callable[[int, bytes, bool], None]
 
@@ -81,8 +88,6 @@ class SimulatedNode:
             count=profile.capabilities.tpdos,
             timer_zero_disables_255=self._quirk("transmission_type_255_timer_0_disables") is not None,
         )
-        if self.faults.active("wrong_default"):
-            self._corrupt_defaults()
 
     # -- helpers -------------------------------------------------------------------------
     def _quirk(self, effect: str) -> dict | None:
@@ -117,12 +122,21 @@ class SimulatedNode:
                 return stored
         return self.configured_node_id
 
-    def _corrupt_defaults(self) -> None:
+    def _apply_value_faults(self) -> None:
+        """wrong_default: every reload leaves writable UNSIGNED values one above their default."""
+        if not self.faults.active("wrong_default"):
+            return
         for key, entry in self.store.entries.items():
             value = self.store.get(key)
-            if entry.writable and entry.readable and isinstance(value, int) and entry.type.startswith("UNSIGNED"):
-                if key[0] not in (0x1010, 0x1011):
-                    self.store.set(key, value + 1)
+            default = resolve_node_id_expression(self.default_value(key), self.node_id)  # type: ignore[arg-type]
+            if (
+                entry.writable
+                and isinstance(value, int)
+                and value == default
+                and entry.type.startswith("UNSIGNED")
+                and key[0] not in (0x1010, 0x1011)
+            ):
+                self.store.set(key, value + 1)
 
     # -- power and boot ------------------------------------------------------------------
     def power_on(self) -> None:
@@ -130,6 +144,7 @@ class SimulatedNode:
         with self.lock:
             self.node_id = self._node_id_at_power_on()
             self.store.reload(lambda index: True, self.node_id)
+            self._apply_value_faults()
             self.emcy.clear_history()
             self.state = NmtState.INITIALISING
             self._awaiting_traffic = self._quirk("silent_until_bus_traffic") is not None
@@ -178,6 +193,7 @@ class SimulatedNode:
                 self.store.reload(lambda index: True, self.node_id)
             else:
                 self.store.reload(lambda index: 0x1000 <= index <= 0x1FFF, self.node_id)
+            self._apply_value_faults()
             self._schedule_boot(power_on=False)
 
     # -- heartbeat -----------------------------------------------------------------------
@@ -259,16 +275,14 @@ class SimulatedNode:
         elif cmd is NmtCommand.RESET_COMMUNICATION:
             if not self.faults.active("reset_comm_keeps_state"):
                 self._reset(node=False)
-        elif not (cmd is NmtCommand.START and self.faults.active("ignore_start")) and not (
-            cmd is NmtCommand.STOP and self.faults.active("ignore_stop")
-        ):
+        elif not self.faults.active(IGNORE_FAULT[cmd]):
             self._enter(TARGET[cmd])
 
     def _enter(self, state: NmtState) -> None:
         previous, self.state = self.state, state
         if state is previous:
             return
-        if pdo_allowed(state) or self.faults.active("pdo_outside_operational") and state is not NmtState.STOPPED:
+        if pdo_allowed(state) or self.faults.active("pdo_outside_operational"):
             self.tpdo.start()
         else:
             self.tpdo.stop()
@@ -318,11 +332,24 @@ class SimulatedNode:
         if key == (0x6500, 0) and self.store.has((0x6000, 0)):
             return self.store.get((0x6000, 0))
         value = self.store.get(key)
-        if key == (0x1018, 1) and self.faults.active("wrong_vendor_id") and isinstance(value, int):
-            return (value + 1) & 0xFFFFFFFF
-        if key == (0x1000, 0) and self.faults.active("wrong_device_type") and isinstance(value, int):
-            return (value & 0xFFFF0000) | ((value + 1) & 0xFFFF)
-        if key == (0x1008, 0) and self.faults.active("wrong_device_name"):
+        return self._identity_fault(key, value)
+
+    def _identity_fault(self, key: Key, value: int | str | bytes) -> int | str | bytes:
+        faults = self.faults
+        if isinstance(value, int):
+            if key == (0x1018, 1) and faults.active("wrong_vendor_id") or key == (0x1018, 2) and faults.active(
+                "wrong_product_code"
+            ):
+                return (value + 1) & 0xFFFFFFFF
+            if key == (0x1018, 3) and faults.active("wrong_revision"):
+                return 0xFFFFFFFF
+            if key == (0x1018, 0) and faults.active("wrong_identity_size"):
+                return value + 1
+            if key == (0x1018, 4) and faults.active("serial_mismatch"):
+                return (value ^ 0x1) & 0xFFFFFFFF
+            if key == (0x1000, 0) and faults.active("wrong_device_type"):
+                return (value & 0xFFFF0000) | ((value + 1) & 0xFFFF)
+        if key == (0x1008, 0) and faults.active("wrong_device_name"):
             return f"X{value}"
         return value
 

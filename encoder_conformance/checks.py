@@ -1,0 +1,48 @@
+"""Assertion helpers for the suites: expected, observed, the abort code's name, the last frames."""
+
+from __future__ import annotations
+
+from .dut.device import DeviceUnderTest
+from .dut.frames import format_frames
+from .dut.sdo_frames import SdoResponse, abort_name
+from .plugin.evidence import Evidence
+
+#: CiA 301 abort code per situation (strict mode).
+CIA_ABORTS: dict[str, int] = {
+    "write_ro": 0x06010002,
+    "read_wo": 0x06010001,
+    "no_object": 0x06020000,
+    "no_subindex": 0x06090011,
+    "length_high": 0x06070012,
+    "length_low": 0x06070013,
+    "value_high": 0x06090031,
+    "value_low": 0x06090032,
+    "store_signature": 0x08000020,
+}
+
+
+def expected_aborts(dut: DeviceUnderTest, situation: str, evidence: Evidence) -> set[int]:
+    """CiA's code for the situation, or the codes a documented quirk of the profile names."""
+    for quirk_id, quirk in dut.profile.quirks.items():
+        if quirk.effect == "abort_code" and quirk.params.get("situation") == situation:
+            evidence.deviation(quirk_id, quirk.title)
+            return {int(code) for code in quirk.params.get("codes", [])}
+    return {CIA_ABORTS[situation]}
+
+
+def assert_abort(dut: DeviceUnderTest, response: SdoResponse, expected: set[int], what: str) -> None:
+    """The response must be an abort with one of ``expected`` codes for the same multiplexer."""
+    wanted = " or ".join(abort_name(code) for code in sorted(expected))
+    if not response.is_abort:
+        raise AssertionError(
+            f"{what}: expected abort {wanted}, observed {response.describe()}\n"
+            f"last frames:\n{format_frames(dut.frames.last(6))}"
+        )
+    if response.abort_code not in expected:
+        raise AssertionError(f"{what}: expected abort {wanted}, observed abort {abort_name(response.abort_code or 0)}")
+
+
+def describe_value(value: object) -> str:
+    if isinstance(value, int):
+        return f"{value} (0x{value:X})"
+    return repr(value)

@@ -1,0 +1,81 @@
+"""Read the device's identity (1000h, 1008h, 1018h) and compare it with the profile."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from canopen.sdo.exceptions import SdoAbortedError
+
+from ..profile.model import DeviceProfile
+from .device import DeviceUnderTest
+
+
+@dataclass(frozen=True)
+class DeviceIdentity:
+    device_type: int | None
+    device_name: str | None
+    vendor_id: int | None
+    product_code: int | None
+    revision: int | None
+    serial: int | None
+
+    def as_report(self) -> dict[str, str]:
+        def hex_or_dash(value: int | None) -> str:
+            return "-" if value is None else f"0x{value:08X}"
+
+        return {
+            "vendor-id (1018h.1)": hex_or_dash(self.vendor_id),
+            "product code (1018h.2)": hex_or_dash(self.product_code),
+            "revision (1018h.3)": hex_or_dash(self.revision),
+            "serial number (1018h.4)": "-" if self.serial is None else f"{self.serial} (0x{self.serial:08X})",
+            "device type (1000h)": hex_or_dash(self.device_type),
+            "device name (1008h)": self.device_name or "-",
+        }
+
+
+def _optional_uint(dut: DeviceUnderTest, index: int, sub: int) -> int | None:
+    try:
+        return dut.read_uint(index, sub)
+    except SdoAbortedError:
+        return None
+
+
+def read_identity(dut: DeviceUnderTest) -> DeviceIdentity:
+    """Everything the device says about itself; absent objects read as None."""
+    try:
+        name = dut.read(0x1008, 0).decode("latin-1").rstrip("\x00")
+    except SdoAbortedError:
+        name = None
+    return DeviceIdentity(
+        device_type=_optional_uint(dut, 0x1000, 0),
+        device_name=name,
+        vendor_id=_optional_uint(dut, 0x1018, 1),
+        product_code=_optional_uint(dut, 0x1018, 2),
+        revision=_optional_uint(dut, 0x1018, 3),
+        serial=_optional_uint(dut, 0x1018, 4),
+    )
+
+
+def identity_mismatch(identity: DeviceIdentity, profile: DeviceProfile) -> str | None:
+    """A reason to stop the run when the device is plainly another product than the profile's.
+
+    Only a device that differs in vendor-id AND product code (or in device type where the
+    profile has no 1018h values) counts: a single wrong field is a conformance failure that
+    the identity tests report, not a reason to stop.
+    """
+    expected = profile.identity
+    checks = [
+        ("vendor-id", expected.vendor_id, identity.vendor_id),
+        ("product code", expected.product_code, identity.product_code),
+    ]
+    declared = [(name, want, got) for name, want, got in checks if want is not None]
+    if not declared and expected.device_type is not None:
+        declared = [("device type", expected.device_type, identity.device_type)]
+    if declared and all(want != got for _, want, got in declared):
+        found = ", ".join(f"{name} {'-' if got is None else f'0x{got:08X}'}" for name, _, got in declared)
+        wanted = ", ".join(f"{name} 0x{want:08X}" for name, want, _ in declared)
+        return (
+            f"wrong device for profile {profile.id}: it reports {found} but the profile expects {wanted}. "
+            f"Choose the matching --device-profile (encoder-conformance profile list)"
+        )
+    return None

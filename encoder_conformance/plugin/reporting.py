@@ -1,0 +1,180 @@
+"""Report outputs: where they go, the header (identity, profile, bus), per-test evidence, summaries."""
+
+from __future__ import annotations
+
+import html
+import time
+from pathlib import Path
+
+import pytest
+
+from .evidence import EVIDENCE
+from .options import repo_root, settings_of
+
+REPORT_DIR = pytest.StashKey[Path]()
+IDENTITY = pytest.StashKey[dict[str, str]]()
+
+
+def _runs_suites(config: pytest.Config) -> bool:
+    suites = repo_root() / "suites"
+    paths = [Path(a.split("::")[0]).resolve() for a in config.args] or [suites]
+    return any(p == suites or suites in p.parents for p in paths)
+
+
+def configure_outputs(config: pytest.Config) -> None:
+    """Conformance runs write report.html, junit.xml and allure-results into one folder."""
+    if not _runs_suites(config) or hasattr(config, "workerinput"):
+        return
+    settings = settings_of(config)
+    given = config.getoption("--report-dir")
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    folder = Path(given) if given else repo_root() / "reports" / f"{stamp}-{settings.loaded.profile.id}"
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "traces").mkdir(exist_ok=True)
+    config.stash[REPORT_DIR] = folder
+    option = config.option
+    if not getattr(option, "htmlpath", None):
+        option.htmlpath = str(folder / "report.html")
+        option.self_contained_html = True
+    if not getattr(option, "xmlpath", None):
+        option.xmlpath = str(folder / "junit.xml")
+    if not getattr(option, "allure_report_dir", None):
+        option.allure_report_dir = str(folder / "allure-results")
+        option.clean_alluredir = True
+    _set_metadata(config)
+
+
+def report_dir(config: pytest.Config) -> Path | None:
+    return config.stash.get(REPORT_DIR, None)
+
+
+def _metadata(config: pytest.Config) -> dict[str, object] | None:
+    try:
+        from pytest_metadata.plugin import metadata_key
+    except ImportError:  # pragma: no cover - pytest-html always brings pytest-metadata
+        return None
+    return config.stash.get(metadata_key, None)
+
+
+def _set_metadata(config: pytest.Config) -> None:
+    data = _metadata(config)
+    if data is None:
+        return
+    settings = settings_of(config)
+    loaded = settings.loaded
+    data["Device profile"] = f"{loaded.profile.id} ({loaded.path.name})"
+    data["Profile sha256"] = loaded.sha256
+    data["Profile files"] = ", ".join(p.name for p in loaded.chain)
+    for key, value in settings.bus.kwargs.items():
+        data[f"Bus {key}"] = f"{value} (from {settings.bus.sources.get(key, 'default')})"
+    data["Node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
+
+
+def record_identity(config: pytest.Config, identity: dict[str, str]) -> None:
+    """Called by the dut fixture once the device's identity has been read."""
+    config.stash[IDENTITY] = identity
+    data = _metadata(config)
+    if data is not None:
+        for key, value in identity.items():
+            data[f"Device {key}"] = value
+
+
+def header_lines(config: pytest.Config) -> list[str]:
+    settings = settings_of(config)
+    loaded = settings.loaded
+    lines = [
+        f"device profile: {loaded.profile.id} ({loaded.path}) sha256 {loaded.sha256[:16]}",
+        f"bus: {settings.bus.describe()}",
+        f"node-id: {settings.node_id} ({settings.node_id_source})",
+    ]
+    folder = report_dir(config)
+    if folder:
+        lines.append(f"reports: {folder}")
+    return lines
+
+
+def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pytest.TestReport) -> None:
+    """Add measurements, deviations and the trace link to the HTML report and the allure result."""
+    evidence = item.stash.get(EVIDENCE, None)
+    if evidence is None or report.when != "call":
+        return
+    try:
+        import pytest_html
+    except ImportError:  # pragma: no cover
+        return
+    extras = list(getattr(report, "extras", []))
+    rows = []
+    if evidence.spec:
+        rows.append(f"<tr><th>basis</th><td>{html.escape(evidence.spec)}</td></tr>")
+    for m in evidence.measurements:
+        rows.append(f"<tr><th>measurement</th><td>{html.escape(m.describe())}</td></tr>")
+    for quirk_id, text in evidence.deviations:
+        rows.append(f"<tr><th>documented deviation</th><td>{html.escape(quirk_id)}: {html.escape(text)}</td></tr>")
+    for note in evidence.notes:
+        rows.append(f"<tr><th>note</th><td>{html.escape(note)}</td></tr>")
+    if rows:
+        extras.append(pytest_html.extras.html(f"<table class='evidence'>{''.join(rows)}</table>"))
+    folder = report_dir(item.config)
+    if evidence.trace_path and evidence.trace_path.exists() and folder:
+        relative = evidence.trace_path.relative_to(folder).as_posix()
+        extras.append(pytest_html.extras.url(relative, name="bus trace (ASC)"))
+    report.extras = extras
+    for quirk_id, _ in evidence.deviations:
+        report.user_properties.append(("documented_deviation", quirk_id))
+
+
+def html_summary(prefix: list[str], session: pytest.Session) -> None:
+    config = session.config
+    settings = settings_of(config)
+    profile = settings.loaded.profile
+    identity = config.stash.get(IDENTITY, {})
+    rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in identity.items())
+    prefix.append(f"<h2>Device identity (read from the device)</h2><table>{rows or '<tr><td>not read</td></tr>'}</table>")
+    quirk_rows = "".join(
+        f"<tr><td>{html.escape(qid)}</td><td>{html.escape(q.title)}</td><td>{html.escape(q.manual)}</td>"
+        f"<td>{html.escape(q.deviates_from or '')}</td></tr>"
+        for qid, q in profile.quirks.items()
+    )
+    prefix.append(
+        f"<h2>Documented deviations of {html.escape(profile.id)} ({len(profile.quirks)})</h2>"
+        "<table><tr><th>id</th><th>deviation</th><th>manual</th><th>deviates from</th></tr>"
+        f"{quirk_rows}</table>"
+    )
+
+
+def terminal_summary(terminalreporter, config: pytest.Config) -> None:  # noqa: ANN001 - pytest type
+    if REPORT_DIR not in config.stash:
+        return
+    stats = terminalreporter.stats
+    skipped = stats.get("skipped", [])
+    if skipped:
+        reasons: dict[str, int] = {}
+        for rep in skipped:
+            reason = rep.longrepr[2] if isinstance(rep.longrepr, tuple) else str(rep.longrepr)
+            key = reason.replace("Skipped: ", "").split(" (")[0]
+            reasons[key] = reasons.get(key, 0) + 1
+        terminalreporter.write_sep("-", "skipped, by reason")
+        for reason, count in sorted(reasons.items(), key=lambda kv: -kv[1]):
+            terminalreporter.write_line(f"{count:4d}  {reason}")
+    deviations: dict[str, int] = {}
+    for rep in stats.get("passed", []) + stats.get("failed", []):
+        for key, value in rep.user_properties:
+            if key == "documented_deviation":
+                deviations[value] = deviations.get(value, 0) + 1
+    if deviations:
+        terminalreporter.write_sep("-", "documented deviations relied on")
+        for quirk_id, count in sorted(deviations.items()):
+            terminalreporter.write_line(f"{count:4d}  {quirk_id}")
+    terminalreporter.write_sep("-", f"reports in {config.stash[REPORT_DIR]}")
+
+
+def fail_all_skipped(session: pytest.Session) -> None:
+    """A run where every test was skipped is not green (labgrid #610)."""
+    reporter = session.config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is None or REPORT_DIR not in session.config.stash:
+        return
+    stats = reporter.stats
+    ran = len(stats.get("passed", [])) + len(stats.get("failed", [])) + len(stats.get("error", []))
+    if session.testscollected and not ran:
+        reporter.write_line("every test was skipped: nothing was checked, so the run fails", red=True)
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED

@@ -1,0 +1,85 @@
+"""Which tests apply: profile-driven parametrisation, capability skips, destructive gates."""
+
+from __future__ import annotations
+
+import pytest
+
+from ..profile.model import Capabilities, EntrySpec, ObjectSpec
+from .options import settings_of
+
+#: fixture name -> which profile entries it is parametrised with
+ENTRY_FIXTURES = {
+    "od_entry": lambda e: True,
+    "readable_entry": lambda e: e.readable,
+    "read_only_entry": lambda e: e.access in ("ro", "const"),
+    "write_only_entry": lambda e: e.access == "wo",
+    "default_entry": lambda e: e.checks_default,
+}
+EMPTY_REASON = {
+    "od_entry": "the profile declares no objects",
+    "readable_entry": "the profile declares no readable objects",
+    "read_only_entry": "the profile declares no read-only objects",
+    "write_only_entry": "the profile declares no write-only objects",
+    "default_entry": "the profile declares no factory defaults to check",
+}
+
+
+def entry_id(index: int, sub: int, entry: EntrySpec) -> str:
+    """Test ids that read as sentences: '0x6001.00 Measuring units per revolution'."""
+    return f"0x{index:04X}.{sub:02X} {entry.name}"
+
+
+def parametrize_from_profile(metafunc: pytest.Metafunc) -> None:
+    profile = settings_of(metafunc.config).loaded.profile
+    for fixture, wanted in ENTRY_FIXTURES.items():
+        if fixture not in metafunc.fixturenames:
+            continue
+        params = [
+            pytest.param((index, sub, obj, entry), id=entry_id(index, sub, entry))
+            for index, sub, obj, entry in profile.iter_entries()
+            if wanted(entry)
+        ]
+        if not params:
+            params = [pytest.param(None, id="none", marks=pytest.mark.skip(reason=EMPTY_REASON[fixture]))]
+        metafunc.parametrize(fixture, params)
+
+
+def _capability_present(capabilities: Capabilities, name: str) -> bool:
+    value = getattr(capabilities, name)
+    return bool(value)
+
+
+def apply_capability_marks(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Skip tests whose ``requires(...)`` capabilities the profile lacks (reason names them)."""
+    profile = settings_of(config).loaded.profile
+    known = set(Capabilities.model_fields)
+    for item in items:
+        wanted: list[str] = []
+        for mark in item.iter_markers("requires"):
+            if not mark.args or not all(isinstance(a, str) for a in mark.args):
+                raise pytest.UsageError(
+                    f"{item.nodeid}: use pytest.mark.requires('capability', ...) with capability names"
+                )
+            wanted += mark.args
+        unknown = [w for w in wanted if w not in known]
+        if unknown:
+            raise pytest.UsageError(
+                f"{item.nodeid}: unknown capability {', '.join(unknown)}; known: {', '.join(sorted(known))}"
+            )
+        missing = [w for w in wanted if not _capability_present(profile.capabilities, w)]
+        if missing:
+            item.add_marker(pytest.mark.skip(
+                reason=f"not applicable: profile {profile.id} lacks capability {', '.join(missing)} "
+                       f"(capabilities.{missing[0]} in {settings_of(config).loaded.path.name})"
+            ))
+
+
+def check_gates(item: pytest.Item) -> None:
+    """Destructive tests need --allow-destructive on hardware."""
+    settings = settings_of(item.config)
+    if item.get_closest_marker("destructive") and not settings.allow_destructive:
+        pytest.skip("destructive (changes what the device remembers): run with --allow-destructive")
+
+
+def object_has_subs(obj: ObjectSpec) -> bool:
+    return obj.subs is not None

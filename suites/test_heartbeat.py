@@ -1,0 +1,54 @@
+"""Heartbeat producer: 1017h sets the period, 0 disables it (CiA 301 §7.2.8.3.2.2, §7.5.2.32)."""
+
+from __future__ import annotations
+
+import allure
+import pytest
+
+from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.timing import interval_stats
+
+pytestmark = [pytest.mark.spec("CiA 301 §7.2.8.3.2.2 (heartbeat protocol)"), pytest.mark.requires("heartbeat_producer")]
+
+
+def test_heartbeat_period_within_tolerance(dut, heartbeat, evidence):
+    """Over at least 20 intervals, every heartbeat interval is within the profile's tolerance of 1017h."""
+    timing = dut.profile.timing
+    count = timing.heartbeat_intervals + 1
+    mark = dut.frames.mark()
+    samples = dut.heartbeats(mark, count, timeout=count * heartbeat * 1.5 / 1000 + 0.5)
+    assert len(samples) == count, f"only {len(samples)} of {count} heartbeats in time (1017h = {heartbeat} ms)"
+    stats = interval_stats([s.timestamp for s in samples], heartbeat)
+    tolerance = timing.heartbeat_tolerance.allowed_ms(heartbeat)
+    evidence.measure("heartbeat mean interval", round(stats.mean_ms, 3), "ms", heartbeat - tolerance, heartbeat + tolerance)
+    evidence.measure("worst interval error", round(stats.worst_error_ms, 3), "ms", 0, tolerance)
+    allure.attach(stats.csv(), name="heartbeat intervals.csv", attachment_type=allure.attachment_type.CSV)
+    bad = stats.outside(tolerance)
+    assert not bad, (
+        f"{len(bad)} of {stats.count} intervals off by more than {tolerance:.1f} ms from {heartbeat} ms: "
+        + ", ".join(f"#{n}: {i:.1f} ms" for n, i in bad[:8])
+    )
+
+
+def test_heartbeat_frame_format(dut, heartbeat):
+    """Heartbeat frames are 700h+node-id, DLC 1, and report pre-operational as 7Fh."""
+    mark = dut.frames.mark()
+    samples = dut.heartbeats(mark, 3, timeout=4 * heartbeat / 1000 + 0.5)
+    assert len(samples) == 3, f"only {len(samples)} heartbeats within {4 * heartbeat} ms"
+    wrong = [s for s in samples if s.dlc != 1 or s.state != 0x7F]
+    assert not wrong, "heartbeat in pre-operational must be DLC 1 with 7Fh; observed " + ", ".join(
+        f"DLC {s.dlc} state {s.state:02X}h" for s in wrong
+    )
+
+
+def test_heartbeat_zero_disables(dut, heartbeat, settings_journal, evidence):
+    """Writing 0 to 1017h stops the heartbeat."""
+    mark = dut.frames.mark()
+    assert dut.heartbeats(mark, 2, timeout=3 * heartbeat / 1000 + 0.5), "heartbeat did not start"
+    settings_journal.write(0x1017, 0, b"\x00\x00")
+    stopped = dut.frames.mark()
+    window = 3 * heartbeat / 1000 + dut.profile.timing.nmt_settle_ms / 1000
+    late = dut.frames.quiet_period(lambda m: m.is_rx and m.arbitration_id == 0x700 + dut.node_id, window, stopped)
+    # one heartbeat may already be on its way when the write is processed
+    evidence.measure("heartbeats after 1017h = 0", len(late), "frames", 0, 1)
+    assert len(late) <= 1, f"{len(late)} heartbeats in {window * 1000:.0f} ms after 1017h = 0:\n{format_frames(late[:5])}"

@@ -1,0 +1,84 @@
+"""Identity and device type: 1000h, 1008h, 1018h (CiA 301 §7.5.2.1, §7.5.2.9, §7.5.2.23)."""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.checks import describe_value
+
+pytestmark = pytest.mark.spec("CiA 301 §7.5.2")
+
+
+def _expect(value, what: str, reason: str):
+    if value is None:
+        pytest.skip(f"not applicable: the profile gives no {what} ({reason})")
+    return value
+
+
+@pytest.mark.spec("CiA 301 §7.5.2.1 (1000h device type)")
+def test_device_type_matches_profile(dut, evidence):
+    """1000h reads the device type the profile declares (profile number + encoder type)."""
+    expected = _expect(dut.profile.identity.device_type, "device type", "identity.device_type")
+    observed = dut.read_uint(0x1000)
+    assert observed == expected, f"1000h: expected {describe_value(expected)}, observed {describe_value(observed)}"
+
+
+@pytest.mark.spec("CiA 301 §7.5.2.9 (1008h manufacturer device name)")
+def test_device_name_matches_profile(dut):
+    """1008h reads the manufacturer device name the profile declares."""
+    expected = _expect(dut.profile.identity.device_name, "device name", "identity.device_name")
+    observed = dut.read(0x1008).decode("latin-1").rstrip("\x00")
+    assert observed == expected, f"1008h: expected {expected!r}, observed {observed!r}"
+
+
+@pytest.mark.spec("CiA 301 §7.5.2.23 (1018h sub 1 vendor-ID)")
+def test_vendor_id_matches_profile(dut):
+    """1018h sub 1 holds the CiA-assigned vendor-ID of the manufacturer."""
+    expected = _expect(dut.profile.identity.vendor_id, "vendor-ID", "identity.vendor_id")
+    observed = dut.read_uint(0x1018, 1)
+    assert observed == expected, f"1018h.01: expected {describe_value(expected)}, observed {describe_value(observed)}"
+
+
+@pytest.mark.spec("CiA 301 §7.5.2.23 (1018h sub 2 product code)")
+def test_product_code_matches_profile(dut):
+    """1018h sub 2 holds the product code the profile declares."""
+    expected = _expect(dut.profile.identity.product_code, "product code", "identity.product_code")
+    observed = dut.read_uint(0x1018, 2)
+    assert observed == expected, f"1018h.02: expected {describe_value(expected)}, observed {describe_value(observed)}"
+
+
+@pytest.mark.spec("CiA 301 §7.5.2.23 (1018h sub 3 revision number)")
+def test_revision_number_in_declared_range(dut, evidence):
+    """1018h sub 3 lies in the revision range the manual covers."""
+    revision = _expect(dut.profile.identity.revision, "revision range", "identity.revision")
+    observed = dut.read_uint(0x1018, 3)
+    evidence.note(f"revision number 0x{observed:08X}")
+    assert revision.min <= observed <= revision.max, (
+        f"1018h.03: 0x{observed:08X} is outside the range the profile covers "
+        f"(0x{revision.min:08X}..0x{revision.max:08X}); a firmware the manual does not describe"
+    )
+
+
+@pytest.mark.spec("CiA 301 §7.5.2.23 (1018h sub 0 highest sub-index)")
+def test_identity_record_size(dut):
+    """1018h sub 0 equals the highest identity sub-index the profile declares."""
+    entry = dut.profile.entry(0x1018, 0)
+    if entry is None or entry.default is None:
+        pytest.skip("not applicable: the profile declares no 1018h sub 0 value")
+    observed = dut.read_uint(0x1018, 0)
+    assert observed == entry.default, f"1018h.00: expected {entry.default}, observed {observed}"
+
+
+@pytest.mark.spec("CiA 406 650Bh / CiA 301 1018h sub 4 (serial number)")
+def test_serial_number_consistent(dut, evidence):
+    """The serial number in 1018h sub 4 equals the one in 650Bh where the device has both."""
+    profile = dut.profile
+    if profile.entry(0x1018, 4) is None:
+        pytest.skip("not applicable: the profile declares no 1018h sub 4 serial number")
+    serial = dut.read_uint(0x1018, 4)
+    evidence.note(f"serial number {serial}")
+    other = profile.entry(0x650B, 1) and (0x650B, 1) or profile.entry(0x650B, 0) and (0x650B, 0)
+    if not other:
+        pytest.skip("not applicable: the profile declares no 650Bh serial number to compare with")
+    observed = dut.read_uint(*other)
+    assert observed == serial, f"650Bh.{other[1]:02X} = {observed} but 1018h.04 = {serial}"

@@ -1,0 +1,163 @@
+"""NMT state machine, boot-up and per-state service gating (CiA 301 §7.3.2, §7.2.8.3.2.1)."""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.nmt_observer import NmtObserver
+
+pytestmark = pytest.mark.spec("CiA 301 §7.3.2 (NMT state machine)")
+
+TRANSITIONS = [
+    ("pre-operational", "start", 0x05),
+    ("pre-operational", "stop", 0x04),
+    ("operational", "pre-operational", 0x7F),
+    ("operational", "stop", 0x04),
+    ("stopped", "start", 0x05),
+    ("stopped", "pre-operational", 0x7F),
+]
+
+
+@pytest.fixture
+def nmt(dut, heartbeat, nmt_reset_after) -> NmtObserver:
+    return NmtObserver(dut, heartbeat)
+
+
+@pytest.mark.spec("CiA 301 §7.2.8.3.2.1 (boot-up protocol)")
+@pytest.mark.parametrize("reset", ["reset-node", "reset-communication"])
+def test_bootup_after_reset(dut, reset, evidence):
+    """After NMT reset node / reset communication the device sends one boot-up frame 700h+id [00h]."""
+    mark = dut.nmt(reset)
+    boot = dut.wait_bootup(mark)
+    assert boot is not None, (
+        f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after {reset}\n"
+        f"{format_frames(dut.frames.since(mark)) or '  no frames'}"
+    )
+    elapsed_ms = (boot.timestamp - dut.frames.since(mark, lambda m: not m.is_rx)[0].timestamp) * 1000
+    evidence.measure("boot-up delay", elapsed_ms, "ms", 0, dut.profile.timing.bootup_max_ms)
+    assert boot.dlc == 1, f"boot-up frame has DLC {boot.dlc}, CiA 301 requires 1"
+
+
+@pytest.mark.parametrize(("start", "command", "expected"), TRANSITIONS,
+                         ids=[f"{s} --{c}--> {e:02X}h" for s, c, e in TRANSITIONS])
+def test_transition(dut, nmt, start, command, expected):
+    """Each NMT command moves the device to its target state, as the heartbeat state byte shows."""
+    if start != "pre-operational":
+        nmt.go_to(start)
+    mark = nmt.command(command)
+    nmt.expect_state(mark, expected, f"{command} from {start}")
+
+
+def test_broadcast_command_applies(dut, nmt):
+    """An NMT command to node-id 0 (all nodes) is obeyed like an addressed one."""
+    mark = nmt.command("start", node_id=0)
+    nmt.expect_state(mark, 0x05, "start remote node to all nodes (node-id 0)")
+
+
+def test_command_for_other_node_ignored(dut, nmt):
+    """An NMT command addressed to another node-id leaves the device in its state."""
+    other = dut.node_id % 127 + 1
+    mark = nmt.command("start", node_id=other)
+    changed = dut.wait_heartbeat(mark, nmt.window_s, state=0x05)
+    assert changed is None, f"device went operational on a start command addressed to node {other}"
+
+
+def test_no_sdo_in_stopped(dut, nmt):
+    """In stopped the device does not answer SDO requests (only NMT and error control remain)."""
+    nmt.go_to("stopped")
+    response = dut.sdo_request(sdo_frames.upload_request(0x1000, 0))
+    assert response is None, f"SDO answered in stopped: {response.describe()}"
+
+
+def _pdo_stimulus(dut, device_control, duration_s: float):
+    """Turn the shaft and send SYNCs for ``duration_s``: every TPDO trigger the device may have."""
+    if device_control is not None:
+        device_control.set_speed(1.0)
+    mark = dut.frames.mark()
+    count = 10
+    for _ in range(count):
+        dut.network.send_message(0x80, b"")
+        dut.frames.quiet_period(lambda m: False, duration_s / count)  # pacing window between SYNCs
+    if device_control is not None:
+        device_control.set_speed(0.0)
+    return mark
+
+
+@pytest.fixture
+def shaft(simulator):
+    """The simulator's shaft control, or None on hardware (the SYNC-driven TPDOs still apply)."""
+    return None if simulator is None else simulator.control
+
+
+@pytest.mark.requires("tpdos")
+@pytest.mark.parametrize("state", ["pre-operational", "stopped"])
+def test_no_pdo_outside_operational(dut, nmt, shaft, state):
+    """No TPDO is sent in pre-operational or stopped, although SYNCs arrive and the shaft turns."""
+    if state != "pre-operational":
+        nmt.go_to(state)
+    mark = _pdo_stimulus(dut, shaft, 0.3)
+    pdos = dut.frames.since(mark, dut.is_pdo)
+    assert not pdos, f"{len(pdos)} TPDO(s) in {state}:\n{format_frames(pdos[:5])}"
+
+
+@pytest.mark.requires("tpdos")
+def test_pdo_in_operational(dut, nmt, shaft):
+    """In operational the same stimulus makes the device send TPDOs (so the silence above means something)."""
+    nmt.go_to("operational")
+    mark = _pdo_stimulus(dut, shaft, 0.3)
+    pdos = dut.frames.since(mark, dut.is_pdo)
+    assert pdos, "no TPDO in operational during 10 SYNCs and a turning shaft: check the default PDO configuration"
+
+
+def test_stopped_sends_only_error_control(dut, nmt, shaft):
+    """In stopped the device sends nothing but heartbeats, whatever happens on the bus."""
+    nmt.go_to("stopped")
+    mark = _pdo_stimulus(dut, shaft, 0.3)
+    dut.network.send_message(0x600 + dut.node_id, sdo_frames.upload_request(0x1000, 0))
+    own = dut.frames_from_node(mark, 0.1)
+    others = [m for m in own if m.arbitration_id != 0x700 + dut.node_id]
+    assert not others, f"frames other than heartbeat in stopped:\n{format_frames(others[:5])}"
+
+
+def _app_parameter(profile):
+    """A rw application parameter with an integer default and room for default+1."""
+    from encoder_conformance.profile import datatypes
+
+    for index, sub, _, entry in profile.iter_entries():
+        if index < 0x2000 or not entry.writable or not entry.readable or not isinstance(entry.default, int):
+            continue
+        if entry.persisted_by not in ("store_all", "store_app", "store_manufacturer"):
+            continue
+        limits = datatypes.value_range(entry.type)
+        top = entry.max if entry.max is not None else (limits[1] if limits else None)
+        if top is not None and entry.default + 1 <= top:
+            return index, sub, entry
+    return None
+
+
+@pytest.mark.spec("CiA 301 §7.3.2.2.3 (reset node: application parameters to their stored/default values)")
+def test_reset_node_reloads_application_parameters(dut, settings_journal):
+    """An unstored change of an application parameter is undone by NMT reset node."""
+    found = _app_parameter(dut.profile)
+    if found is None:
+        pytest.skip("not applicable: the profile declares no writable application parameter with a default")
+    index, sub, entry = found
+    size = len(dut.read(index, sub))
+    settings_journal.write(index, sub, (entry.default + 1).to_bytes(size, "little"))
+    dut.reset_node_and_wait()
+    observed = dut.read_uint(index, sub)
+    assert observed == entry.default, (
+        f"{index:04X}h.{sub:02X} {entry.name}: {observed} after reset node, expected the default {entry.default}"
+    )
+
+
+@pytest.mark.spec("CiA 301 §7.3.2.2.3 (reset communication: 1000h-1FFFh to their stored/default values)")
+def test_reset_communication_reloads_communication_parameters(dut, heartbeat):
+    """An unstored 1017h change is undone by NMT reset communication."""
+    default = dut.profile.entry(0x1017, 0).default
+    mark = dut.nmt("reset-communication")
+    assert dut.wait_bootup(mark) is not None, "no boot-up after reset communication"
+    observed = dut.read_uint(0x1017)
+    assert observed == default, f"1017h = {observed} after reset communication, expected the default {default}"
