@@ -62,10 +62,12 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
     return reporting.header_lines(config)
 
 
+@pytest.hookimpl(optionalhook=True)
 def pytest_html_report_title(report) -> None:
     report.title = "CANopen encoder conformance report"
 
 
+@pytest.hookimpl(optionalhook=True)
 def pytest_html_results_summary(prefix: list[str], summary: list[str], postfix: list[str], session) -> None:
     reporting.html_summary(prefix, session)
 

@@ -7,6 +7,7 @@ import pytest
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_observer import NmtObserver
+from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2 (NMT state machine)")
 
@@ -121,35 +122,20 @@ def test_stopped_sends_only_error_control(dut, nmt, shaft):
     assert not others, f"frames other than heartbeat in stopped:\n{format_frames(others[:5])}"
 
 
-def _app_parameter(profile):
-    """A rw application parameter with an integer default and room for default+1."""
-    from encoder_conformance.profile import datatypes
-
-    for index, sub, _, entry in profile.iter_entries():
-        if index < 0x2000 or not entry.writable or not entry.readable or not isinstance(entry.default, int):
-            continue
-        if entry.persisted_by not in ("store_all", "store_app", "store_manufacturer"):
-            continue
-        limits = datatypes.value_range(entry.type)
-        top = entry.max if entry.max is not None else (limits[1] if limits else None)
-        if top is not None and entry.default + 1 <= top:
-            return index, sub, entry
-    return None
-
-
 @pytest.mark.spec("CiA 301 §7.3.2.2.3 (reset node: application parameters to their stored/default values)")
 def test_reset_node_reloads_application_parameters(dut, settings_journal):
     """An unstored change of an application parameter is undone by NMT reset node."""
-    found = _app_parameter(dut.profile)
+    found = changeable_parameter(
+        dut.profile, lambda index, e: index >= 0x2000 and e.persisted_by in STORE_GROUPS
+    )
     if found is None:
         pytest.skip("not applicable: the profile declares no writable application parameter with a default")
-    index, sub, entry = found
-    size = len(dut.read(index, sub))
-    settings_journal.write(index, sub, (entry.default + 1).to_bytes(size, "little"))
+    size = len(dut.read(found.index, found.sub))
+    settings_journal.write(found.index, found.sub, found.new_value.to_bytes(size, "little"))
     dut.reset_node_and_wait()
-    observed = dut.read_uint(index, sub)
-    assert observed == entry.default, (
-        f"{index:04X}h.{sub:02X} {entry.name}: {observed} after reset node, expected the default {entry.default}"
+    observed = dut.read_uint(found.index, found.sub)
+    assert observed == found.entry.default, (
+        f"{found.label}: {observed} after reset node, expected the default {found.entry.default}"
     )
 
 

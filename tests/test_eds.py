@@ -327,7 +327,7 @@ def test_import_failure_is_a_value_error(tmp_path, monkeypatch):
 def test_draft_validates_after_yaml_round_trip(name, tmp_path):
     profile, todos, text = draft_profile(name, tmp_path)
     assert profile.schema_version == 1
-    assert text.startswith("# Profile draft generated from EDS")
+    assert text.startswith(f"# Profile draft {profile.id!r} generated from an EDS")
     assert "# TODO:" in text
     assert todos
     assert "\n  0x1000:\n" in text  # hex object indices

@@ -169,3 +169,13 @@ def abort_code_of(exc: SdoAbortedError) -> int:
 
 def u32(value: int) -> bytes:
     return struct.pack("<I", value)
+
+
+def wake_if_silent(dut: DeviceUnderTest) -> str | None:
+    """Devices with automatic bit-rate detection stay silent after power-on until they see a
+    frame; send one SYNC as the manual prescribes. Returns the quirk id relied on, if any."""
+    found = dut.profile.quirk_with_effect("silent_until_bus_traffic")
+    if found is None:
+        return None
+    dut.network.send_message(0x80, b"")
+    return found[0]

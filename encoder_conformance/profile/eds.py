@@ -92,6 +92,7 @@ _ACCESS_ALIASES = {
 }  # fmt: skip
 
 _VAR, _DOMAIN, _ARRAY, _RECORD = 0x7, 0x2, 0x8, 0x9
+_SECTION_HEADER = re.compile(r"^\[([^\]]+)\]\s*(?:[;#].*)?$")
 _BOOL_WORDS = {"true": 1, "yes": 1, "on": 1, "false": 0, "no": 0, "off": 0}
 _NODEID_FORMULA = re.compile(
     r"^\$NODEID(?:\s*\+\s*(?P<a>0x[0-9a-f]+|\d+))?$|^(?P<b>0x[0-9a-f]+|\d+)\s*\+\s*\$NODEID$", re.I
@@ -216,9 +217,10 @@ class _IniReader:
             line = raw.strip()
             if not line or line.startswith((";", "#", "//")):
                 continue
-            if line.startswith("[") and line.endswith("]"):
-                self._section(line[1:-1].strip())
-            elif "=" in line and self.current is not None:
+            header = _SECTION_HEADER.match(line)
+            if header:
+                self._section(header.group(1).strip())
+            elif "=" in line and self.current is not None and line.partition("=")[0].strip():
                 key, _, value = line.partition("=")
                 self._option(key.strip(), value)
             else:
@@ -366,9 +368,10 @@ def _fix_object(sections: Sections, origins: dict[str, str], obj: _Object, fixes
     assert obj.main is not None
     main = sections[obj.main]
     _fix_name(main, obj.main, f"Object {obj.index:04X}", fixes)
+    compact = parse_number(main.pop("CompactSubObj", "")) or 0
     if "ObjectType" in main:
         _fix_numbers(sections, obj.main, ("ObjectType",), fixes)
-    elif obj.subs or "CompactSubObj" in main:
+    elif obj.subs or compact:
         main["ObjectType"] = f"0x{_RECORD:X}" if obj.subs else f"0x{_ARRAY:X}"
         fixes.append(f"[{obj.main}] has no ObjectType but sub-indices; set {main['ObjectType']}")
     kind = _object_type(main)
@@ -380,14 +383,13 @@ def _fix_object(sections: Sections, origins: dict[str, str], obj: _Object, fixes
         if obj.subs or obj.extras:
             fixes.append(f"[{obj.main}] is a VAR; dropped its sub-index sections")
             _drop(sections, [*obj.subs.values(), *obj.extras])
-        if "CompactSubObj" in main:
-            del main["CompactSubObj"]
-            fixes.append(f"[{obj.main}] CompactSubObj on a VAR; removed")
+        if compact:
+            fixes.append(f"[{obj.main}] CompactSubObj on a VAR; ignored")
         if not _fix_entry(sections, obj.main, fixes):
             del sections[obj.main]
         return
-    if "CompactSubObj" in main:
-        _expand_compact(sections, origins, obj, fixes)
+    if compact:
+        _expand_compact(sections, origins, obj, compact, fixes)
     else:
         if obj.extras:
             fixes.append(f"{', '.join(f'[{n}]' for n in obj.extras)} without CompactSubObj; dropped")
@@ -459,11 +461,12 @@ def _fix_default(section: dict[str, str], name: str, code: int, fixes: list[str]
         section["DefaultValue"] = str(value)
 
 
-def _expand_compact(sections: Sections, origins: dict[str, str], obj: _Object, fixes: list[str]) -> None:
-    """Write a CompactSubObj array out as explicit sub-index sections (CiA 306 §4.5.2.5)."""
+def _expand_compact(
+    sections: Sections, origins: dict[str, str], obj: _Object, count: int, fixes: list[str]
+) -> None:
+    """Write a CompactSubObj array out as explicit sub-index sections 0..count (CiA 306)."""
     assert obj.main is not None
     main = sections[obj.main]
-    count = parse_number(main.pop("CompactSubObj")) or 0
     names = sections.pop(f"{obj.index:04X}Name", {})
     values = sections.pop(f"{obj.index:04X}Value", {})
     template = {k: main.pop(k) for k in ("DataType", "AccessType", "PDOMapping", "LowLimit", "HighLimit")
@@ -608,7 +611,7 @@ def _objects_from_od(
             continue
         manual = f"EDS {filename} [{cleaned.origins.get(f'{index:04X}', f'{index:04X}')}]"
         if isinstance(obj, ODVariable):
-            objects[index] = {"name": obj.name, **_entry(obj, cleaned, manual, notes), "manual": manual}
+            objects[index] = {"name": obj.name, **_entry(obj, cleaned, notes), "manual": manual}
             continue
         subs = {sub: _sub_entry(obj, sub, cleaned, filename, notes) for sub in sorted(obj.subindices)}
         if not subs:
@@ -625,10 +628,10 @@ def _sub_entry(
     var = obj.subindices[sub]
     section = f"{obj.index:04X}sub{sub:X}"
     manual = f"EDS {filename} [{cleaned.origins.get(section, section)}]"
-    return {"name": var.name, **_entry(var, cleaned, manual, notes), "manual": manual}
+    return {"name": var.name, **_entry(var, cleaned, notes), "manual": manual}
 
 
-def _entry(var: ODVariable, cleaned: CleanedEds, manual: str, notes: list[str]) -> dict[str, Any]:
+def _entry(var: ODVariable, cleaned: CleanedEds, notes: list[str]) -> dict[str, Any]:
     """type/access/default/min/max/pdo_mappable of one canopen variable."""
     where = f"0x{var.index:04X}.{var.subindex} {var.name!r}"
     type_name = _type_name(var.data_type)
@@ -642,8 +645,8 @@ def _entry(var: ODVariable, cleaned: CleanedEds, manual: str, notes: list[str]) 
     default = _convert_value(getattr(var, "default_raw", None), type_name, where, "default", notes)
     if default is not None:
         entry["default"] = default
-    low = _convert_value(section.get("LowLimit"), type_name, where, "LowLimit", notes, formulas=False)
-    high = _convert_value(section.get("HighLimit"), type_name, where, "HighLimit", notes, formulas=False)
+    low = _convert_value(section.get("LowLimit"), type_name, where, "LowLimit", notes, is_default=False)
+    high = _convert_value(section.get("HighLimit"), type_name, where, "HighLimit", notes, is_default=False)
     if low is not None and high is not None and low > high:
         notes.append(f"{where}: LowLimit {low} > HighLimit {high}; limits dropped")
         low = high = None
@@ -664,16 +667,20 @@ def _section_of(var: ODVariable) -> str:
 
 
 def _convert_value(
-    raw: str | None, type_name: str, where: str, what: str, notes: list[str], formulas: bool = True
+    raw: str | None, type_name: str, where: str, what: str, notes: list[str], is_default: bool = True
 ) -> int | str | None:
-    """A DefaultValue/LowLimit/HighLimit text as the profile holds it (None: not representable)."""
+    """A DefaultValue/LowLimit/HighLimit text as the profile holds it (None: not representable).
+
+    Strings stay strings (defaults only), $NODEID formulas stay formulas, numbers become ints
+    (hex of a signed type as two's complement).
+    """
     if raw is None or not str(raw).strip():
         return None
     raw = str(raw).strip()
     canonical = datatypes.canonical_name(type_name)
     if canonical in datatypes.STRING_TYPES:
-        return raw if formulas else None
-    if formulas and is_node_id_expression(raw):
+        return raw if is_default else None
+    if is_default and is_node_id_expression(raw):
         return raw
     limits = datatypes.value_range(canonical)
     value = parse_number(raw)
@@ -965,9 +972,8 @@ def _yaml_ready(draft: dict[str, Any]) -> dict[str, Any]:
 
 def write_profile_draft(draft: dict[str, Any], out: Path, todos: list[str] | None = None) -> None:
     """Write ``draft`` as YAML, hex indices/ids/COB-IDs, with the TODO notes as a header comment."""
-    source = draft.get("identity", {}).get("manual", "an EDS")
     header = [
-        f"# Profile draft generated from {source} by encoder_conformance.profile.eds.",
+        f"# Profile draft {draft.get('id', '')!r} generated from an EDS by encoder_conformance.profile.eds.",
         "# Check every TODO against the device manual, then delete this header.",
     ]
     if todos:

@@ -1,0 +1,90 @@
+"""Run the suites against the simulator once per named fault and tabulate which tests catch which fault.
+
+A conformance test that no fault can make fail proves nothing; the matrix shows it. Each run
+is a separate pytest process (the same command a user runs), parsed from its JUnit XML.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+_ENTRY_PARAM = re.compile(r"\[0x[0-9A-F]{4}\.[0-9A-F]{2} [^\]]*\]$")
+
+
+def test_key(name: str) -> str:
+    """Group per-entry parametrisations under their test function; keep fixed parameters apart."""
+    return _ENTRY_PARAM.sub("[each entry]", name)
+
+
+@dataclass
+class RunResult:
+    fault: str | None
+    returncode: int
+    outcomes: dict[str, str] = field(default_factory=dict)  # test name -> passed/failed/skipped/error
+
+    def keys_with(self, outcome: str) -> set[str]:
+        return {test_key(n) for n, o in self.outcomes.items() if o == outcome}
+
+
+def _parse_junit(path: Path) -> dict[str, str]:
+    outcomes = {}
+    for case in ET.parse(path).getroot().iter("testcase"):
+        name = f"{case.get('classname', '').split('.')[-1]}::{case.get('name')}"
+        if case.find("failure") is not None:
+            outcomes[name] = "failed"
+        elif case.find("error") is not None:
+            outcomes[name] = "error"
+        elif case.find("skipped") is not None:
+            outcomes[name] = "skipped"
+        else:
+            outcomes[name] = "passed"
+    return outcomes
+
+
+def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None = None) -> RunResult:
+    """One pytest run of suites/ against the simulator with ``fault`` injected."""
+    folder = workdir / (fault or "no-fault")
+    command = [sys.executable, "-m", "pytest", str(REPO_ROOT / "suites"), "-q", "-p", "no:cacheprovider",
+               "--device-profile", profile, "--report-dir", str(folder), "--tb=no", "-o", "console_output_style=classic"]
+    if fault:
+        command += ["--sim-fault", fault]
+    if select:
+        command += ["-k", select]
+    env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
+    completed = subprocess.run(command, cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=600)
+    junit = folder / "junit.xml"
+    outcomes = _parse_junit(junit) if junit.exists() else {}
+    if not outcomes:
+        raise RuntimeError(f"no results from {' '.join(command)}:\n{completed.stdout[-3000:]}\n{completed.stderr[-3000:]}")
+    return RunResult(fault, completed.returncode, outcomes)
+
+
+def run_matrix(profile: str, faults: list[str], workdir: Path, select: str | None = None,
+               workers: int = 2) -> tuple[RunResult, list[RunResult]]:
+    """The fault-free baseline plus one run per fault (``workers`` runs in parallel)."""
+    baseline = run_suite(profile, None, workdir, select)
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        results = list(pool.map(lambda f: run_suite(profile, f, workdir, select), faults))
+    return baseline, results
+
+
+def format_matrix(baseline: RunResult, results: list[RunResult]) -> str:
+    """Text table: one row per test, the faults that make it fail."""
+    tests = sorted(baseline.keys_with("passed"))
+    lines = [f"fault matrix ({len(results)} faults x {len(tests)} tests passing without faults)"]
+    for test in tests:
+        catching = [r.fault for r in results if test in r.keys_with("failed") | r.keys_with("error")]
+        lines.append(f"  {test:90s} {', '.join(c for c in catching if c) or '** NO FAULT MAKES IT FAIL **'}")
+    lines.append("faults -> number of tests they make fail:")
+    for result in results:
+        failing = result.keys_with("failed") | result.keys_with("error")
+        lines.append(f"  {result.fault:32s} {len(failing)}")
+    return "\n".join(lines)

@@ -1,0 +1,52 @@
+"""Pick parameters a test may change safely, and a value to change them to, from the profile."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from .profile import datatypes
+from .profile.model import DeviceProfile, EntrySpec
+
+STORE_GROUPS = ("store_all", "store_comm", "store_app", "store_manufacturer")
+
+
+@dataclass(frozen=True)
+class Changeable:
+    index: int
+    sub: int
+    entry: EntrySpec
+    new_value: int
+
+    @property
+    def label(self) -> str:
+        return f"{self.index:04X}h.{self.sub:02X} {self.entry.name}"
+
+
+def _other_value(profile: DeviceProfile, index: int, entry: EntrySpec) -> int | None:
+    """A valid value different from the default (a harmless heartbeat period for 1017h)."""
+    if not isinstance(entry.default, int):
+        return None
+    if index == 0x1017:
+        return max(entry.default + 1, 10 * profile.timing.heartbeat_test_period_ms)
+    limits = datatypes.value_range(entry.type)
+    top = entry.max if entry.max is not None else (limits[1] if limits else None)
+    return entry.default + 1 if top is not None and entry.default + 1 <= top else None
+
+
+def changeable_parameter(
+    profile: DeviceProfile, wanted: Callable[[int, EntrySpec], bool], prefer: tuple[int, ...] = ()
+) -> Changeable | None:
+    """The first rw integer entry with a default that ``wanted`` accepts (``prefer`` indices first)."""
+    entries = profile.iter_entries()
+    ordered = [e for e in entries if e[0] in prefer] + [e for e in entries if e[0] not in prefer]
+    for index, sub, _, entry in ordered:
+        if not (entry.writable and entry.readable) or index in (0x1010, 0x1011) or not wanted(index, entry):
+            continue
+        if any(q.effect in ("node_id_object", "bitrate_object") and q.params.get("index") == index
+               for q in profile.quirks.values()):
+            continue  # never move the device to another node-id or bit rate
+        value = _other_value(profile, index, entry)
+        if value is not None:
+            return Changeable(index, sub, entry, value)
+    return None

@@ -1,0 +1,68 @@
+"""Store (1010h) and restore default (1011h) parameters (CiA 301 §7.5.2.13, §7.5.2.14; CTT 8.1-8.9)."""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.checks import assert_abort, expected_aborts
+from encoder_conformance.dut import sdo_frames
+from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter
+
+pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.13/§7.5.2.14"), pytest.mark.destructive,
+              pytest.mark.requires("store_subindices")]
+
+SAVE = (0x65766173).to_bytes(4, "little")
+LOAD = (0x64616F6C).to_bytes(4, "little")
+
+
+@pytest.fixture
+def stored_change(dut, settings_journal):
+    """Change one storable parameter and store it; afterwards put the old value back and store again."""
+    found = changeable_parameter(dut.profile, lambda i, e: e.persisted_by in STORE_GROUPS, prefer=(0x1017,))
+    if found is None:
+        pytest.skip("not applicable: the profile declares no storable parameter with a default")
+    index, sub, entry, value = found.index, found.sub, found.entry, found.new_value
+    original = dut.read(index, sub)
+    settings_journal.write(index, sub, value.to_bytes(len(original), "little"))
+    dut.write(0x1010, 1, SAVE)
+    yield index, sub, entry, value
+    if not dut.lost:
+        dut.write(index, sub, original)
+        dut.write(0x1010, 1, SAVE)
+
+
+def test_stored_value_survives_reset_node(dut, stored_change):
+    """A value stored with 1010h sub 1 'save' is still there after NMT reset node."""
+    index, sub, entry, value = stored_change
+    dut.reset_node_and_wait()
+    observed = dut.read_uint(index, sub)
+    assert observed == value, f"{index:04X}h.{sub:02X} {entry.name}: stored {value}, {observed} after reset node"
+
+
+def test_stored_value_survives_power_cycle(dut, stored_change, power_cycle):
+    """A value stored with 1010h sub 1 'save' is still there after the power is switched off and on."""
+    index, sub, entry, value = stored_change
+    power_cycle()
+    observed = dut.read_uint(index, sub)
+    assert observed == value, f"{index:04X}h.{sub:02X} {entry.name}: stored {value}, {observed} after power cycle"
+
+
+@pytest.mark.requires("restore_subindices")
+def test_restore_defaults_effective_after_reset(dut, stored_change):
+    """After 1011h sub 1 'load' and reset node, the stored value is replaced by the factory default."""
+    index, sub, entry, _ = stored_change
+    dut.write(0x1011, 1, LOAD)
+    dut.reset_node_and_wait()
+    observed = dut.read_uint(index, sub)
+    assert observed == entry.default, f"{index:04X}h.{sub:02X}: {observed} after restore + reset, default {entry.default}"
+
+
+@pytest.mark.parametrize(("index", "name"), [(0x1010, "store"), (0x1011, "restore")])
+def test_wrong_signature_refused(dut, index, name, evidence):
+    """A store/restore command without the 'save'/'load' signature is refused with abort 08000020h."""
+    subs = dut.profile.capabilities.store_subindices if index == 0x1010 else dut.profile.capabilities.restore_subindices
+    if not subs:
+        pytest.skip(f"not applicable: the profile declares no {name} sub-indices")
+    response = dut.expect_abort(sdo_frames.expedited_download_request(index, subs[0], b"SAVE"))
+    assert_abort(dut, response, expected_aborts(dut, "store_signature", evidence),
+                 f"{name} {index:04X}h.{subs[0]:02X} with signature 'SAVE'")
