@@ -98,7 +98,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     run = sub.add_parser("run", help="run the conformance suites (extra arguments go to pytest)")
-    run.add_argument("--profile", default=DEFAULT_PROFILE, help=f"device profile id or file (default {DEFAULT_PROFILE})")
+    run.add_argument("--profile", default=DEFAULT_PROFILE,
+                     help=f"device profile id or file (default {DEFAULT_PROFILE})")
     run.add_argument("--can-interface", help="python-can interface (pcan, kvaser, socketcan, remote ...)")
     run.add_argument("--can-channel")
     run.add_argument("--can-bitrate", type=int)

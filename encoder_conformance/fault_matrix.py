@@ -53,7 +53,7 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     """One pytest run of suites/ against the simulator with ``fault`` injected."""
     folder = workdir / (fault or "no-fault")
     command = [sys.executable, "-m", "pytest", str(REPO_ROOT / "suites"), "-q", "-p", "no:cacheprovider",
-               "--device-profile", profile, "--report-dir", str(folder), "--tb=no", "-o", "console_output_style=classic"]
+               "--device-profile", profile, "--report-dir", str(folder), "--tb=no"]
     if fault:
         command += ["--sim-fault", fault]
     if select:
@@ -63,7 +63,8 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     junit = folder / "junit.xml"
     outcomes = _parse_junit(junit) if junit.exists() else {}
     if not outcomes:
-        raise RuntimeError(f"no results from {' '.join(command)}:\n{completed.stdout[-3000:]}\n{completed.stderr[-3000:]}")
+        output = f"{completed.stdout[-3000:]}\n{completed.stderr[-3000:]}"
+        raise RuntimeError(f"no results from {' '.join(command)}:\n{output}")
     return RunResult(fault, completed.returncode, outcomes)
 
 

@@ -7,6 +7,7 @@ fixtures can drive a simulator in another process without the suites knowing it 
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from multiprocessing.connection import Client, Connection, Listener
 from typing import TYPE_CHECKING, Any
@@ -59,10 +60,8 @@ class SimulatorControl:
         return self._call("describe")
 
     def close(self) -> None:
-        try:
+        with contextlib.suppress(OSError):
             self._conn.close()
-        except OSError:
-            pass
 
 
 def _execute(host: SimulatorHost, command: str, node_id: int | None, args: tuple[Any, ...]) -> Any:
@@ -118,7 +117,7 @@ def serve_control(host: SimulatorHost, address: tuple[str, int]) -> tuple[str, i
 class LocalControl(SimulatorControl):
     """Same API for a simulator running in this process (--sim-inprocess, self-tests)."""
 
-    def __init__(self, host: SimulatorHost, node_id: int | None = None) -> None:  # noqa: D107
+    def __init__(self, host: SimulatorHost, node_id: int | None = None) -> None:
         self._host = host
         self._node_id = node_id
         self._lock = threading.Lock()

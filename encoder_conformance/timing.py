@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import statistics
 from dataclasses import dataclass
 
@@ -37,5 +38,5 @@ class IntervalStats:
 
 def interval_stats(timestamps: list[float], period_ms: float) -> IntervalStats:
     """Intervals between consecutive timestamps (seconds in, milliseconds out)."""
-    intervals = tuple((b - a) * 1000 for a, b in zip(timestamps, timestamps[1:], strict=False))
+    intervals = tuple((b - a) * 1000 for a, b in itertools.pairwise(timestamps))
     return IntervalStats(period_ms, intervals)

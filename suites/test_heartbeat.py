@@ -8,7 +8,10 @@ import pytest
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.timing import interval_stats
 
-pytestmark = [pytest.mark.spec("CiA 301 §7.2.8.3.2.2 (heartbeat protocol)"), pytest.mark.requires("heartbeat_producer")]
+pytestmark = [
+    pytest.mark.spec("CiA 301 §7.2.8.3.2.2 (heartbeat protocol)"),
+    pytest.mark.requires("heartbeat_producer"),
+]
 
 
 def test_heartbeat_period_within_tolerance(dut, heartbeat, evidence):
@@ -20,7 +23,9 @@ def test_heartbeat_period_within_tolerance(dut, heartbeat, evidence):
     assert len(samples) == count, f"only {len(samples)} of {count} heartbeats in time (1017h = {heartbeat} ms)"
     stats = interval_stats([s.timestamp for s in samples], heartbeat)
     tolerance = timing.heartbeat_tolerance.allowed_ms(heartbeat)
-    evidence.measure("heartbeat mean interval", round(stats.mean_ms, 3), "ms", heartbeat - tolerance, heartbeat + tolerance)
+    evidence.measure(
+        "heartbeat mean interval", round(stats.mean_ms, 3), "ms", heartbeat - tolerance, heartbeat + tolerance
+    )
     evidence.measure("worst interval error", round(stats.worst_error_ms, 3), "ms", 0, tolerance)
     allure.attach(stats.csv(), name="heartbeat intervals.csv", attachment_type=allure.attachment_type.CSV)
     bad = stats.outside(tolerance)
@@ -51,4 +56,6 @@ def test_heartbeat_zero_disables(dut, heartbeat, settings_journal, evidence):
     late = dut.frames.quiet_period(lambda m: m.is_rx and m.arbitration_id == 0x700 + dut.node_id, window, stopped)
     # one heartbeat may already be on its way when the write is processed
     evidence.measure("heartbeats after 1017h = 0", len(late), "frames", 0, 1)
-    assert len(late) <= 1, f"{len(late)} heartbeats in {window * 1000:.0f} ms after 1017h = 0:\n{format_frames(late[:5])}"
+    assert len(late) <= 1, (
+        f"{len(late)} heartbeats in {window * 1000:.0f} ms after 1017h = 0:\n{format_frames(late[:5])}"
+    )

@@ -77,7 +77,7 @@ def test_serial_number_consistent(dut, evidence):
         pytest.skip("not applicable: the profile declares no 1018h sub 4 serial number")
     serial = dut.read_uint(0x1018, 4)
     evidence.note(f"serial number {serial}")
-    other = profile.entry(0x650B, 1) and (0x650B, 1) or profile.entry(0x650B, 0) and (0x650B, 0)
+    other = (profile.entry(0x650B, 1) and (0x650B, 1)) or (profile.entry(0x650B, 0) and (0x650B, 0))
     if not other:
         pytest.skip("not applicable: the profile declares no 650Bh serial number to compare with")
     observed = dut.read_uint(*other)

@@ -37,7 +37,7 @@ def test_readable_entry_exists_with_declared_size(dut, readable_entry):
 
 def test_read_only_entry_refuses_write(dut, read_only_entry, evidence):
     """Writing a ro/const entry (with its own current value) is refused with abort 06010002h."""
-    index, sub, _, entry = read_only_entry
+    index, sub, _, _ = read_only_entry
     current = _read_or_fail(dut, index, sub)
     payload = (current or b"\x00")[:4]
     response = dut.expect_abort(sdo_frames.expedited_download_request(index, sub, payload))
@@ -64,7 +64,8 @@ def _undeclared_indices(profile) -> list[int]:
 @pytest.mark.parametrize("area", ["communication", "manufacturer", "device profile"])
 def test_undeclared_object_aborts(dut, area, evidence):
     """An upload of an object the device does not have is refused with abort 06020000h."""
-    picks = dict(zip(["communication", "manufacturer", "device profile"], _undeclared_indices(dut.profile)))
+    areas = ["communication", "manufacturer", "device profile"]
+    picks = dict(zip(areas, _undeclared_indices(dut.profile), strict=False))
     index = picks[area]
     evidence.note(f"probed {index:04X}h")
     response = dut.expect_abort(sdo_frames.upload_request(index, 0))

@@ -54,10 +54,12 @@ def test_restore_defaults_effective_after_reset(dut, stored_change):
     dut.write(0x1011, 1, LOAD)
     dut.reset_node_and_wait()
     observed = dut.read_uint(index, sub)
-    assert observed == entry.default, f"{index:04X}h.{sub:02X}: {observed} after restore + reset, default {entry.default}"
+    assert observed == entry.default, (
+        f"{index:04X}h.{sub:02X}: {observed} after restore + reset, expected the default {entry.default}"
+    )
 
 
-@pytest.mark.parametrize(("index", "name"), [(0x1010, "store"), (0x1011, "restore")])
+@pytest.mark.parametrize(("index", "name"), [(0x1010, "store"), (0x1011, "restore")], ids=["1010h store", "1011h restore"])
 def test_wrong_signature_refused(dut, index, name, evidence):
     """A store/restore command without the 'save'/'load' signature is refused with abort 08000020h."""
     subs = dut.profile.capabilities.store_subindices if index == 0x1010 else dut.profile.capabilities.restore_subindices

@@ -6,6 +6,7 @@ canopen's Network and Notifier use it like the real bus.
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any
 
 import can
@@ -28,7 +29,5 @@ class TracingBus:
         return getattr(self._bus, name)
 
     def shutdown(self) -> None:
-        try:
+        with contextlib.suppress(OSError):  # python-can-remote: the server may already be gone
             self._bus.shutdown()
-        except OSError:  # python-can-remote: the server may already be gone
-            pass

@@ -99,8 +99,8 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
     if evidence is None or report.when != "call":
         return
     try:
-        import pytest_html
-    except ImportError:  # pragma: no cover
+        from pytest_html import extras as html_extras
+    except ImportError:  # pragma: no cover - pytest-html is a dependency
         return
     extras = list(getattr(report, "extras", []))
     rows = []
@@ -113,11 +113,11 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
     for note in evidence.notes:
         rows.append(f"<tr><th>note</th><td>{html.escape(note)}</td></tr>")
     if rows:
-        extras.append(pytest_html.extras.html(f"<table class='evidence'>{''.join(rows)}</table>"))
+        extras.append(html_extras.html(f"<table class='evidence'>{''.join(rows)}</table>"))
     folder = report_dir(item.config)
     if evidence.trace_path and evidence.trace_path.exists() and folder:
         relative = evidence.trace_path.relative_to(folder).as_posix()
-        extras.append(pytest_html.extras.url(relative, name="bus trace (ASC)"))
+        extras.append(html_extras.url(relative, name="bus trace (ASC)"))
     report.extras = extras
     for quirk_id, _ in evidence.deviations:
         report.user_properties.append(("documented_deviation", quirk_id))
@@ -129,7 +129,8 @@ def html_summary(prefix: list[str], session: pytest.Session) -> None:
     profile = settings.loaded.profile
     identity = config.stash.get(IDENTITY, {})
     rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in identity.items())
-    prefix.append(f"<h2>Device identity (read from the device)</h2><table>{rows or '<tr><td>not read</td></tr>'}</table>")
+    rows = rows or "<tr><td>not read</td></tr>"
+    prefix.append(f"<h2>Device identity (read from the device)</h2><table>{rows}</table>")
     quirk_rows = "".join(
         f"<tr><td>{html.escape(qid)}</td><td>{html.escape(q.title)}</td><td>{html.escape(q.manual)}</td>"
         f"<td>{html.escape(q.deviates_from or '')}</td></tr>"

@@ -91,7 +91,7 @@ def _line_map(text: str) -> dict[tuple[Any, ...], int]:
         if isinstance(node, yaml.MappingNode):
             for key_node, value_node in node.value:
                 key: Any = key_node.value
-                if len(path) in (1, 3) and path[:1] == ("objects",) or path[-1:] == ("subs",):
+                if (len(path) in (1, 3) and path[:1] == ("objects",)) or path[-1:] == ("subs",):
                     key = _parse_index(key) if path == ("objects",) else _parse_sub(key)
                 lines[(*path, key)] = key_node.start_mark.line + 1
                 walk(value_node, (*path, key))

@@ -91,12 +91,12 @@ class EntrySpec(StrictModel):
         if self.default is not None and (self.dynamic or self.per_unit):
             raise ValueError("give either a default or dynamic/per_unit: true, not both")
         limits = datatypes.value_range(self.type)
-        if isinstance(self.default, str) and self.type not in datatypes.STRING_TYPES:
-            if not is_node_id_expression(self.default):
-                raise ValueError(
-                    f"default {self.default!r} is a string but type {self.type} is numeric; "
-                    "write a number or a '$NODEID+0x180' formula"
-                )
+        if (isinstance(self.default, str) and self.type not in datatypes.STRING_TYPES
+                and not is_node_id_expression(self.default)):
+            raise ValueError(
+                f"default {self.default!r} is a string but type {self.type} is numeric; "
+                "write a number or a '$NODEID+0x180' formula"
+            )
         if limits and isinstance(self.default, int) and not limits[0] <= self.default <= limits[1]:
             raise ValueError(f"default {self.default} does not fit {self.type} ({limits[0]}..{limits[1]})")
         if self.min is not None and self.max is not None and self.min > self.max:

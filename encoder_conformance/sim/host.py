@@ -59,7 +59,7 @@ class SimulatorHost:
                 return node
         raise LookupError(f"no simulated node with node-id {node_id}; have {[n.node_id for n in self.nodes]}")
 
-    def _send_from(self, origin: SimulatedNode | None):  # noqa: ANN202 - closure factory
+    def _send_from(self, origin: SimulatedNode | None):
         def send(cob_id: int, data: bytes, extended: bool = False) -> None:
             msg = can.Message(arbitration_id=cob_id, data=data, is_extended_id=extended)
             with self._send_lock:

@@ -179,7 +179,7 @@ class SimulatedNode:
             silent = not power_on and self.faults.active("no_bootup_after_reset")
             if not silent:
                 self.send(0x700 + self.node_id, b"\x00")
-            self.state = NmtState.PRE_OPERATIONAL
+            self._enter(NmtState.PRE_OPERATIONAL)
             self._restart_heartbeat()
 
     def _reset(self, node: bool) -> None:
@@ -249,9 +249,8 @@ class SimulatedNode:
                 self._on_nmt(bytes(msg.data))
             elif can_id == 0x600 + self.node_id and not msg.is_remote_frame:
                 self._on_sdo(bytes(msg.data))
-            elif self._is_sync(msg):
-                if sync_allowed(self.state):
-                    self.tpdo.on_sync()
+            elif self._is_sync(msg) and sync_allowed(self.state):
+                self.tpdo.on_sync()
 
     def _is_sync(self, msg: can.Message) -> bool:
         cob = self._read_int(0x1005, 0)
@@ -323,7 +322,6 @@ class SimulatedNode:
 
     def current_value(self, key: Key) -> int | str | bytes:
         """Dynamic entries are computed; the rest come from the store (with identity faults)."""
-        index, sub = key
         if key in ((0x6004, 0), (0x6008, 0)):
             return self.position()
         if key == (0x6030, 1):
@@ -337,9 +335,9 @@ class SimulatedNode:
     def _identity_fault(self, key: Key, value: int | str | bytes) -> int | str | bytes:
         faults = self.faults
         if isinstance(value, int):
-            if key == (0x1018, 1) and faults.active("wrong_vendor_id") or key == (0x1018, 2) and faults.active(
+            if (key == (0x1018, 1) and faults.active("wrong_vendor_id")) or (key == (0x1018, 2) and faults.active(
                 "wrong_product_code"
-            ):
+            )):
                 return (value + 1) & 0xFFFFFFFF
             if key == (0x1018, 3) and faults.active("wrong_revision"):
                 return 0xFFFFFFFF
