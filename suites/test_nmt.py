@@ -87,6 +87,25 @@ def _pdo_stimulus(dut, device_control, duration_s: float):
 
 
 @pytest.fixture
+def sync_tpdo(dut, settings_journal, evidence):
+    """Make sure one TPDO is sent on every SYNC (set 18xxh sub 2 = 1 if needed, put back afterwards)."""
+    types = dut.profile.capabilities.tpdo_transmission_types
+    for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF):
+        mapping = dut.profile.entry(comm + 0x200, 0)
+        kind = dut.profile.entry(comm, 2)
+        if kind is None or (mapping is not None and dut.read_uint(comm + 0x200, 0) == 0):
+            continue
+        current = dut.read_uint(comm, 2)
+        if 1 <= current <= 240:
+            return comm
+        if kind.writable and 1 in types:
+            settings_journal.write(comm, 2, b"\x01")
+            evidence.note(f"{comm:04X}h.02 set to 1 (synchronous, every SYNC) for the test")
+            return comm
+    return None
+
+
+@pytest.fixture
 def shaft(simulator):
     """The simulator's shaft control, or None on hardware (the SYNC-driven TPDOs still apply)."""
     return None if simulator is None else simulator.control
@@ -94,7 +113,7 @@ def shaft(simulator):
 
 @pytest.mark.requires("tpdos")
 @pytest.mark.parametrize("state", ["pre-operational", "stopped"])
-def test_no_pdo_outside_operational(dut, nmt, shaft, state):
+def test_no_pdo_outside_operational(dut, sync_tpdo, nmt, shaft, state):
     """No TPDO is sent in pre-operational or stopped, although SYNCs arrive and the shaft turns."""
     if state != "pre-operational":
         nmt.go_to(state)
@@ -104,7 +123,7 @@ def test_no_pdo_outside_operational(dut, nmt, shaft, state):
 
 
 @pytest.mark.requires("tpdos")
-def test_pdo_in_operational(dut, nmt, shaft):
+def test_pdo_in_operational(dut, sync_tpdo, nmt, shaft):
     """In operational the same stimulus makes the device send TPDOs (so the silence above means something)."""
     nmt.go_to("operational")
     mark = _pdo_stimulus(dut, shaft, 0.3)
@@ -140,10 +159,18 @@ def test_reset_node_reloads_application_parameters(dut, settings_journal):
 
 
 @pytest.mark.spec("CiA 301 §7.3.2.2.3 (reset communication: 1000h-1FFFh to their stored/default values)")
-def test_reset_communication_reloads_communication_parameters(dut, heartbeat):
-    """An unstored 1017h change is undone by NMT reset communication."""
-    default = dut.profile.entry(0x1017, 0).default
+def test_reset_communication_reloads_communication_parameters(dut, settings_journal):
+    """An unstored change of a communication parameter (1017h first) is undone by NMT reset communication."""
+    found = changeable_parameter(
+        dut.profile, lambda index, e: index < 0x2000 and e.persisted_by in STORE_GROUPS, prefer=(0x1017,)
+    )
+    if found is None:
+        pytest.skip("not applicable: no communication parameter is stored on command (all persisted_by auto/none)")
+    size = len(dut.read(found.index, found.sub))
+    settings_journal.write(found.index, found.sub, found.new_value.to_bytes(size, "little"))
     mark = dut.nmt("reset-communication")
     assert dut.wait_bootup(mark) is not None, "no boot-up after reset communication"
-    observed = dut.read_uint(0x1017)
-    assert observed == default, f"1017h = {observed} after reset communication, expected the default {default}"
+    observed = dut.read_uint(found.index, found.sub)
+    assert observed == found.entry.default, (
+        f"{found.label} = {observed} after reset communication, expected the default {found.entry.default}"
+    )

@@ -412,7 +412,7 @@ def test_hex_suffix_sub_index_keys(tmp_path):
 )
 @pytest.mark.parametrize(
     ("replace", "line"),
-    [(("schema_version: 1", "schema_version: 2"), 1), (("title: Probe encoder", "extends: nope\ntitle: x"), 3)],
+    [(("schema_version: 1", "schema_version: 2"), 1), (("title: Probe encoder", "extends: nope.yaml\ntitle: x"), 3)],
     ids=["schema_version", "extends"],
 )
 def test_non_schema_problems_name_the_line(tmp_path, replace, line):

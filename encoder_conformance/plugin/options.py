@@ -27,6 +27,7 @@ class RunSettings:
     allow_destructive: bool
     sim_faults: tuple[str, ...]
     sim_inprocess: bool
+    sim_profile: LoadedProfile
 
 
 SETTINGS = pytest.StashKey[RunSettings]()
@@ -50,6 +51,9 @@ def add_options(parser: pytest.Parser) -> None:
                          "Always allowed on the simulator")
     group.addoption("--sim-fault", action="append", default=[],
                     help="simulator only: inject a named fault (encoder-conformance faults lists them)")
+    group.addoption("--sim-profile", default=None,
+                    help="simulator only: the profile the twin plays (default: the --device-profile). "
+                         "Checking a twin with another device's profile shows how a wrong profile fails")
     group.addoption("--sim-inprocess", action="store_true", default=False,
                     help="simulator only: run it in the test process on the virtual interface "
                          "(faster start, less accurate timing)")
@@ -92,6 +96,7 @@ def configure(config: pytest.Config) -> None:
         allow_destructive=bool(config.getoption("--allow-destructive")) or bus.simulated,
         sim_faults=faults,
         sim_inprocess=bool(config.getoption("--sim-inprocess")),
+        sim_profile=load_profile(config.getoption("--sim-profile")) if config.getoption("--sim-profile") else loaded,
     )
 
 

@@ -52,12 +52,15 @@ class TpdoEngine:
         self.running = False
 
     def _load(self) -> list[TpdoConfig]:
-        configs = []
-        for n in range(self._count):
-            comm, mapping = 0x1800 + n, 0x1A00 + n
+        configs: list[TpdoConfig] = []
+        for comm in range(0x1800, 0x1A00):  # not always consecutive (POSITAL uses 1800h and 1802h)
+            if len(configs) == self._count:
+                break
+            mapping = comm + 0x200
             cob_id = self._read(comm, 1)
             if cob_id is None:
                 continue
+            n = comm - 0x1800
             entries = []
             for sub in range(1, (self._read(mapping, 0) or 0) + 1):
                 word = self._read(mapping, sub) or 0
