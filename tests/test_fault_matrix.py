@@ -18,7 +18,7 @@ COMPLEMENT_PROFILE = "tests/data/profiles/minimal-encoder.yaml"
 
 @pytest.fixture(scope="module")
 def main_matrix(tmp_path_factory):
-    return run_matrix(MAIN_PROFILE, sorted(FAULTS), tmp_path_factory.mktemp("matrix-main"))
+    return run_matrix(MAIN_PROFILE, sorted(FAULTS), tmp_path_factory.mktemp("matrix-main"), workers=3)
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +28,9 @@ def complement_matrix(main_matrix, tmp_path_factory):
     skipped = sorted({name.split("::")[1].split("[")[0] for name, o in baseline.outcomes.items() if o == "skipped"})
     if not skipped:
         return None
-    return run_matrix(COMPLEMENT_PROFILE, sorted(FAULTS), tmp_path_factory.mktemp("matrix-extra"), " or ".join(skipped))
+    return run_matrix(
+        COMPLEMENT_PROFILE, sorted(FAULTS), tmp_path_factory.mktemp("matrix-extra"), " or ".join(skipped), workers=3
+    )
 
 
 def test_fault_free_simulator_passes_everything(main_matrix):

@@ -57,9 +57,10 @@ class Rig:
     log: FrameLog
     tmp_path: Path
 
-    def add(self, profile: DeviceProfile, faults: tuple[str, ...] = (), power_on: bool = False,
-            nvm: str = "nvm.json") -> SimulatedNode:
-        return self.host.add_node(profile, nvm_path=self.tmp_path / nvm, faults=FaultSet(faults), power_on=power_on)
+    def add(self, profile: DeviceProfile, faults: tuple[str, ...] = ()) -> SimulatedNode:
+        """A node of ``profile`` on the bus, not yet powered, with its NVM file in tmp_path."""
+        return self.host.add_node(profile, nvm_path=self.tmp_path / "nvm.json", faults=FaultSet(faults),
+                                  power_on=False)
 
     def client(self, node_id: int) -> canopen.RemoteNode:
         remote = canopen.RemoteNode(node_id, canopen.ObjectDictionary())
@@ -86,10 +87,9 @@ class Rig:
         node.power_on()
         return self.wait_bootup(node.node_id, mark)
 
-    def raw_sdo(self, node_id: int, request: bytes, after: Mark | None = None) -> can.Message | None:
-        mark = after or self.send(0x600 + node_id, request)
-        if after is not None:
-            self.network.send_message(0x600 + node_id, request)
+    def raw_sdo(self, node_id: int, request: bytes) -> can.Message | None:
+        """Send one raw SDO request; the node's response frame or None."""
+        mark = self.send(0x600 + node_id, request)
         return self.log.wait_for(lambda m: m.is_rx and m.arbitration_id == 0x580 + node_id, WAIT_S, mark)
 
     def scheduler_drained(self, delay_s: float) -> bool:
@@ -145,7 +145,7 @@ def booted(rig: Rig, profile: DeviceProfile, faults: tuple[str, ...] = ()) -> tu
 
 
 def test_bootup_on_power_on(rig, minimal_profile):
-    """Power-on sends one boot-up frame 700h+node-id [1] 00 and enters pre-operational."""
+    """Power-on sends the boot-up frame 700h+node-id [1] 00 and enters pre-operational."""
     node = rig.add(minimal_profile)
     assert node.state is None
     boot = rig.power_on(node)
@@ -271,6 +271,20 @@ def test_writes_preop_only_quirk(rig, wdga_profile):
     assert node.state is NmtState.OPERATIONAL
     assert abort_code(client, 0x2101, 0, bytes([node.node_id])) == params.params["abort_code"]
 
+
+def test_node_id_object_quirk_takes_effect_at_reset(rig, wdga_profile):
+    """WDGA: 2101h = 5 is saved at once and used after reset communication; $NODEID COB-IDs follow."""
+    node, client = booted(rig, wdga_profile)
+    client.sdo.download(0x2101, 0, b"\x05")
+    assert u32(client, 0x2101) == 5, "the new node-id must not take effect before the reset"
+    stored = json.loads((rig.tmp_path / "nvm.json").read_text(encoding="utf-8"))["values"]
+    assert stored["0x2101.0"] == 5
+    mark = rig.nmt(0x82, node.node_id)
+    assert rig.wait_bootup(5, mark) is not None, "no boot-up on node-id 5"
+    assert node.node_id == 5
+    moved = rig.client(5)
+    assert u32(moved, 0x1014) == 0x85
+    assert u32(moved, 0x1800, 1) & 0x7FF == 0x185
 
 def test_silent_until_bus_traffic(rig, wdga_profile):
     """WDGA twin: no boot-up after power-on until a frame is seen; then boot-up follows."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -17,6 +18,8 @@ from encoder_conformance.profile.loader import iter_profile_ids
 
 REPO = Path(__file__).resolve().parents[1]
 PROFILES = [ref.id for ref in iter_profile_ids() if not ref.abstract]
+#: suite runs mostly wait for the device (timeouts, boot-up delays): three at a time fit two cores
+PARALLEL_RUNS = 3
 
 
 def run_suite(tmp_path: Path, *args: str) -> tuple[subprocess.CompletedProcess[str], float]:
@@ -27,16 +30,36 @@ def run_suite(tmp_path: Path, *args: str) -> tuple[subprocess.CompletedProcess[s
     return completed, time.monotonic() - start
 
 
-@pytest.mark.parametrize("profile", PROFILES)
-def test_twin_passes_its_profile(profile, tmp_path, capsys):
-    completed, seconds = run_suite(tmp_path, "--device-profile", profile)
-    summary = completed.stdout.strip().splitlines()[-1] if completed.stdout.strip() else completed.stderr[-500:]
+@pytest.fixture(scope="module")
+def twin_runs(tmp_path_factory):
+    """One full suite run per profile against its own twin (a few in parallel)."""
+    def one(profile: str):
+        folder = tmp_path_factory.mktemp(profile)
+        return profile, folder, *run_suite(folder, "--device-profile", profile)
+
+    with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
+        results = {profile: rest for profile, *rest in pool.map(one, PROFILES)}
+    return results
+
+
+def test_each_full_run_takes_well_under_a_minute(twin_runs, capsys):
+    """Prints each profile's run time and pytest summary; every run stays under 60 s."""
     with capsys.disabled():
-        print(f"\n  {profile:32s} {seconds:5.1f} s  {summary}")
+        print("\nfull suite against each twin (run time, pytest summary):")
+        for profile, (_, completed, seconds) in twin_runs.items():
+            lines = completed.stdout.strip().splitlines()
+            print(f"  {profile:32s} {seconds:5.1f} s  {lines[-1] if lines else completed.stderr[-300:]}")
+    slow = {p: round(s) for p, (_, _, s) in twin_runs.items() if s >= 60}
+    assert not slow, f"runs of a minute or more: {slow}"
+
+
+@pytest.mark.parametrize("profile", PROFILES)
+def test_twin_passes_its_profile(profile, twin_runs):
+    folder, completed, _ = twin_runs[profile]
     assert completed.returncode == 0, f"{profile} twin fails its own profile:\n{completed.stdout[-4000:]}"
-    assert (tmp_path / "report" / "report.html").exists()
-    assert (tmp_path / "report" / "junit.xml").exists()
-    assert any((tmp_path / "report" / "allure-results").iterdir())
+    assert (folder / "report" / "report.html").exists()
+    assert (folder / "report" / "junit.xml").exists()
+    assert any((folder / "report" / "allure-results").iterdir())
 
 
 def test_wrong_profile_fails_on_identity_without_timeouts(tmp_path):
