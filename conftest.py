@@ -40,6 +40,10 @@ def pytest_configure(config: pytest.Config) -> None:
     reporting.configure_outputs(config)
 
 
+def pytest_sessionstart(session: pytest.Session) -> None:
+    reporting.set_metadata(session.config)
+
+
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
     selection.parametrize_from_profile(metafunc)
 

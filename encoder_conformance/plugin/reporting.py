@@ -41,7 +41,6 @@ def configure_outputs(config: pytest.Config) -> None:
     if not getattr(option, "allure_report_dir", None):
         option.allure_report_dir = str(folder / "allure-results")
         option.clean_alluredir = True
-    _set_metadata(config)
 
 
 def report_dir(config: pytest.Config) -> Path | None:
@@ -56,9 +55,10 @@ def _metadata(config: pytest.Config) -> dict[str, object] | None:
     return config.stash.get(metadata_key, None)
 
 
-def _set_metadata(config: pytest.Config) -> None:
+def set_metadata(config: pytest.Config) -> None:
+    """Profile, its hash and the bus settings with their sources, for the report's environment table."""
     data = _metadata(config)
-    if data is None:
+    if data is None or REPORT_DIR not in config.stash:
         return
     settings = settings_of(config)
     loaded = settings.loaded
