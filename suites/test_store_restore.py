@@ -59,10 +59,13 @@ def test_restore_defaults_effective_after_reset(dut, stored_change):
     )
 
 
-@pytest.mark.parametrize(("index", "name"), [(0x1010, "store"), (0x1011, "restore")], ids=["1010h store", "1011h restore"])
+@pytest.mark.parametrize(
+    ("index", "name"), [(0x1010, "store"), (0x1011, "restore")], ids=["1010h store", "1011h restore"]
+)
 def test_wrong_signature_refused(dut, index, name, evidence):
     """A store/restore command without the 'save'/'load' signature is refused with abort 08000020h."""
-    subs = dut.profile.capabilities.store_subindices if index == 0x1010 else dut.profile.capabilities.restore_subindices
+    capabilities = dut.profile.capabilities
+    subs = capabilities.store_subindices if index == 0x1010 else capabilities.restore_subindices
     if not subs:
         pytest.skip(f"not applicable: the profile declares no {name} sub-indices")
     response = dut.expect_abort(sdo_frames.expedited_download_request(index, subs[0], b"SAVE"))
