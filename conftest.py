@@ -11,7 +11,7 @@ import os
 import pytest
 from hypothesis import HealthCheck, settings
 
-from encoder_conformance.errors import ProfileError
+from encoder_conformance.errors import BusSetupError, ProfileError
 from encoder_conformance.plugin import options as opts
 from encoder_conformance.plugin import reporting, selection
 
@@ -35,7 +35,7 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "bench: needs bench equipment the simulator provides (power switch)")
     try:
         opts.configure(config)
-    except ProfileError as exc:
+    except (ProfileError, BusSetupError) as exc:
         raise pytest.UsageError(str(exc)) from None
     reporting.configure_outputs(config)
 

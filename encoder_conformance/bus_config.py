@@ -14,6 +14,8 @@ from typing import Any
 
 import can
 
+from .errors import BusSetupError
+
 SIMULATOR = "simulator"
 
 
@@ -48,6 +50,16 @@ def _env_sources() -> dict[str, str]:
     return sources
 
 
+def _configured_interface() -> bool:
+    """True if python-can's environment or can.rc names an interface (so a failure is not 'nothing set')."""
+    if can.rc.get("interface") or os.environ.get("CAN_INTERFACE"):
+        return True
+    try:
+        return "interface" in json.loads(os.environ.get("CAN_CONFIG") or "{}")
+    except ValueError:
+        return False
+
+
 def resolve_bus_config(interface: str | None, channel: str | None, bitrate: int | None) -> BusConfig:
     """Merge command-line values with python-can's configuration sources."""
     given = {k: v for k, v in {"interface": interface, "channel": channel, "bitrate": bitrate}.items() if v}
@@ -56,7 +68,10 @@ def resolve_bus_config(interface: str | None, channel: str | None, bitrate: int 
         return BusConfig({"interface": SIMULATOR}, {"interface": "command line"})
     try:
         resolved = can.util.load_config(config=given)
-    except can.CanInterfaceNotImplementedError:
+    except can.CanInterfaceNotImplementedError as exc:
+        if given.get("interface") or _configured_interface():
+            known = ", ".join(sorted(can.interfaces.VALID_INTERFACES))
+            raise BusSetupError(f"CAN interface problem: {exc}; known interfaces: {known}") from None
         return BusConfig({"interface": SIMULATOR}, {"interface": "default (no CAN interface configured)"})
     env = _env_sources()
     for key in resolved:

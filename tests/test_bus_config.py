@@ -118,11 +118,6 @@ def test_describe_names_value_and_source():
     assert config.describe() == "interface='virtual' (command line), channel='c' (default)"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: bus_config.resolve_bus_config turns CanInterfaceNotImplementedError (a misspelled "
-    "interface) into the simulator fallback, so a hardware run silently tests the simulator",
-)
 @pytest.mark.parametrize("where", ["command line", "environment"])
 def test_unknown_interface_is_an_error(monkeypatch, where):
     """A misspelled interface is refused with its name, never replaced by the simulator."""

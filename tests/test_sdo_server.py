@@ -205,11 +205,6 @@ def test_reset_drops_the_transfer(server):
     assert abort_of(server.handle(segment(0x60)))[2] == COMMAND_INVALID
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: sdo_server._download_segment clears the transfer before a last-segment abort, so the "
-    "abort frame carries bytes 1-3 of the segment data as index/sub instead of the transfer's",
-)
 def test_abort_at_last_download_segment_names_the_transfer(server):
     """A write refused after the last segment aborts with the transfer's index/sub (CiA 301 §7.2.4.3.17)."""
     server.handle(frame(0x21, 0x1008, 0, struct.pack("<I", 10)))
@@ -217,11 +212,6 @@ def test_abort_at_last_download_segment_names_the_transfer(server):
     assert abort_of(server.handle(segment(0x19, b"HIJ"))) == (0x1008, 0, WRITE_RO)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: sdo_server._download_segment: size-mismatch abort 06070010h carries segment data as "
-    "index/sub (transfer cleared before the raise)",
-)
 def test_download_size_mismatch_aborts_06070010_for_the_transfer(server, access):
     """Segments totalling a different size than the initiate announced abort 06070010h; nothing is written."""
     server.handle(frame(0x21, 0x2000, 0, struct.pack("<I", 12)))
@@ -230,11 +220,6 @@ def test_download_size_mismatch_aborts_06070010_for_the_transfer(server, access)
     assert access.writes == []
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: sdo_server._initiate_upload encodes an empty value as 53h (n=4 overflows into the reserved "
-    "bit 4); clients read 4 zero bytes instead of an empty string",
-)
 def test_upload_of_an_empty_value(server):
     """An empty value (e.g. a VISIBLE_STRING "") uploads as 0 bytes: segmented with size 0 or e=1, s=0."""
     response = server.handle(frame(0x40, 0x1009, 0))

@@ -75,9 +75,11 @@ def _normalise_keys(data: dict[str, Any]) -> dict[str, Any]:
 
 
 def _parse_sub(key: Any) -> Any:
+    """Accept 3, '3', '0x0A' and '0Ah' as a sub-index ('h' suffix = hexadecimal)."""
     if isinstance(key, str):
+        text = key.strip().lower()
         try:
-            return int(key.strip().lower().rstrip("h"), 0)
+            return int(text[:-1], 16) if text.endswith("h") else int(text, 0)
         except ValueError:
             return key
     return key
@@ -140,8 +142,10 @@ def _read_yaml(path: Path) -> tuple[dict[str, Any], str]:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ProfileError(str(path), [f"cannot read the file: {exc.strerror}"]) from None
+    except UnicodeDecodeError as exc:
+        raise ProfileError(str(path), [f"byte {exc.start} is not UTF-8; save the file as UTF-8"]) from None
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_StrictLoader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
@@ -150,6 +154,21 @@ def _read_yaml(path: Path) -> tuple[dict[str, Any], str]:
     if not isinstance(data, dict):
         raise ProfileError(str(path), ["the file must hold a mapping (key: value pairs) at the top level"])
     return _normalise_keys(data), text
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """SafeLoader that refuses a key given twice in one mapping (it would silently replace the first)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        seen: dict[Any, int] = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"key {key_node.value!r} given twice (first on line {seen[key]})", key_node.start_mark
+                )
+            seen[key] = key_node.start_mark.line + 1
+        return super().construct_mapping(node, deep=deep)
 
 
 def deep_merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
@@ -230,13 +249,19 @@ def _parent_path(path: Path, parent_name: str) -> Path:
         candidate = path.parent / parent_name
         if candidate.is_file():
             return candidate
-        raise ProfileError(str(path), [f"extends: file {parent_name!r} not found next to the profile"])
+        problem = f"{_where(path, 'extends')}extends: file {parent_name!r} not found next to the profile"
+        raise ProfileError(str(path), [problem])
     try:
         return find_profile(parent_name, [path.parent, DEFAULT_PROFILE_DIR])
     except ProfileError:
-        raise ProfileError(
-            str(path), [f"extends: no profile {parent_name!r} in {path.parent}; check the id (the file name)"]
-        ) from None
+        problem = f"{_where(path, 'extends')}extends: no profile {parent_name!r} in {path.parent}; check the id"
+        raise ProfileError(str(path), [problem]) from None
+
+
+def _where(path: Path, key: str) -> str:
+    """'file:line: ' for a top-level key (for messages raised outside schema validation)."""
+    line = _line_map(path.read_text(encoding="utf-8")).get((key,))
+    return f"{path.name}:{line}: " if line else f"{path.name}: "
 
 
 def _merge_eds(path: Path, data: dict[str, Any], eds_name: str) -> dict[str, Any]:
@@ -256,9 +281,15 @@ def load_profile(name_or_path: str | Path, search_dirs: list[Path] | None = None
     data, chain, _ = _resolve_raw(path, ())
     schema = data.get("schema_version")
     if schema != model.SCHEMA_VERSION:
+        line = _line_map(path.read_text(encoding="utf-8")).get(("schema_version",))
+        where = f"{path.name}:{line}: " if line else f"{path.name}: "
         raise ProfileError(
             str(path),
-            [f"schema_version: is {schema!r}; this tool reads schema_version {model.SCHEMA_VERSION}"],
+            [f"{where}schema_version: is {schema!r}; this tool reads schema_version {model.SCHEMA_VERSION}"],
+        )
+    if data.get("id") != path.stem:
+        raise ProfileError(
+            str(path), [f"{path.name}: id: is {data.get('id')!r}; it must equal the file name {path.stem!r}"]
         )
     try:
         profile = model.DeviceProfile.model_validate(data)

@@ -50,6 +50,7 @@ class SdoServer:
     def __init__(self, access: ObjectAccess) -> None:
         self._access = access
         self._transfer: _Transfer | None = None
+        self._last_multiplexer: tuple[int, int] | None = None  # for aborts during segments
 
     def reset(self) -> None:
         """Drop a transfer in progress (NMT reset, power cycle)."""
@@ -61,6 +62,7 @@ class SdoServer:
             return None  # CiA 301: SDO frames have 8 data bytes; shorter frames are not answered
         ccs = request[0] >> 5
         index, sub = struct.unpack_from("<HB", request, 1)
+        self._last_multiplexer = (self._transfer.index, self._transfer.sub) if self._transfer else None
         try:
             if ccs == 1:
                 return self._initiate_download(request, index, sub)
@@ -75,8 +77,8 @@ class SdoServer:
                 return None
             raise SdoAbort(COMMAND_INVALID)  # block transfer (5, 6) and reserved (7)
         except SdoAbort as abort:
-            if ccs in (0, 3) and self._transfer is not None:
-                index, sub = self._transfer.index, self._transfer.sub
+            if ccs in (0, 3) and self._last_multiplexer is not None:
+                index, sub = self._last_multiplexer
             self._transfer = None
             return abort_frame(index, sub, abort.code)
 
@@ -114,7 +116,7 @@ class SdoServer:
     def _initiate_upload(self, index: int, sub: int) -> bytes:
         self._transfer = None
         data = self._access.sdo_read(index, sub)
-        if len(data) <= 4:
+        if 1 <= len(data) <= 4:
             command = 0x43 | ((4 - len(data)) << 2)
             return struct.pack("<BHB", command, index, sub) + data.ljust(4, b"\x00")
         self._transfer = _Transfer(upload=True, index=index, sub=sub, data=bytearray(data))
