@@ -64,12 +64,18 @@ class SimulatorControl:
             self._conn.close()
 
 
+def _each(nodes: list[Any], method: str) -> None:
+    for node in nodes:
+        getattr(node, method)()
+
+
 def _execute(host: SimulatorHost, command: str, node_id: int | None, args: tuple[Any, ...]) -> Any:
     node = host.node(node_id)
+    device = host.device_nodes(node)  # a redundant device's nodes share one power supply
     actions = {
-        "power_cycle": node.power_cycle,
-        "power_off": node.power_off,
-        "power_on": node.power_on,
+        "power_cycle": lambda: _each(device, "power_cycle"),
+        "power_off": lambda: _each(device, "power_off"),
+        "power_on": lambda: _each(device, "power_on"),
         "turn_by": node.shaft.turn_by,
         "set_speed": node.shaft.set_speed,
         "raise_emcy": node.raise_emcy,

@@ -18,7 +18,7 @@ COMPLEMENT_PROFILE = "tests/data/profiles/minimal-encoder.yaml"
 
 @pytest.fixture(scope="module")
 def main_matrix(tmp_path_factory):
-    return run_matrix(MAIN_PROFILE, sorted(FAULTS), tmp_path_factory.mktemp("matrix-main"), workers=3)
+    return run_matrix(MAIN_PROFILE, sorted(FAULTS), tmp_path_factory.mktemp("matrix-main"), workers=2)
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +29,7 @@ def complement_matrix(main_matrix, tmp_path_factory):
     if not skipped:
         return None
     return run_matrix(
-        COMPLEMENT_PROFILE, sorted(FAULTS), tmp_path_factory.mktemp("matrix-extra"), " or ".join(skipped), workers=3
+        COMPLEMENT_PROFILE, sorted(FAULTS), tmp_path_factory.mktemp("matrix-extra"), " or ".join(skipped), workers=2
     )
 
 

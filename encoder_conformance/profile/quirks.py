@@ -36,8 +36,10 @@ EFFECTS: dict[str, str] = {
         "a TPDO with transmission type 255 and event timer 0 is not sent at all. params: {}"
     ),
     "store_reboots_without_reply": (
-        "the store command is not answered by SDO; the device reboots and sends a boot-up. "
-        "params: {index: int, subindex: int, reboot_ms: number}"
+        "writing the signature to the store object is not answered by SDO; the device stores its "
+        "storable values, reboots (silent) and sends a boot-up after reboot_ms. params: {index: int, "
+        "subindex: int, reboot_ms: number, signature_u32: int, wrong_signature_abort: int (the twin's "
+        "answer to any other value; default 08000020h, nothing stored, no reboot)}"
     ),
     "writes_need_scaling_bit": (
         "writes to the listed objects are refused unless 6000h bit 2 (scaling) is set. "
@@ -53,11 +55,33 @@ EFFECTS: dict[str, str] = {
     ),
     "store_automatic": "parameters are stored automatically on every write; 1010h is absent. params: {}",
     "position_frozen_during_execution": (
-        "the position value does not update while certain writes are processed. "
-        "params: {objects: [index, ...], duration_ms: number}"
+        "the position value does not update while certain writes are processed (the SDO reply comes "
+        "first). params: {objects: [index, ...], duration_ms: number, durations_ms: {'0xIIII': ms, "
+        "'0x6000.scaling_bit_set': ms} (optional, per object)}"
     ),
     "second_node": (
-        "the device answers on a second node-id as a redundant channel (e.g. WayCon MH). "
-        "params: {node_id_offset: int}"
+        "the device answers on a second node-id as a redundant channel (e.g. WayCon MH); the twin puts "
+        "the sibling on the bus. params: {node_id_offset: int, profile: id (optional, the sibling's "
+        "profile; default the same)}"
+    ),
+    "manufacturer_encoder_objects": (
+        "the encoder function lives in manufacturer objects instead of 6000h..6004h. params: "
+        "{equivalents: {manufacturer index: CiA 406 index}, scaling_bit: int|null (bit of the "
+        "operating-parameter object that enables scaling; null = the scaling objects always apply)}"
+    ),
+    "limit_switch_flags": (
+        "limit switches set flag bits in the process value. params: {value_object: index, "
+        "enable_object: index, position_mask: int, min: {object, enable_bit, flag_bit}, "
+        "max: {object, enable_bit, flag_bit}, applies_to: [tpdo, sdo]}"
+    ),
+    "fixed_tpdo_mapping": (
+        "TPDOs without mapping objects carry a fixed payload. params: {mapping: {comm index: "
+        "[[index, sub, bits], ...]}, cyclic: {tpdo, period_object, period_unit_ms} (optional: sent "
+        "every period, sub 2 ignored), sync: {tpdo, counter_subindex} (optional: every n-th SYNC, "
+        "n = 1..255), polled: {tpdo} (optional: answers an RTR on its COB-ID in operational)}"
+    ),
+    "signed_position_range": (
+        "position and preset are SIGNED32; multiturn profiles split the measuring range into "
+        "-TMR/2 .. TMR/2 - 1, singleturn profiles count 0 .. TMR - 1. params: {objects: [index, ...]}"
     ),
 }

@@ -1,7 +1,8 @@
 """What an SDO read or write does on the simulated node: existence, access, size, limits, effects.
 
 Each check returns the CiA 301 abort code for its situation; faults and profile quirks change
-the outcome at exactly one place each.
+the outcome at exactly one place each. A quirk with effect ``abort_code`` replaces the code of
+its situation by the first code it lists.
 """
 
 from __future__ import annotations
@@ -9,6 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from ..profile import datatypes
+from ..profile.model import DeviceProfile
 from .sdo_server import SdoAbort
 
 if TYPE_CHECKING:
@@ -31,21 +33,46 @@ GENERAL_ERROR = 0x08000000
 SAVE = 0x65766173  # 'save' little-endian
 LOAD = 0x64616F6C  # 'load' little-endian
 
+#: CiA 301 code per situation of the quirk effect ``abort_code``
+CIA_CODES: dict[str, int] = {
+    "write_ro": WRITE_RO,
+    "read_wo": READ_WO,
+    "no_object": NO_OBJECT,
+    "no_subindex": NO_SUBINDEX,
+    "length_high": LENGTH_HIGH,
+    "length_low": LENGTH_LOW,
+    "value_high": VALUE_HIGH,
+    "value_low": VALUE_LOW,
+    "wrong_state": WRONG_STATE,
+    "store_signature": CANNOT_STORE,
+}
+
+
+def situation_codes(profile: DeviceProfile) -> dict[str, int]:
+    """The code the device sends per situation: CiA's, or the first one an ``abort_code`` quirk lists."""
+    codes = dict(CIA_CODES)
+    for quirk in profile.quirks.values():
+        listed = quirk.params.get("codes") or []
+        if quirk.effect == "abort_code" and quirk.params.get("situation") in codes and listed:
+            codes[quirk.params["situation"]] = int(listed[0])
+    return codes
+
 
 class NodeObjectAccess:
     """The ObjectAccess of one simulated node (see sdo_server.ObjectAccess)."""
 
     def __init__(self, node: SimulatedNode) -> None:
         self.node = node
+        self.codes = situation_codes(node.profile)
 
     # -- shared checks -------------------------------------------------------------------
     def _locate(self, index: int, sub: int) -> tuple[int, int]:
         node, faults = self.node, self.node.faults
         missing_index = not node.store.has_index(index) or index in node.hidden_indices
         if missing_index:
-            raise SdoAbort(NO_SUBINDEX if faults.active("wrong_abort_no_object") else NO_OBJECT)
+            raise SdoAbort(NO_SUBINDEX if faults.active("wrong_abort_no_object") else self.codes["no_object"])
         if not node.store.has((index, sub)):
-            raise SdoAbort(NO_OBJECT if faults.active("wrong_abort_no_subindex") else NO_SUBINDEX)
+            raise SdoAbort(NO_OBJECT if faults.active("wrong_abort_no_subindex") else self.codes["no_subindex"])
         return index, sub
 
     # -- read ----------------------------------------------------------------------------
@@ -56,7 +83,7 @@ class NodeObjectAccess:
         if entry.access == "wo":
             if node.faults.active("read_wo_allowed"):
                 return bytes(datatypes.size_bytes(entry.type) or 1)
-            raise SdoAbort(READ_WO)
+            raise SdoAbort(self.codes["read_wo"])
         data = node.encode_current(key)
         if node.faults.active("wrong_size") and len(data) == 4 and entry.type not in datatypes.STRING_TYPES:
             data = data[:2]
@@ -70,10 +97,10 @@ class NodeObjectAccess:
         if entry.access in ("ro", "const"):
             if node.faults.active("write_ro_accepted"):
                 return
-            raise SdoAbort(GENERAL_ERROR if node.faults.active("wrong_abort_write_ro") else WRITE_RO)
+            raise SdoAbort(GENERAL_ERROR if node.faults.active("wrong_abort_write_ro") else self.codes["write_ro"])
         size = datatypes.size_bytes(entry.type)
         if size is not None and len(data) != size:
-            raise SdoAbort(LENGTH_HIGH if len(data) > size else LENGTH_LOW)
+            raise SdoAbort(self.codes["length_high"] if len(data) > size else self.codes["length_low"])
         value = node.store.decode(key, data)
         if isinstance(value, int):
             self._check_limits(entry.min, entry.max, value)
@@ -82,9 +109,8 @@ class NodeObjectAccess:
             return
         node.apply_write(key, value)
 
-    @staticmethod
-    def _check_limits(minimum: int | None, maximum: int | None, value: int) -> None:
+    def _check_limits(self, minimum: int | None, maximum: int | None, value: int) -> None:
         if maximum is not None and value > maximum:
-            raise SdoAbort(VALUE_HIGH)
+            raise SdoAbort(self.codes["value_high"])
         if minimum is not None and value < minimum:
-            raise SdoAbort(VALUE_LOW)
+            raise SdoAbort(self.codes["value_low"])

@@ -1,7 +1,8 @@
 """The simulator host: one CAN bus, one receive thread, one scheduler, any number of nodes.
 
 Nodes on the same host also hear each other (a real bus delivers every frame to every other
-node). The host can serve its bus to other processes through python-can-remote.
+node). The host can serve its bus to other processes through python-can-remote. A device with
+the quirk ``second_node`` (a redundant interface) gets its sibling node through ``add_siblings``.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from pathlib import Path
 
 import can
 
+from ..profile.loader import load_profile
 from ..profile.model import DeviceProfile
 from .faults import FaultSet
 from .node import SimulatedNode
@@ -29,6 +31,7 @@ class SimulatorHost:
         self.bus = can.Bus(interface=interface, channel=channel, **bus_kwargs)
         self.scheduler = DeadlineScheduler()
         self.nodes: list[SimulatedNode] = []
+        self._primary_of: dict[int, SimulatedNode] = {}  # id(sibling) -> the node whose quirk added it
         self._send_lock = threading.Lock()
         self._notifier = can.Notifier(self.bus, [self._dispatch], timeout=0.05)
         self._remote = None
@@ -48,12 +51,36 @@ class SimulatorHost:
             node.power_on()
         return node
 
+    def add_siblings(self, power_on: bool = True) -> list[SimulatedNode]:
+        """Put the sibling of every node with a ``second_node`` quirk on the bus (unless its id is taken).
+
+        The sibling plays ``params.profile`` (default: the same profile) at node-id + offset, with
+        its own NVM file next to the node's and no faults: the faults belong to the device under test.
+        """
+        added = []
+        for node in list(self.nodes):
+            spec = sibling_spec(node)
+            if spec is None or any(n.configured_node_id == spec[1] for n in self.nodes):
+                continue
+            profile, node_id = spec
+            nvm = node.nvm.path
+            nvm_path = None if nvm is None else nvm.with_name(f"{nvm.stem}-sibling{node_id}{nvm.suffix}")
+            sibling = self.add_node(profile, node_id, nvm_path, FaultSet(), power_on)
+            self._primary_of[id(sibling)] = node
+            added.append(sibling)
+        return added
+
+    def device_nodes(self, node: SimulatedNode) -> list[SimulatedNode]:
+        """``node`` and the siblings that share its device (and its power supply)."""
+        return [node, *(n for n in self.nodes if self._primary_of.get(id(n)) is node)]
+
     def node(self, node_id: int | None = None) -> SimulatedNode:
-        """The node with ``node_id`` (or the only node)."""
+        """The node with ``node_id`` (or the only node that is not a sibling)."""
         if node_id is None:
-            if len(self.nodes) != 1:
-                raise LookupError(f"{len(self.nodes)} nodes on the bus; name a node-id")
-            return self.nodes[0]
+            primaries = [n for n in self.nodes if id(n) not in self._primary_of]
+            if len(primaries) != 1:
+                raise LookupError(f"{len(primaries)} nodes on the bus; name a node-id")
+            return primaries[0]
         for node in self.nodes:
             if node.node_id == node_id:
                 return node
@@ -100,3 +127,18 @@ class SimulatorHost:
             self.bus.shutdown()
         except Exception as exc:  # pragma: no cover - shutdown must not raise
             print(f"bus shutdown: {exc}", file=sys.stderr)
+
+
+def sibling_spec(node: SimulatedNode) -> tuple[DeviceProfile, int] | None:
+    """(profile, node-id) of the sibling a ``second_node`` quirk asks for, or None."""
+    found = node.profile.quirk_with_effect("second_node")
+    if found is None:
+        return None
+    params = found[1].params
+    node_id = node.configured_node_id + int(params.get("node_id_offset", 1))
+    if not 1 <= node_id <= 127:
+        log.warning("second_node: sibling node-id %d of node %d is outside 1..127", node_id, node.configured_node_id)
+        return None
+    name = params.get("profile")
+    profile = node.profile if not name or name == node.profile.id else load_profile(str(name)).profile
+    return profile, node_id

@@ -19,13 +19,14 @@ from ..profile.od_builder import initial_value
 from . import access as codes
 from .access import NodeObjectAccess
 from .emcy import EmcyProducer
+from .encoder import EncoderFunction
 from .faults import FaultSet
 from .nmt import TARGET, NmtCommand, NmtState, pdo_allowed, sdo_allowed, sync_allowed
 from .nvm import Key, NonVolatileMemory
 from .object_store import SUB_TO_GROUP, ObjectStore
-from .position import EncoderGeometry, Scaling, position_value, unshifted_position
+from .pdo_layout import FixedTpdoLayout
 from .scheduler import DeadlineScheduler, JobHandle
-from .sdo_server import SdoAbort, SdoServer
+from .sdo_server import SdoAbort, SdoNoReply, SdoServer
 from .shaft import Shaft
 from .tpdo import TpdoEngine
 
@@ -65,6 +66,7 @@ class SimulatedNode:
         self.access = NodeObjectAccess(self)
         self.sdo = SdoServer(self.access)
         self.shaft = Shaft()
+        self.encoder = EncoderFunction(profile, self.store, self.shaft, scheduler)
         self.lock = threading.RLock()
         self.state: NmtState | None = None  # None = powered off
         self.hidden_indices = {max(profile.objects)} if self.faults.active("missing_object") else set()
@@ -87,6 +89,7 @@ class SimulatedNode:
             send=lambda cob_id, data: self.send(cob_id, data),
             count=profile.capabilities.tpdos,
             timer_zero_disables_255=self._quirk("transmission_type_255_timer_0_disables") is not None,
+            layout=None if (fixed := self._quirk("fixed_tpdo_mapping")) is None else FixedTpdoLayout.from_params(fixed),
         )
 
     # -- helpers -------------------------------------------------------------------------
@@ -142,20 +145,34 @@ class SimulatedNode:
     def power_on(self) -> None:
         """Apply power: reload everything from NVM, then boot (or wait for bus traffic)."""
         with self.lock:
-            self.node_id = self._node_id_at_power_on()
-            self.store.reload(lambda index: True, self.node_id)
-            self._apply_value_faults()
-            self.emcy.clear_history()
+            self._load_everything()
             self.state = NmtState.INITIALISING
             self._awaiting_traffic = self._quirk("silent_until_bus_traffic") is not None
             if not self._awaiting_traffic:
                 self._schedule_boot(power_on=True)
 
+    def _load_everything(self) -> None:
+        """What a (re)start loads: node-id, every value from NVM or default, no error history."""
+        self.node_id = self._node_id_at_power_on()
+        self.store.reload(lambda index: True, self.node_id)
+        self.encoder.reload(self.nvm)
+        self._apply_value_faults()
+        self.emcy.clear_history()
+
     def power_off(self) -> None:
         with self.lock:
             self._stop_services()
             self.sdo.reset()
+            self.encoder.thaw()
             self.state = None
+
+    def _reboot(self, delay_s: float) -> None:
+        """The device restarts by itself: silent while it initialises, boot-up after ``delay_s``."""
+        self._stop_services()
+        self.sdo.reset()
+        self.state = NmtState.INITIALISING
+        self._load_everything()
+        self._boot_job = self.scheduler.call_later(delay_s, lambda: self._finish_boot(power_on=True))
 
     def power_cycle(self) -> None:
         self.power_off()
@@ -191,6 +208,7 @@ class SimulatedNode:
             self.node_id = self._node_id_at_power_on()
             if node and not self.faults.active("reset_node_keeps_values"):
                 self.store.reload(lambda index: True, self.node_id)
+                self.encoder.reload(self.nvm)
             else:
                 self.store.reload(lambda index: 0x1000 <= index <= 0x1FFF, self.node_id)
             self._apply_value_faults()
@@ -251,6 +269,8 @@ class SimulatedNode:
                 self._on_sdo(bytes(msg.data))
             elif self._is_sync(msg) and sync_allowed(self.state):
                 self.tpdo.on_sync()
+            elif msg.is_remote_frame and not msg.is_extended_id:
+                self.tpdo.on_rtr(can_id)  # answered only by TPDOs that allow RTR, in operational
 
     def _is_sync(self, msg: can.Message) -> bool:
         cob = self._read_int(0x1005, 0)
@@ -298,37 +318,17 @@ class SimulatedNode:
             self.send(0x580 + self.node_id, response)
 
     # -- values seen through SDO and PDO ---------------------------------------------------
-    def _geometry(self) -> EncoderGeometry:
-        steps = self._read_int(0x6501, 0) or int(self.profile.simulator.values.get("steps_per_rev", 4096))
-        revolutions = self._read_int(0x6502, 0) if self.profile.capabilities.multiturn else 1
-        return EncoderGeometry(steps, revolutions or 1)
-
-    def _scaling(self) -> Scaling:
-        params = self._read_int(0x6000, 0) or 0
-        return Scaling(
-            ccw=bool(params & 0x01),
-            enabled=bool(params & 0x04) and self.profile.capabilities.scaling,
-            units_per_rev=self._read_int(0x6001, 0) or 0,
-            total_range=self._read_int(0x6002, 0) or 0,
-            offset=self._signed(self._read_int(0x6509, 0) or 0),
-        )
-
-    @staticmethod
-    def _signed(value: int) -> int:
-        return value - (1 << 32) if value >= 1 << 31 else value
-
     def position(self) -> int:
-        return position_value(self.shaft.turns(), self._geometry(), self._scaling())
+        return self.encoder.position()
 
-    def current_value(self, key: Key) -> int | str | bytes:
-        """Dynamic entries are computed; the rest come from the store (with identity faults)."""
-        if key in ((0x6004, 0), (0x6008, 0)):
-            return self.position()
-        if key == (0x6030, 1):
-            units = self._scaling().units_per_rev or self._geometry().steps_per_rev
-            return max(-32768, min(32767, round(self.shaft.speed * units)))
-        if key == (0x6500, 0) and self.store.has((0x6000, 0)):
-            return self.store.get((0x6000, 0))
+    def current_value(self, key: Key, channel: str = "sdo") -> int | str | bytes:
+        """Computed entries come from the encoder; the rest from the store (with identity faults)."""
+        computed = self.encoder.value(key, channel)
+        if computed is not None:
+            return computed
+        reads_back = self._quirk("store_object_reads_back")
+        if reads_back is not None and key[0] in (0x1010, 0x1011) and key[1] >= 1:
+            return int(reads_back.get("value", 0))
         value = self.store.get(key)
         return self._identity_fault(key, value)
 
@@ -351,8 +351,8 @@ class SimulatedNode:
             return f"X{value}"
         return value
 
-    def encode_current(self, key: Key) -> bytes:
-        value = self.current_value(key)
+    def encode_current(self, key: Key, channel: str = "sdo") -> bytes:
+        value = self.current_value(key, channel)
         if isinstance(value, bytes):
             return value
         if isinstance(value, str):
@@ -366,17 +366,23 @@ class SimulatedNode:
         key = (index, sub)
         if not self.store.has(key):
             return bytes(bits // 8)
-        return self.encode_current(key).ljust(bits // 8, b"\x00")[: bits // 8]
+        return self.encode_current(key, "tpdo").ljust(bits // 8, b"\x00")[: bits // 8]
 
     # -- writes: gates and effects ---------------------------------------------------------
     def quirk_write_gate(self, key: Key) -> None:
         """Profile quirks that refuse a write in the current situation."""
         gate = self._quirk("writes_preop_only")
         if gate and key[0] in gate.get("objects", []) and self.state is not NmtState.PRE_OPERATIONAL:
-            raise SdoAbort(int(gate.get("abort_code", codes.WRONG_STATE)))
+            raise SdoAbort(int(gate.get("abort_code", self.access.codes["wrong_state"])))
+        gate = self._quirk("writes_need_scaling_bit")
+        if gate and key[0] in gate.get("objects", []) and not (self._read_int(0x6000, 0) or 0) & 0x04:
+            raise SdoAbort(int(gate.get("abort_code", self.access.codes["wrong_state"])))
 
     def apply_write(self, key: Key, value: int | str | bytes) -> None:
         index, sub = key
+        reboot = self._quirk("store_reboots_without_reply")
+        if reboot is not None and key == (int(reboot.get("index", 0x1010)), int(reboot.get("subindex", 1))):
+            self._store_and_reboot(value, reboot)
         if index in (0x1010, 0x1011):
             self._store_or_restore(index, sub, value)
             return
@@ -385,36 +391,47 @@ class SimulatedNode:
                 raise SdoAbort(codes.VALUE_INVALID)
             self.emcy.clear_history()
             return
-        if index == 0x6003 and isinstance(value, int):
-            self._preset(value)
+        self.encoder.on_write(key, value)
         self.store.set(key, value)
         self.store.persist_auto(key)
+        if self._quirk("store_automatic") is not None:
+            self.store.persist(key)
         if index == 0x1017:
             if value == 0 and self.faults.active("heartbeat_ignores_zero"):
                 return
             self._restart_heartbeat()
-        elif 0x1800 <= index <= 0x1BFF:
+        elif 0x1800 <= index <= 0x1BFF or index in self.tpdo.reload_indices:
             self.tpdo.reload()
 
     def _store_or_restore(self, index: int, sub: int, value: object) -> None:
         storing = index == 0x1010
         signature = codes.SAVE if storing else codes.LOAD
         if value != signature and not self.faults.active("store_wrong_signature_accepted"):
-            raise SdoAbort(codes.CANNOT_STORE)
+            raise SdoAbort(self.access.codes["store_signature"])
         group = SUB_TO_GROUP.get(sub, "store_manufacturer")
         if storing:
             if not self.faults.active("store_not_persisted"):
                 self.store.store(group)
+                self.encoder.persist(self.nvm)
         elif not self.faults.active("restore_ineffective"):
             self.store.restore_defaults(group)
+            self.encoder.forget(self.nvm)
 
-    def _preset(self, preset: int) -> None:
-        scaling = self._scaling()
-        before = unshifted_position(self.shaft.turns(), self._geometry(), scaling)
-        span = scaling.total_range if scaling.enabled and scaling.total_range else self._geometry().range
-        offset = (preset - before) % span if span else preset - before
-        if self.store.has((0x6509, 0)):
-            self.store.set((0x6509, 0), offset)
+    def _store_and_reboot(self, value: object, params: dict) -> None:
+        """Quirk store_reboots_without_reply: store everything, no SDO reply, reboot, boot-up later.
+
+        Any other value than the signature is refused (params.wrong_signature_abort, default the
+        CiA 'cannot store' code) and changes nothing: the manual leaves this case open.
+        """
+        signature = int(params.get("signature_u32", codes.SAVE))
+        if value != signature and not self.faults.active("store_wrong_signature_accepted"):
+            raise SdoAbort(int(params.get("wrong_signature_abort", self.access.codes["store_signature"])))
+        if not self.faults.active("store_not_persisted"):
+            self.store.store_all_storable()
+            self.encoder.persist(self.nvm)
+        delay_ms = float(params.get("reboot_ms", self.profile.simulator.bootup_delay_ms))
+        self._reboot(delay_ms / 1000)
+        raise SdoNoReply
 
     # -- control API (used by the control server and in-process tests) ----------------------
     def default_value(self, key: Key) -> object:

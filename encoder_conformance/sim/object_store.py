@@ -103,6 +103,17 @@ class ObjectStore:
         keys = self.storable_keys(group)
         self.nvm.put_many({key: self.values[key] for key in keys if not isinstance(self.values[key], bytes)})
 
+    def store_all_storable(self) -> None:
+        """Write every storable entry (store_* groups and manufacturer_store) to NVM at once."""
+        storable = ("store_all", "store_comm", "store_app", "store_manufacturer", "manufacturer_store")
+        keys = [key for key, entry in self.entries.items() if entry.writable and entry.persisted_by in storable]
+        self.nvm.put_many({key: self.values[key] for key in keys if not isinstance(self.values[key], bytes)})
+
+    def persist(self, key: Key) -> None:
+        """Write one entry to NVM now (quirk store_automatic), unless it cannot be stored."""
+        if self.entries[key].persisted_by not in ("none", "volatile") and not isinstance(self.values[key], bytes):
+            self.nvm.put_many({key: self.values[key]})
+
     def restore_defaults(self, group: str) -> None:
         """Forget stored values of the group; defaults become active at the next reset."""
         self.nvm.remove_many(self.storable_keys(group))

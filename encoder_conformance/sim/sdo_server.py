@@ -24,6 +24,10 @@ class SdoAbort(Exception):
         self.code = code
 
 
+class SdoNoReply(Exception):
+    """Raised by an ObjectAccess when the device sends no response at all (e.g. it reboots)."""
+
+
 class ObjectAccess(Protocol):
     def sdo_read(self, index: int, sub: int) -> bytes: ...
 
@@ -76,6 +80,9 @@ class SdoServer:
                 self._transfer = None
                 return None
             raise SdoAbort(COMMAND_INVALID)  # block transfer (5, 6) and reserved (7)
+        except SdoNoReply:
+            self._transfer = None
+            return None
         except SdoAbort as abort:
             if ccs in (0, 3) and self._last_multiplexer is not None:
                 index, sub = self._last_multiplexer

@@ -30,12 +30,17 @@ def serve(
     ready_line: bool,
 ) -> int:
     """Start the host, add one node per profile, print the endpoints, run until signalled."""
+    # Timing: the default 5 ms GIL switch interval delays the scheduler thread by up to 5 ms when
+    # the receive/remote threads are busy; 0.5 ms keeps heartbeat jitter well below the CI
+    # tolerance (reference/python-stack-measured.md §6: p99 4.9 ms -> 1.8 ms).
+    sys.setswitchinterval(0.0005)
     host = SimulatorHost(channel=f"sim-{time.monotonic_ns()}")
     for i, name in enumerate(profiles):
         loaded = load_profile(name)
         node_id = node_ids[i] if i < len(node_ids) else None
         nvm_path = None if nvm is None else nvm.with_name(f"{nvm.stem}-{i}{nvm.suffix}") if i else nvm
         host.add_node(loaded.profile, node_id, nvm_path, FaultSet(faults))
+    host.add_siblings()  # second_node quirk: the redundant interface's other node
     can_host, can_port = host.serve_remote(*_address(listen))
     control_address = serve_control(host, _address(control)) if control else None
     info = {
