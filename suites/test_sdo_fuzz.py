@@ -111,8 +111,8 @@ def test_unknown_command_specifiers_abort(dut, alive_after):
         response = dut.sdo_request(request)
         note(f"request {request.hex(' ')} -> {response.describe() if response else 'no response'}")
         assert response is not None, f"no response to command specifier {ccs} ({request.hex(' ').upper()})"
-        assert response.is_abort and response.abort_code == 0x05040001, (
-            f"command specifier {ccs}: expected abort {sdo_frames.abort_name(0x05040001)}, got {response.describe()}"
-        )
+        expected = f"command specifier {ccs}: expected abort {sdo_frames.abort_name(0x05040001)}"
+        assert response.is_abort, f"{expected}, got {response.describe()}"
+        assert response.abort_code == 0x05040001, f"{expected}, got {response.describe()}"
 
     check()

@@ -23,11 +23,12 @@ from .encoder import EncoderFunction
 from .faults import FaultSet
 from .nmt import TARGET, NmtCommand, NmtState, pdo_allowed, sdo_allowed, sync_allowed
 from .nvm import Key, NonVolatileMemory
-from .object_store import SUB_TO_GROUP, ObjectStore
+from .object_store import ObjectStore
 from .pdo_layout import FixedTpdoLayout
 from .scheduler import DeadlineScheduler, JobHandle
-from .sdo_server import SdoAbort, SdoNoReply, SdoServer
+from .sdo_server import SdoAbort, SdoServer
 from .shaft import Shaft
+from .store_commands import StoreCommands
 from .tpdo import TpdoEngine
 
 log = logging.getLogger(__name__)
@@ -65,6 +66,7 @@ class SimulatedNode:
         self.store = ObjectStore(profile, self.nvm, self._node_id_at_power_on())
         self.access = NodeObjectAccess(self)
         self.sdo = SdoServer(self.access)
+        self.store_commands = StoreCommands(self)
         self.shaft = Shaft()
         self.encoder = EncoderFunction(profile, self.store, self.shaft, scheduler)
         self.lock = threading.RLock()
@@ -79,7 +81,7 @@ class SimulatedNode:
             self.send,
             allowed=lambda: self.state in (NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL),
             node_id=lambda: self.node_id,
-            without_generic_bit=self._quirk("error_register_without_generic_bit") is not None,
+            without_generic_bit=self.quirk_params("error_register_without_generic_bit") is not None,
             cob_offset=1 if self.faults.active("emcy_wrong_cob_id") else 0,
         )
         self.tpdo = TpdoEngine(
@@ -88,12 +90,17 @@ class SimulatedNode:
             mapped_bytes=self._mapped_bytes,
             send=lambda cob_id, data: self.send(cob_id, data),
             count=profile.capabilities.tpdos,
-            timer_zero_disables_255=self._quirk("transmission_type_255_timer_0_disables") is not None,
-            layout=None if (fixed := self._quirk("fixed_tpdo_mapping")) is None else FixedTpdoLayout.from_params(fixed),
+            timer_zero_disables_255=self.quirk_params("transmission_type_255_timer_0_disables") is not None,
+            layout=self._fixed_tpdo_layout(),
         )
 
     # -- helpers -------------------------------------------------------------------------
-    def _quirk(self, effect: str) -> dict | None:
+    def _fixed_tpdo_layout(self) -> FixedTpdoLayout | None:
+        params = self.quirk_params("fixed_tpdo_mapping")
+        return None if params is None else FixedTpdoLayout.from_params(params)
+
+    def quirk_params(self, effect: str) -> dict | None:
+        """The params of the profile's quirk with ``effect``, or None if it has none."""
         found = self.profile.quirk_with_effect(effect)
         return None if found is None else found[1].params
 
@@ -111,14 +118,14 @@ class SimulatedNode:
 
     def _preconfigure_node_id(self) -> None:
         """A twin started with --node-id behaves as if configured before delivery."""
-        quirk = self._quirk("node_id_object")
+        quirk = self.quirk_params("node_id_object")
         if quirk and self.configured_node_id != self.profile.bus.node_id:
             key = (int(quirk["index"]), int(quirk.get("subindex", 0)))
             if key not in self.nvm:
                 self.nvm.put_many({key: self.configured_node_id})
 
     def _node_id_at_power_on(self) -> int:
-        quirk = self._quirk("node_id_object")
+        quirk = self.quirk_params("node_id_object")
         if quirk:
             stored = self.nvm.get((int(quirk["index"]), int(quirk.get("subindex", 0))))
             if isinstance(stored, int) and 1 <= stored <= 127:
@@ -147,7 +154,7 @@ class SimulatedNode:
         with self.lock:
             self._load_everything()
             self.state = NmtState.INITIALISING
-            self._awaiting_traffic = self._quirk("silent_until_bus_traffic") is not None
+            self._awaiting_traffic = self.quirk_params("silent_until_bus_traffic") is not None
             if not self._awaiting_traffic:
                 self._schedule_boot(power_on=True)
 
@@ -166,7 +173,7 @@ class SimulatedNode:
             self.encoder.thaw()
             self.state = None
 
-    def _reboot(self, delay_s: float) -> None:
+    def reboot(self, delay_s: float) -> None:
         """The device restarts by itself: silent while it initialises, boot-up after ``delay_s``."""
         self._stop_services()
         self.sdo.reset()
@@ -326,7 +333,7 @@ class SimulatedNode:
         computed = self.encoder.value(key, channel)
         if computed is not None:
             return computed
-        reads_back = self._quirk("store_object_reads_back")
+        reads_back = self.quirk_params("store_object_reads_back")
         if reads_back is not None and key[0] in (0x1010, 0x1011) and key[1] >= 1:
             return int(reads_back.get("value", 0))
         value = self.store.get(key)
@@ -371,20 +378,16 @@ class SimulatedNode:
     # -- writes: gates and effects ---------------------------------------------------------
     def quirk_write_gate(self, key: Key) -> None:
         """Profile quirks that refuse a write in the current situation."""
-        gate = self._quirk("writes_preop_only")
+        gate = self.quirk_params("writes_preop_only")
         if gate and key[0] in gate.get("objects", []) and self.state is not NmtState.PRE_OPERATIONAL:
             raise SdoAbort(int(gate.get("abort_code", self.access.codes["wrong_state"])))
-        gate = self._quirk("writes_need_scaling_bit")
+        gate = self.quirk_params("writes_need_scaling_bit")
         if gate and key[0] in gate.get("objects", []) and not (self._read_int(0x6000, 0) or 0) & 0x04:
             raise SdoAbort(int(gate.get("abort_code", self.access.codes["wrong_state"])))
 
     def apply_write(self, key: Key, value: int | str | bytes) -> None:
         index, sub = key
-        reboot = self._quirk("store_reboots_without_reply")
-        if reboot is not None and key == (int(reboot.get("index", 0x1010)), int(reboot.get("subindex", 1))):
-            self._store_and_reboot(value, reboot)
-        if index in (0x1010, 0x1011):
-            self._store_or_restore(index, sub, value)
+        if self.store_commands.on_write(key, value):
             return
         if index == 0x1003 and sub == 0:
             if value != 0:
@@ -393,45 +396,13 @@ class SimulatedNode:
             return
         self.encoder.on_write(key, value)
         self.store.set(key, value)
-        self.store.persist_auto(key)
-        if self._quirk("store_automatic") is not None:
-            self.store.persist(key)
+        self.store_commands.after_write(key, value)
         if index == 0x1017:
             if value == 0 and self.faults.active("heartbeat_ignores_zero"):
                 return
             self._restart_heartbeat()
         elif 0x1800 <= index <= 0x1BFF or index in self.tpdo.reload_indices:
             self.tpdo.reload()
-
-    def _store_or_restore(self, index: int, sub: int, value: object) -> None:
-        storing = index == 0x1010
-        signature = codes.SAVE if storing else codes.LOAD
-        if value != signature and not self.faults.active("store_wrong_signature_accepted"):
-            raise SdoAbort(self.access.codes["store_signature"])
-        group = SUB_TO_GROUP.get(sub, "store_manufacturer")
-        if storing:
-            if not self.faults.active("store_not_persisted"):
-                self.store.store(group)
-                self.encoder.persist(self.nvm)
-        elif not self.faults.active("restore_ineffective"):
-            self.store.restore_defaults(group)
-            self.encoder.forget(self.nvm)
-
-    def _store_and_reboot(self, value: object, params: dict) -> None:
-        """Quirk store_reboots_without_reply: store everything, no SDO reply, reboot, boot-up later.
-
-        Any other value than the signature is refused (params.wrong_signature_abort, default the
-        CiA 'cannot store' code) and changes nothing: the manual leaves this case open.
-        """
-        signature = int(params.get("signature_u32", codes.SAVE))
-        if value != signature and not self.faults.active("store_wrong_signature_accepted"):
-            raise SdoAbort(int(params.get("wrong_signature_abort", self.access.codes["store_signature"])))
-        if not self.faults.active("store_not_persisted"):
-            self.store.store_all_storable()
-            self.encoder.persist(self.nvm)
-        delay_ms = float(params.get("reboot_ms", self.profile.simulator.bootup_delay_ms))
-        self._reboot(delay_ms / 1000)
-        raise SdoNoReply
 
     # -- control API (used by the control server and in-process tests) ----------------------
     def default_value(self, key: Key) -> object:

@@ -12,12 +12,9 @@ from ..profile.model import DeviceProfile, EntrySpec, resolve_node_id_expression
 from ..profile.od_builder import build_object_dictionary, initial_value
 from .nvm import Key, NonVolatileMemory
 
-STORE_GROUPS: dict[str, Callable[[int], bool]] = {
-    "store_all": lambda index: True,
-    "store_comm": lambda index: 0x1000 <= index <= 0x1FFF,
-    "store_app": lambda index: 0x6000 <= index <= 0x9FFF,
-    "store_manufacturer": lambda index: 0x2000 <= index <= 0x5FFF,
-}
+#: persisted_by labels a 1010h sub stores; the profile's label decides (devices differ in the
+#: ranges their subs cover, e.g. FAULHABER's "application" sub covers 2000h..6FFFh)
+STORE_GROUPS = ("store_all", "store_comm", "store_app", "store_manufacturer")
 #: CiA 301 1010h/1011h sub-index -> group it covers (sub 4+ are manufacturer-defined).
 SUB_TO_GROUP = {1: "store_all", 2: "store_comm", 3: "store_app", 4: "store_manufacturer"}
 
@@ -91,12 +88,12 @@ class ObjectStore:
                 self.values[key] = resolve_node_id_expression(self.default_of(key, node_id), node_id)  # type: ignore[assignment]
 
     def storable_keys(self, group: str) -> list[Key]:
-        """Entries that 1010h with ``group`` writes to NVM."""
-        in_group = STORE_GROUPS[group]
+        """Entries that 1010h with ``group`` writes to NVM: those labelled so (store_all: every store_* label)."""
         return [
             key
             for key, entry in self.entries.items()
-            if entry.persisted_by.startswith("store_") and in_group(key[0]) and entry.writable
+            if entry.writable and entry.persisted_by in STORE_GROUPS
+            and (group == "store_all" or entry.persisted_by == group)
         ]
 
     def store(self, group: str) -> None:
