@@ -11,28 +11,20 @@ import itertools
 import json
 import statistics
 import struct
-import threading
-import uuid
-from dataclasses import dataclass
-from pathlib import Path
 
-import can
 import canopen
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.dut.frames import FrameLog, Mark
-from encoder_conformance.dut.tracing_bus import TracingBus
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile, resolve_node_id_expression
 from encoder_conformance.sim.faults import FaultSet
-from encoder_conformance.sim.host import SimulatorHost
 from encoder_conformance.sim.nmt import NmtState
 from encoder_conformance.sim.node import SimulatedNode
+from tests import sim_rig
+from tests.sim_rig import MINIMAL, WAIT_S, Rig
 
-REPO = Path(__file__).resolve().parents[1]
-MINIMAL = REPO / "tests" / "data" / "profiles" / "minimal-encoder.yaml"
-WAIT_S = 2.0  # upper bound for any expected frame; tests go on as soon as it arrives
+rig = sim_rig.rig  # the shared fixture
 
 SAVE = b"save"
 LOAD = b"load"
@@ -48,72 +40,6 @@ def wdga_profile() -> DeviceProfile:
     return load_profile("wachendorff-wdga-mt").profile
 
 
-@dataclass
-class Rig:
-    """One simulator host and one tester (canopen Network + FrameLog) on a private virtual channel."""
-
-    host: SimulatorHost
-    network: canopen.Network
-    log: FrameLog
-    tmp_path: Path
-
-    def add(self, profile: DeviceProfile, faults: tuple[str, ...] = ()) -> SimulatedNode:
-        """A node of ``profile`` on the bus, not yet powered, with its NVM file in tmp_path."""
-        return self.host.add_node(profile, nvm_path=self.tmp_path / "nvm.json", faults=FaultSet(faults),
-                                  power_on=False)
-
-    def client(self, node_id: int) -> canopen.RemoteNode:
-        remote = canopen.RemoteNode(node_id, canopen.ObjectDictionary())
-        self.network.add_node(remote)
-        remote.sdo.RESPONSE_TIMEOUT = WAIT_S
-        return remote
-
-    def send(self, cob_id: int, data: bytes = b"") -> Mark:
-        mark = self.log.mark()
-        self.network.send_message(cob_id, data)
-        return mark
-
-    def nmt(self, command: int, node_id: int) -> Mark:
-        return self.send(0x000, bytes([command, node_id]))
-
-    def wait_bootup(self, node_id: int, after: Mark) -> can.Message | None:
-        return self.log.wait_for(
-            lambda m: m.is_rx and m.arbitration_id == 0x700 + node_id and bytes(m.data) == b"\x00", WAIT_S, after
-        )
-
-    def power_on(self, node: SimulatedNode) -> can.Message | None:
-        """Power the node and return its boot-up frame (None if it stays silent)."""
-        mark = self.log.mark()
-        node.power_on()
-        return self.wait_bootup(node.node_id, mark)
-
-    def raw_sdo(self, node_id: int, request: bytes) -> can.Message | None:
-        """Send one raw SDO request; the node's response frame or None."""
-        mark = self.send(0x600 + node_id, request)
-        return self.log.wait_for(lambda m: m.is_rx and m.arbitration_id == 0x580 + node_id, WAIT_S, mark)
-
-    def scheduler_drained(self, delay_s: float) -> bool:
-        """True once the simulator's scheduler has run everything due within ``delay_s``."""
-        done = threading.Event()
-        self.host.scheduler.call_later(delay_s, done.set)
-        return done.wait(WAIT_S + delay_s)
-
-
-_channels = itertools.count()
-
-
-@pytest.fixture
-def rig(tmp_path):
-    channel = f"selftest-{uuid.uuid4().hex[:8]}-{next(_channels)}"
-    host = SimulatorHost(channel=channel)
-    log = FrameLog()
-    network = canopen.Network(TracingBus(can.Bus(interface="virtual", channel=channel), log))
-    network.NOTIFIER_CYCLE = 0.02  # short receive timeout: disconnect() returns at once
-    network.listeners.append(log)
-    network.connect()
-    yield Rig(host, network, log, tmp_path)
-    network.disconnect()
-    host.shutdown()
 
 
 def upload_request(index: int, sub: int = 0) -> bytes:

@@ -11,36 +11,27 @@ from __future__ import annotations
 import itertools
 import statistics
 import struct
-import threading
 import time
-import uuid
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
-import can
 import canopen
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.dut.frames import FrameLog, Mark
-from encoder_conformance.dut.tracing_bus import TracingBus
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile, Quirk
 from encoder_conformance.sim.faults import FaultSet
-from encoder_conformance.sim.host import SimulatorHost
 from encoder_conformance.sim.nmt import NmtState
-from encoder_conformance.sim.node import SimulatedNode
 from encoder_conformance.sim.nvm import NonVolatileMemory
 from encoder_conformance.sim_control import LocalControl
+from tests import sim_rig
+from tests.sim_rig import MINIMAL, WAIT_S
 
-REPO = Path(__file__).resolve().parents[1]
-MINIMAL = REPO / "tests" / "data" / "profiles" / "minimal-encoder.yaml"
-WAIT_S = 2.0  # upper bound for any expected frame; tests go on as soon as it arrives
+rig = sim_rig.rig  # the shared fixture
+
 STORE_2300 = bytes.fromhex("22 00 23 00 55 AA AA 55")
 REBOOT_MS = 150
 
-_channels = itertools.count()
 
 
 def fast(profile: DeviceProfile, quirk_params: dict[str, dict[str, Any]] | None = None,
@@ -58,72 +49,6 @@ def quirk(effect: str, **params: Any) -> Quirk:
     return Quirk(title=f"test {effect}", manual="self-test", description="self-test", effect=effect, params=params)
 
 
-@dataclass
-class Rig:
-    """One simulator host and one tester (canopen Network + FrameLog) on a private virtual channel."""
-
-    host: SimulatorHost
-    network: canopen.Network
-    log: FrameLog
-    tmp_path: Path
-
-    def boot(self, profile: DeviceProfile, node_id: int | None = None) -> tuple[SimulatedNode, canopen.RemoteNode]:
-        node = self.host.add_node(profile, node_id, self.tmp_path / f"nvm-{profile.id}.json", FaultSet(),
-                                  power_on=False)
-        mark = self.log.mark()
-        node.power_on()
-        if profile.quirk_with_effect("silent_until_bus_traffic"):
-            self.send(0x80)
-        assert self.wait_bootup(node.node_id, mark) is not None, "no boot-up"
-        return node, self.client(node.node_id)
-
-    def client(self, node_id: int) -> canopen.RemoteNode:
-        remote = canopen.RemoteNode(node_id, canopen.ObjectDictionary())
-        self.network.add_node(remote)
-        remote.sdo.RESPONSE_TIMEOUT = WAIT_S
-        return remote
-
-    def send(self, cob_id: int, data: bytes = b"", remote: bool = False) -> Mark:
-        mark = self.log.mark()
-        self.network.send_message(cob_id, data, remote=remote)
-        return mark
-
-    def nmt(self, command: int, node_id: int) -> Mark:
-        return self.send(0x000, bytes([command, node_id]))
-
-    def frame(self, cob_id: int, after: Mark, timeout: float = WAIT_S) -> can.Message | None:
-        return self.log.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id, timeout, after)
-
-    def frames(self, cob_id: int, after: Mark) -> list[can.Message]:
-        return self.log.since(after, lambda m: m.is_rx and m.arbitration_id == cob_id)
-
-    def wait_bootup(self, node_id: int, after: Mark, timeout: float = WAIT_S) -> can.Message | None:
-        return self.log.wait_for(
-            lambda m: m.is_rx and m.arbitration_id == 0x700 + node_id and bytes(m.data) == b"\x00", timeout, after
-        )
-
-    def raw_sdo(self, node_id: int, request: bytes) -> can.Message | None:
-        return self.frame(0x580 + node_id, self.send(0x600 + node_id, request))
-
-    def scheduler_drained(self, delay_s: float) -> bool:
-        """True once the simulator's scheduler has run everything due within ``delay_s``."""
-        done = threading.Event()
-        self.host.scheduler.call_later(delay_s, done.set)
-        return done.wait(WAIT_S + delay_s)
-
-
-@pytest.fixture
-def rig(tmp_path):
-    channel = f"quirktest-{uuid.uuid4().hex[:8]}-{next(_channels)}"
-    host = SimulatorHost(channel=channel)
-    log = FrameLog()
-    network = canopen.Network(TracingBus(can.Bus(interface="virtual", channel=channel), log))
-    network.NOTIFIER_CYCLE = 0.02
-    network.listeners.append(log)
-    network.connect()
-    yield Rig(host, network, log, tmp_path)
-    network.disconnect()
-    host.shutdown()
 
 
 def read_u(client: canopen.RemoteNode, index: int, sub: int = 0) -> int:
