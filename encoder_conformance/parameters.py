@@ -11,6 +11,11 @@ from .profile.model import DeviceProfile, EntrySpec
 STORE_GROUPS = ("store_all", "store_comm", "store_app", "store_manufacturer")
 
 
+def _addressing(index: int) -> bool:
+    """COB-IDs and PDO/SDO parameters: changing them can collide with other nodes on a real bus."""
+    return index in (0x1005, 0x1012, 0x1014) or 0x1200 <= index <= 0x1BFF
+
+
 @dataclass(frozen=True)
 class Changeable:
     index: int
@@ -41,7 +46,9 @@ def changeable_parameter(
     entries = profile.iter_entries()
     ordered = [e for e in entries if e[0] in prefer] + [e for e in entries if e[0] not in prefer]
     for index, sub, _, entry in ordered:
-        if not (entry.writable and entry.readable) or index in (0x1010, 0x1011) or not wanted(index, entry):
+        if not (entry.writable and entry.readable) or index in (0x1010, 0x1011) or _addressing(index):
+            continue
+        if not wanted(index, entry):
             continue
         if any(q.effect in ("node_id_object", "bitrate_object") and q.params.get("index") == index
                for q in profile.quirks.values()):

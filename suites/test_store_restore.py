@@ -71,3 +71,4 @@ def test_wrong_signature_refused(dut, index, name, evidence):
     response = dut.expect_abort(sdo_frames.expedited_download_request(index, subs[0], b"SAVE"))
     assert_abort(dut, response, expected_aborts(dut, "store_signature", evidence),
                  f"{name} {index:04X}h.{subs[0]:02X} with signature 'SAVE'")
+

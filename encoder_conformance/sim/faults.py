@@ -29,6 +29,8 @@ FAULTS: dict[str, str] = {
     "wrong_abort_no_subindex": "access to a missing sub-index aborts 06020000h instead of 06090011h",
     "write_rw_ignored": "writes to rw objects are confirmed but the value does not change",
     "no_sdo_response": "SDO requests are never answered (the device looks dead)",
+    "ignore_unknown_command": "SDO requests with a reserved or block command specifier get no answer",
+    "abort_without_multiplexer": "SDO abort frames carry index 0000h sub 00 instead of the request's",
     # NMT
     "no_bootup_after_reset": "no boot-up message after reset node / reset communication",
     "ignore_start": "NMT start remote node is ignored",

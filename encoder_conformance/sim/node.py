@@ -320,7 +320,11 @@ class SimulatedNode:
             return
         if not sdo_allowed(self.state) and not self.faults.active("sdo_in_stopped"):
             return
+        if data and data[0] >> 5 in (5, 6, 7) and self.faults.active("ignore_unknown_command"):
+            return
         response = self.sdo.handle(data)
+        if response is not None and response[0] == 0x80 and self.faults.active("abort_without_multiplexer"):
+            response = response[:1] + bytes(3) + response[4:]  # as canopen's own client does (issue #377)
         if response is not None:
             self.send(0x580 + self.node_id, response)
 

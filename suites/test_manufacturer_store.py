@@ -1,0 +1,62 @@
+"""Store through a manufacturer command that reboots the device instead of replying (documented quirk).
+
+FRABA POSITAL: 2300h = 55 AA AA 55, no SDO confirmation, boot-up about 4 s later (UMD-CA §4.3,
+§7.2.9). CiA 301 §7.5.2.13 expects 1010h with an SDO confirmation; the profile documents the
+deviation and this test checks the device keeps its own promise.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.dut import sdo_frames
+from encoder_conformance.parameters import changeable_parameter
+
+pytestmark = [pytest.mark.spec("manufacturer store command (profile quirk store_reboots_without_reply)"),
+              pytest.mark.destructive]
+
+SAVE = (0x65766173).to_bytes(4, "little")
+
+
+@pytest.fixture
+def reboot_store(dut):
+    """The (id, params) of a device that stores through a manufacturer object and reboots instead of replying."""
+    found = dut.profile.quirk_with_effect("store_reboots_without_reply")
+    if found is None:
+        pytest.skip("not applicable: the device has no store-by-reboot command (quirk store_reboots_without_reply)")
+    return found
+
+
+def _store_by_reboot(dut, params: dict) -> None:
+    """Send the store command; no SDO reply may come, and a boot-up must follow within store_max_ms."""
+    signature = bytes(params["signature"]) if "signature" in params else SAVE
+    request = sdo_frames.expedited_download_request(int(params["index"]), int(params.get("subindex", 0)), signature)
+    request = bytes([0x22]) + request[1:]  # the manual's frame: download, size not indicated
+    mark = dut.frames.mark()
+    reply = dut.sdo_request(request)
+    assert reply is None, f"documented: no SDO reply to the store command; observed {reply.describe()}"
+    boot = dut.wait_bootup(mark, timeout=dut.profile.timing.store_max_ms / 1000)
+    assert boot is not None, (
+        f"no boot-up within {dut.profile.timing.store_max_ms:.0f} ms after the store command (the manual: reboot)"
+    )
+
+
+@pytest.mark.requires("preset")
+def test_store_by_reboot_keeps_value(dut, reboot_store, evidence):
+    """The manufacturer store command (no reply, reboot, boot-up) keeps a changed parameter over a reset."""
+    quirk_id, quirk = reboot_store
+    evidence.deviation(quirk_id, quirk.title)
+    found = changeable_parameter(dut.profile, lambda i, e: e.persisted_by == "manufacturer_store")
+    if found is None:
+        pytest.skip("not applicable: no parameter is declared persisted_by: manufacturer_store")
+    original = dut.read(found.index, found.sub)
+    dut.write(found.index, found.sub, found.new_value.to_bytes(len(original), "little"))
+    try:
+        _store_by_reboot(dut, quirk.params)
+        dut.reset_node_and_wait()
+        observed = dut.read_uint(found.index, found.sub)
+        assert observed == found.new_value, f"{found.label}: stored {found.new_value}, {observed} after reset node"
+    finally:
+        if not dut.lost:  # put the device back as it was, and store that
+            dut.write(found.index, found.sub, original)
+            _store_by_reboot(dut, quirk.params)
