@@ -1,15 +1,56 @@
-"""Observe NMT states through the heartbeat (CiA 301 §7.2.8.3.2.2)."""
+"""Observe a device's NMT state: through its heartbeat, or, without one, through its services.
+
+CiA 301 §7.2.8.3.2.2: the heartbeat carries the state byte. A device with neither heartbeat
+nor node guarding (the legacy POSITAL) still shows its state by what it answers: no SDO in
+stopped, SDO but no PDO in pre-operational, SYNC-driven PDOs in operational (§7.3.2.2).
+"""
 
 from __future__ import annotations
 
+import time
+from typing import Protocol
+
 from .device import NMT_COMMANDS, STATE_NAMES, DeviceUnderTest
 from .frames import Mark, format_frames
+from .sdo_frames import upload_request
 
 COMMAND_TARGET = {"start": 0x05, "stop": 0x04, "pre-operational": 0x7F}
+ENTER = {"pre-operational": "pre-operational", "operational": "start", "stopped": "stop"}
 
 
-class NmtObserver:
-    """Sends NMT commands and waits until the heartbeat reports the expected state."""
+class NmtObserver(Protocol):
+    dut: DeviceUnderTest
+    method: str
+
+    @property
+    def window_s(self) -> float: ...
+
+    def expect_state(self, after: Mark, state: int, why: str) -> None: ...
+
+    def expect_not_state(self, after: Mark, state: int, why: str) -> None: ...
+
+
+class _Commands:
+    """Sending NMT commands and bringing the device into a state, shared by both observers."""
+
+    dut: DeviceUnderTest
+
+    def command(self, name: str, node_id: int | None = None) -> Mark:
+        if name not in NMT_COMMANDS:
+            raise ValueError(f"unknown NMT command {name!r}")
+        return self.dut.nmt(name, node_id)
+
+    def go_to(self, state_name: str) -> None:
+        """Bring the device into pre-operational, operational or stopped and confirm it."""
+        command = ENTER[state_name]
+        mark = self.command(command)
+        self.expect_state(mark, COMMAND_TARGET[command], f"entering {state_name}")  # type: ignore[attr-defined]
+
+
+class HeartbeatObserver(_Commands):
+    """Waits until the heartbeat reports the expected state."""
+
+    method = "heartbeat state byte"
 
     def __init__(self, dut: DeviceUnderTest, period_ms: int) -> None:
         self.dut = dut
@@ -28,13 +69,53 @@ class NmtObserver:
                 f"{self.window_s * 1000:.0f} ms; heartbeats seen:\n{format_frames(seen[-6:]) or '  none'}"
             )
 
-    def command(self, name: str, node_id: int | None = None) -> Mark:
-        if name not in NMT_COMMANDS:
-            raise ValueError(f"unknown NMT command {name!r}")
-        return self.dut.nmt(name, node_id)
+    def expect_not_state(self, after: Mark, state: int, why: str) -> None:
+        hit = self.dut.wait_heartbeat(after, self.window_s, state=state)
+        assert hit is None, f"{why}: the heartbeat reported {state:02X}h ({STATE_NAMES.get(state)})"
 
-    def go_to(self, state_name: str) -> None:
-        """Bring the device into pre-operational, operational or stopped and confirm it."""
-        command = {"pre-operational": "pre-operational", "operational": "start", "stopped": "stop"}[state_name]
-        mark = self.command(command)
-        self.expect_state(mark, COMMAND_TARGET[command], f"entering {state_name}")
+
+class ServiceObserver(_Commands):
+    """Infers the state from SDO answers and SYNC-driven TPDOs (for devices without heartbeat)."""
+
+    method = "SDO answers and SYNC-driven TPDOs"
+
+    def __init__(self, dut: DeviceUnderTest, tpdo_comm_index: int) -> None:
+        self.dut = dut
+        self.tpdo_cob_id = dut.read_uint(tpdo_comm_index, 1) & 0x7FF
+        every = dut.read_uint(tpdo_comm_index, 2)
+        self.syncs_per_pdo = every if 1 <= every <= 240 else 1
+
+    @property
+    def window_s(self) -> float:
+        timing = self.dut.profile.timing
+        return (timing.nmt_settle_ms + 2 * timing.sdo_response_max_ms) / 1000 + self.dut.sdo_timeout
+
+    def observe(self) -> int:
+        """The state the device shows now: 04h (no SDO), 05h (TPDO on SYNC) or 7Fh."""
+        if self.dut.sdo_request(upload_request(0x1000, 0)) is None:
+            return 0x04
+        mark = self.dut.frames.mark()
+        for _ in range(self.syncs_per_pdo):
+            self.dut.network.send_message(0x80, b"")
+        pdo = self.dut.frames.wait_for(
+            lambda m: m.is_rx and m.arbitration_id == self.tpdo_cob_id, self.dut.sdo_timeout, mark
+        )
+        return 0x05 if pdo is not None else 0x7F
+
+    def _observe_until(self, state: int) -> int:
+        deadline = time.monotonic() + self.window_s
+        while True:
+            observed = self.observe()
+            if observed == state or time.monotonic() >= deadline:
+                return observed
+
+    def expect_state(self, after: Mark, state: int, why: str) -> None:
+        observed = self._observe_until(state)
+        assert observed == state, (
+            f"{why}: expected {state:02X}h ({STATE_NAMES.get(state)}), the device behaves as "
+            f"{observed:02X}h ({STATE_NAMES.get(observed)}) (observed by {self.method})"
+        )
+
+    def expect_not_state(self, after: Mark, state: int, why: str) -> None:
+        observed = self.observe()
+        assert observed != state, f"{why}: the device behaves as {STATE_NAMES.get(state)} ({self.method})"
