@@ -85,6 +85,26 @@ def _cmd_profile_to_eds(args: argparse.Namespace, extra: list[str]) -> int:
     return 0
 
 
+def _cmd_fault_matrix(args: argparse.Namespace, extra: list[str]) -> int:
+    import tempfile
+
+    from .fault_matrix import format_matrix, run_matrix
+    from .sim.faults import FAULTS
+
+    faults = args.fault or sorted(FAULTS)
+    with tempfile.TemporaryDirectory(prefix="fault-matrix-") as workdir:
+        baseline, results = run_matrix(args.profile, faults, Path(workdir), args.select, workers=args.workers)
+    print(format_matrix(baseline, results))
+    broken = {n for n, o in baseline.outcomes.items() if o in ("failed", "error")}
+    uncaught = [t for t in baseline.keys_with("passed")
+                if not any(t in r.keys_with("failed") | r.keys_with("error") for r in results)]
+    if broken:
+        print(f"the fault-free twin fails {len(broken)} test(s): {sorted(broken)[:10]}")
+    if uncaught:
+        print(f"{len(uncaught)} test(s) no fault makes fail: {uncaught}")
+    return 1 if broken or uncaught else 0
+
+
 def _cmd_faults(args: argparse.Namespace, extra: list[str]) -> int:
     from .sim.faults import FAULTS
 
@@ -136,6 +156,13 @@ def build_parser() -> argparse.ArgumentParser:
     to_eds.add_argument("-o", "--output")
     to_eds.add_argument("--node-id", type=int)
     to_eds.set_defaults(func=_cmd_profile_to_eds)
+
+    matrix = sub.add_parser("fault-matrix", help="run the suites once per fault: which tests catch which fault")
+    matrix.add_argument("--profile", default=DEFAULT_PROFILE)
+    matrix.add_argument("--fault", action="append", default=[], help="only these faults (default: all)")
+    matrix.add_argument("-k", dest="select", help="pytest -k expression selecting the tests")
+    matrix.add_argument("--workers", type=int, default=2, help="suite runs in parallel (default 2)")
+    matrix.set_defaults(func=_cmd_fault_matrix)
 
     faults = sub.add_parser("faults", help="list the simulator's named faults")
     faults.set_defaults(func=_cmd_faults)

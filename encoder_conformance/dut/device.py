@@ -7,12 +7,11 @@ at once with the first reason (labgrid's "broken strategy" pattern).
 
 from __future__ import annotations
 
-import struct
 from dataclasses import dataclass
 
 import can
 import canopen
-from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
+from canopen.sdo.exceptions import SdoCommunicationError
 
 from ..errors import DutLostError
 from ..profile.model import DeviceProfile
@@ -161,14 +160,6 @@ class DeviceUnderTest:
                 f"after reset node\nlast frames:\n{format_frames(self.frames.last(10))}"
             )
         return boot
-
-
-def abort_code_of(exc: SdoAbortedError) -> int:
-    return int(exc.code)
-
-
-def u32(value: int) -> bytes:
-    return struct.pack("<I", value)
 
 
 def wake_if_silent(dut: DeviceUnderTest) -> str | None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from ..profile.model import Capabilities, EntrySpec, ObjectSpec
+from ..profile.model import Capabilities, EntrySpec
 from .options import settings_of
 
 #: fixture name -> which profile entries it is parametrised with
@@ -80,6 +80,3 @@ def check_gates(item: pytest.Item) -> None:
     if item.get_closest_marker("destructive") and not settings.allow_destructive:
         pytest.skip("destructive (changes what the device remembers): run with --allow-destructive")
 
-
-def object_has_subs(obj: ObjectSpec) -> bool:
-    return obj.subs is not None
