@@ -77,6 +77,26 @@ def run_matrix(profile: str, faults: list[str], workdir: Path, select: str | Non
     return baseline, results
 
 
+def run_until_caught(profile: str, faults: list[str], workdir: Path, select: str | None = None,
+                     workers: int = 2, must_try: frozenset[str] = frozenset()) -> tuple[RunResult, list[RunResult]]:
+    """Like run_matrix, but stop once every passing test has failed under some fault.
+
+    ``faults`` is tried in order, ``workers`` at a time; faults in ``must_try`` always run.
+    """
+    baseline = run_suite(profile, None, workdir, select)
+    tests = baseline.keys_with("passed")
+    results: list[RunResult] = []
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        for start in range(0, len(faults), workers):
+            caught = set().union(*(r.keys_with("failed") | r.keys_with("error") for r in results))
+            tried = {r.fault for r in results}
+            if tests <= caught and must_try <= tried:
+                break
+            batch = faults[start : start + workers]
+            results += list(pool.map(lambda f: run_suite(profile, f, workdir, select), batch))
+    return baseline, results
+
+
 def format_matrix(baseline: RunResult, results: list[RunResult]) -> str:
     """Text table: one row per test, the faults that make it fail."""
     tests = sorted(baseline.keys_with("passed"))
