@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
-_ENTRY_PARAM = re.compile(r"\[0x[0-9A-F]{4}\.[0-9A-F]{2} [^\]]*\]$")
+_ENTRY_PARAM = re.compile(r"\[0x[0-9A-F]{4}\.[0-9A-F]{2} .*\]$")  # names may hold brackets: "Kv [1/s]"
 
 
 def test_key(name: str) -> str:
