@@ -43,6 +43,9 @@ FAULTS: dict[str, str] = {
     "pdo_outside_operational": "TPDOs are also sent in pre-operational and stopped",
     "wrong_heartbeat_state": "the heartbeat reports operational (05h) while pre-operational",
     "respond_to_other_node": "NMT commands addressed to another node-id are obeyed",
+    # PDO
+    "sync_tpdo_every_sync": "a TPDO with transmission type n (1..240) is sent on every SYNC, not every n-th",
+    "event_timer_slow_20pct": "TPDO event timers run 20 % slower than 18xxh sub 5 says",
     # heartbeat
     "heartbeat_slow_20pct": "the heartbeat period is 20 % longer than 1017h says",
     "heartbeat_jitter": "every 4th heartbeat comes 30 % of the period late",

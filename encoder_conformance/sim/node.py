@@ -92,6 +92,7 @@ class SimulatedNode:
             count=profile.capabilities.tpdos,
             timer_zero_disables_255=self.quirk_params("transmission_type_255_timer_0_disables") is not None,
             layout=self._fixed_tpdo_layout(),
+            faults=self.faults,
         )
 
     # -- helpers -------------------------------------------------------------------------

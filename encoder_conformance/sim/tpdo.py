@@ -11,6 +11,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from .faults import FaultSet
 from .pdo_layout import FixedTpdoLayout
 from .scheduler import DeadlineScheduler, JobHandle
 
@@ -47,6 +48,7 @@ class TpdoEngine:
         count: int,
         timer_zero_disables_255: bool = False,
         layout: FixedTpdoLayout | None = None,
+        faults: FaultSet | None = None,
     ) -> None:
         self._scheduler = scheduler
         self._read = read
@@ -55,6 +57,7 @@ class TpdoEngine:
         self._count = count
         self._timer_zero_disables_255 = timer_zero_disables_255
         self._layout = layout
+        self._faults = faults or FaultSet()
         self._configs: list[TpdoConfig] = []
         self._jobs: list[JobHandle] = []
         self.running = False
@@ -101,6 +104,8 @@ class TpdoEngine:
         """CiA 301 transmission types: 1..240 every n-th SYNC, 254/255 on change and event timer."""
         kind = config.transmission_type
         config.sync_every = kind if 1 <= kind <= 240 else 0
+        if config.sync_every and self._faults.active("sync_tpdo_every_sync"):
+            config.sync_every = 1
         config.acyclic_sync = kind == 0
         event_driven = kind in (254, 255)
         if kind == 255 and config.event_timer_ms == 0 and self._timer_zero_disables_255:
@@ -128,6 +133,8 @@ class TpdoEngine:
         for config in self._configs:
             if config.event_timer_ms > 0:
                 period = config.event_timer_ms / 1000
+                if self._faults.active("event_timer_slow_20pct"):
+                    period *= 1.2
                 self._jobs.append(
                     self._scheduler.call_later(period, lambda c=config: self._transmit(c), period)
                 )
