@@ -44,10 +44,13 @@ class Rig:
         return self.host.add_node(profile, nvm_path=self.tmp_path / "nvm.json", faults=FaultSet(faults),
                                   power_on=False)
 
-    def boot(self, profile: DeviceProfile, node_id: int | None = None) -> tuple[SimulatedNode, canopen.RemoteNode]:
+    def boot(
+        self, profile: DeviceProfile, node_id: int | None = None, faults: tuple[str, ...] = (),
+        nvm_name: str | None = None,
+    ) -> tuple[SimulatedNode, canopen.RemoteNode]:
         """Add, power and wait for the boot-up of a node (waking it if it waits for bus traffic)."""
-        node = self.host.add_node(profile, node_id, self.tmp_path / f"nvm-{profile.id}.json", FaultSet(),
-                                  power_on=False)
+        nvm = self.tmp_path / (nvm_name or f"nvm-{profile.id}.json")
+        node = self.host.add_node(profile, node_id, nvm, FaultSet(faults), power_on=False)
         mark = self.log.mark()
         node.power_on()
         if profile.quirk_with_effect("silent_until_bus_traffic"):

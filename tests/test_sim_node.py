@@ -57,14 +57,8 @@ def abort_code(client: canopen.RemoteNode, index: int, sub: int, data: bytes) ->
 
 
 def booted(rig: Rig, profile: DeviceProfile, faults: tuple[str, ...] = ()) -> tuple[SimulatedNode, canopen.RemoteNode]:
-    """A node of ``profile`` powered on and in pre-operational (woken if it waits for traffic)."""
-    node = rig.add(profile, faults)
-    mark = rig.log.mark()
-    node.power_on()
-    if profile.quirk_with_effect("silent_until_bus_traffic"):
-        rig.send(0x80)
-    assert rig.wait_bootup(node.node_id, mark) is not None, "no boot-up"
-    return node, rig.client(node.node_id)
+    """A node of ``profile`` powered on and in pre-operational, its NVM in tmp_path/nvm.json."""
+    return rig.boot(profile, faults=faults, nvm_name="nvm.json")
 
 
 # -- boot-up and NMT --------------------------------------------------------------------------------
