@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from .dut.device import DeviceUnderTest
 from .dut.frames import format_frames
 from .dut.sdo_frames import SdoResponse, abort_name
@@ -46,3 +48,21 @@ def describe_value(value: object) -> str:
     if isinstance(value, int):
         return f"{value} (0x{value:X})"
     return repr(value)
+
+
+def documented_quirk(dut: DeviceUnderTest, effect: str, evidence: Evidence, otherwise: str,
+                     needs: tuple[str, ...] = ()) -> dict:
+    """The params of the profile's quirk with ``effect``, cited in the evidence; skips if there is none.
+
+    ``otherwise`` says what the device does without the quirk (the skip reason); ``needs`` lists
+    params the test cannot do without (e.g. the test_object it may change).
+    """
+    found = dut.profile.quirk_with_effect(effect)
+    if found is None:
+        pytest.skip(f"not applicable: {otherwise} (no quirk {effect})")
+    quirk_id, quirk = found
+    missing = [name for name in needs if name not in quirk.params]
+    if missing:
+        pytest.skip(f"not applicable: quirk {quirk_id} names no {', '.join(missing)} the suite may use")
+    evidence.deviation(quirk_id, quirk.title)
+    return quirk.params

@@ -89,9 +89,10 @@ def _cmd_fault_matrix(args: argparse.Namespace, extra: list[str]) -> int:
     import tempfile
 
     from .fault_matrix import format_matrix, run_matrix
-    from .sim.faults import FAULTS
+    from .profile.loader import load_profile
+    from .sim.faults import faults_for
 
-    faults = args.fault or sorted(FAULTS)
+    faults = args.fault or faults_for(load_profile(args.profile).profile.effects)
     with tempfile.TemporaryDirectory(prefix="fault-matrix-") as workdir:
         baseline, results = run_matrix(args.profile, faults, Path(workdir), args.select, workers=args.workers)
     print(format_matrix(baseline, results))

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 from .profile import datatypes
 from .profile.model import DeviceProfile, EntrySpec
+from .value_domain import declared_domain
 
 STORE_GROUPS = ("store_all", "store_comm", "store_app", "store_manufacturer")
 
@@ -28,15 +29,18 @@ class Changeable:
         return f"{self.index:04X}h.{self.sub:02X} {self.entry.name}"
 
 
-def _other_value(profile: DeviceProfile, index: int, entry: EntrySpec) -> int | None:
+def _other_value(profile: DeviceProfile, index: int, sub: int, entry: EntrySpec) -> int | None:
     """A valid value different from the default (a harmless heartbeat period for 1017h)."""
     if not isinstance(entry.default, int):
         return None
     if index == 0x1017:
-        return max(entry.default + 1, 10 * profile.timing.heartbeat_test_period_ms)
-    limits = datatypes.value_range(entry.type)
-    top = entry.max if entry.max is not None else (limits[1] if limits else None)
-    return entry.default + 1 if top is not None and entry.default + 1 <= top else None
+        value: int | None = max(entry.default + 1, 10 * profile.timing.heartbeat_test_period_ms)
+    else:
+        limits = datatypes.value_range(entry.type)
+        top = entry.max if entry.max is not None else (limits[1] if limits else None)
+        value = entry.default + 1 if top is not None and entry.default + 1 <= top else None
+    domain = declared_domain(profile, index, sub)  # also min/max's gaps: allowed, TPDO types
+    return None if value is not None and domain is not None and value not in domain else value
 
 
 def changeable_parameter(
@@ -53,7 +57,21 @@ def changeable_parameter(
         if any(q.effect in ("node_id_object", "bitrate_object") and q.params.get("index") == index
                for q in profile.quirks.values()):
             continue  # never move the device to another node-id or bit rate
-        value = _other_value(profile, index, entry)
+        value = _other_value(profile, index, sub, entry)
         if value is not None:
             return Changeable(index, sub, entry, value)
     return None
+
+
+def parse_key(text: str | int) -> tuple[int, int]:
+    """'0x2348.1' (or an index alone) from a quirk's params -> (index, sub)."""
+    if isinstance(text, int):
+        return text, 0
+    index, _, sub = str(text).partition(".")
+    return int(index, 16), int(sub or "0", 0)
+
+
+def other_valid_value(profile: DeviceProfile, index: int, sub: int, current: int) -> int | None:
+    """A value next to ``current`` inside the entry's declared domain (None if there is none)."""
+    domain = declared_domain(profile, index, sub)
+    return next((c for c in (current + 1, current - 1) if domain is not None and c in domain), None)

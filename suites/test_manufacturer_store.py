@@ -1,18 +1,21 @@
-"""Store through a manufacturer command that reboots the device instead of replying (documented quirk).
+"""Store through manufacturer commands instead of (or besides) 1010h (documented quirks).
 
 FRABA POSITAL: 2300h = 55 AA AA 55, no SDO confirmation, boot-up about 4 s later (UMD-CA §4.3,
-§7.2.9). CiA 301 §7.5.2.13 expects 1010h with an SDO confirmation; the profile documents the
-deviation and this test checks the device keeps its own promise.
+§7.2.9). WayCon WCAN: 2105h 'save' stores 2100h..2104h, which 1010h does not (M §5). CiA 301
+§7.5.2.13 has one store object, 1010h, with an SDO confirmation; the profiles document the
+deviations and these tests check the device keeps its own promise.
 """
 
 from __future__ import annotations
 
 import pytest
 
+from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut import sdo_frames
-from encoder_conformance.parameters import changeable_parameter
+from encoder_conformance.parameters import changeable_parameter, other_valid_value, parse_key
 
-pytestmark = [pytest.mark.spec("manufacturer store command (profile quirk store_reboots_without_reply)"),
+pytestmark = [pytest.mark.spec("manufacturer store commands (profile quirks store_reboots_without_reply, "
+                                "manufacturer_store_object)"),
               pytest.mark.destructive]
 
 SAVE = (0x65766173).to_bytes(4, "little")
@@ -60,3 +63,34 @@ def test_store_by_reboot_keeps_value(dut, reboot_store, evidence):
         if not dut.lost:  # put the device back as it was, and store that
             dut.write(found.index, found.sub, original)
             _store_by_reboot(dut, quirk.params)
+
+
+@pytest.fixture
+def extra_store(dut, evidence):
+    """The params of a second 'save' object for manufacturer parameters (quirk manufacturer_store_object)."""
+    return documented_quirk(dut, "manufacturer_store_object", evidence, "1010h is the only store object",
+                            needs=("test_object",))
+
+
+def test_manufacturer_store_object_keeps_value(dut, extra_store, evidence):
+    """A parameter saved with the manufacturer store object ('save') holds its new value after reset node."""
+    index, sub = parse_key(extra_store["test_object"])
+    command = (int(extra_store["index"]), int(extra_store.get("subindex", 0)))
+    signature = int(extra_store.get("signature", 0x65766173)).to_bytes(4, "little")
+    original = dut.read(index, sub)
+    changed = other_valid_value(dut.profile, index, sub, int.from_bytes(original, "little"))
+    assert changed is not None, f"{index:04X}h.{sub:02X}: no other valid value next to {original.hex()}"
+    dut.write(index, sub, changed.to_bytes(len(original), "little"))
+    try:
+        dut.write(*command, signature)
+        dut.reset_node_and_wait()
+        observed = dut.read_uint(index, sub)
+        evidence.note(f"{index:04X}h.{sub:02X} = {changed}, {command[0]:04X}h 'save', reset node -> {observed}")
+        assert observed == changed, (
+            f"{index:04X}h.{sub:02X}: saved {changed} with {command[0]:04X}h, {observed} after reset node"
+        )
+    finally:
+        if not dut.lost:  # put the device back as it was, store that, and make it effective
+            dut.write(index, sub, original)
+            dut.write(*command, signature)
+            dut.reset_node_and_wait()

@@ -7,6 +7,7 @@ import pytest
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
+from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2 (NMT state machine)")
@@ -78,43 +79,39 @@ def test_no_sdo_in_stopped(dut, nmt):
     assert response is None, f"SDO answered in stopped: {response.describe()}"
 
 
-def _pdo_stimulus(dut, device_control, duration_s: float):
-    """Turn the shaft and send SYNCs for ``duration_s``: every TPDO trigger the device may have."""
-    if device_control is not None:
-        device_control.set_speed(1.0)
-    mark = dut.frames.mark()
-    count = 10
-    for _ in range(count):
-        dut.network.send_message(0x80, b"")
-        dut.frames.quiet_period(lambda m: False, duration_s / count)  # pacing window between SYNCs
-    if device_control is not None:
-        device_control.set_speed(0.0)
-    return mark
+def _made_valid(dut, comm: int, settings_journal, evidence) -> bool:
+    """The TPDO is valid (18xxh sub 1 bit 31 clear), if need be by clearing the bit (put back afterwards)."""
+    cob_id = dut.read_uint(comm, 1)
+    if not cob_id & 0x80000000:
+        return True
+    entry = dut.profile.entry(comm, 1)
+    if entry is None or not entry.writable:
+        return False
+    settings_journal.write(comm, 1, (cob_id & 0x7FFFFFFF).to_bytes(4, "little"))
+    evidence.note(f"{comm:04X}h.01 bit 31 cleared (TPDO valid) for the test")
+    return True
 
 
 @pytest.fixture
 def sync_tpdo(dut, settings_journal, evidence):
-    """Make sure one TPDO is sent on every SYNC (set 18xxh sub 2 = 1 if needed, put back afterwards)."""
+    """Make sure one TPDO is sent on every SYNC (set 18xxh sub 2 = 1 and clear sub 1 bit 31 if needed,
+    put back afterwards; e.g. SIKO PDO2 is disabled after every init)."""
     types = dut.profile.capabilities.tpdo_transmission_types
     for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF):
         mapping = dut.profile.entry(comm + 0x200, 0)
         kind = dut.profile.entry(comm, 2)
         if kind is None or (mapping is not None and dut.read_uint(comm + 0x200, 0) == 0):
             continue
-        current = dut.read_uint(comm, 2)
-        if 1 <= current <= 240:
-            return comm
-        if kind.writable and 1 in types:
+        synchronous = 1 <= dut.read_uint(comm, 2) <= 240
+        if not (synchronous or (kind.writable and 1 in types)):
+            continue
+        if not _made_valid(dut, comm, settings_journal, evidence):
+            continue
+        if not synchronous:
             settings_journal.write(comm, 2, b"\x01")
             evidence.note(f"{comm:04X}h.02 set to 1 (synchronous, every SYNC) for the test")
-            return comm
+        return comm
     return None
-
-
-@pytest.fixture
-def shaft(simulator):
-    """The simulator's shaft control, or None on hardware (the SYNC-driven TPDOs still apply)."""
-    return None if simulator is None else simulator.control
 
 
 @pytest.mark.requires("tpdos")
@@ -123,7 +120,7 @@ def test_no_pdo_outside_operational(dut, sync_tpdo, nmt, shaft, state):
     """No TPDO is sent in pre-operational or stopped, although SYNCs arrive and the shaft turns."""
     if state != "pre-operational":
         nmt.go_to(state)
-    mark = _pdo_stimulus(dut, shaft, 0.3)
+    mark = pdo_stimulus(dut, shaft, 0.3)
     pdos = dut.frames.since(mark, dut.is_pdo)
     assert not pdos, f"{len(pdos)} TPDO(s) in {state}:\n{format_frames(pdos[:5])}"
 
@@ -132,7 +129,7 @@ def test_no_pdo_outside_operational(dut, sync_tpdo, nmt, shaft, state):
 def test_pdo_in_operational(dut, sync_tpdo, nmt, shaft):
     """In operational the same stimulus makes the device send TPDOs (so the silence above means something)."""
     nmt.go_to("operational")
-    mark = _pdo_stimulus(dut, shaft, 0.3)
+    mark = pdo_stimulus(dut, shaft, 0.3)
     pdos = dut.frames.since(mark, dut.is_pdo)
     assert pdos, "no TPDO in operational during 10 SYNCs and a turning shaft: check the default PDO configuration"
 
@@ -140,7 +137,7 @@ def test_pdo_in_operational(dut, sync_tpdo, nmt, shaft):
 def test_stopped_sends_only_error_control(dut, nmt, shaft):
     """In stopped the device sends nothing but heartbeats, whatever happens on the bus."""
     nmt.go_to("stopped")
-    mark = _pdo_stimulus(dut, shaft, 0.3)
+    mark = pdo_stimulus(dut, shaft, 0.3)
     dut.network.send_message(0x600 + dut.node_id, sdo_frames.upload_request(0x1000, 0))
     own = dut.frames_from_node(mark, 0.1)
     others = [m for m in own if m.arbitration_id != 0x700 + dut.node_id]

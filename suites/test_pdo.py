@@ -9,7 +9,9 @@ from __future__ import annotations
 import allure
 import pytest
 
+from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.timing import interval_stats
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos")]
@@ -92,4 +94,25 @@ def test_event_timer_period_within_tolerance(dut, settings_journal, back_to_preo
     assert not bad, (
         f"{len(bad)} of {stats.count} intervals off by more than {tolerance:.1f} ms from {period} ms: "
         + ", ".join(f"#{n}: {i:.1f} ms" for n, i in bad[:8])
+    )
+
+
+def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_to_preoperational, shaft, evidence):
+    """Documented quirk: transmission type 255 with event timer 0 switches the TPDO off (no SYNC, no change)."""
+    documented_quirk(dut, "transmission_type_255_timer_0_disables", evidence,
+                     "CiA 301 type 255 without timer is event-driven")
+    comm = _configurable_tpdo(dut, 5, evidence)
+    cob_id = dut.read_uint(comm, 1) & 0x7FF
+    settings_journal.write(comm, 2, b"\xff")
+    settings_journal.write(comm, 5, b"\x00\x00")
+    _start(dut)
+    control = shaft
+    if control is None:
+        evidence.note("hardware: only SYNCs are sent; turn the shaft during the test to cover position changes")
+    mark = pdo_stimulus(dut, control, 0.3)
+    pdos = dut.frames.since(mark, lambda m: m.is_rx and m.arbitration_id == cob_id)
+    evidence.measure(f"TPDO {cob_id:03X}h frames with type 255, timer 0", len(pdos), "frames", 0, 0)
+    assert not pdos, (
+        f"{comm:04X}h.02 = 255 and sub 5 = 0 must switch the TPDO off (documented); observed {len(pdos)} on "
+        f"{cob_id:03X}h during 10 SYNCs{' and a turning shaft' if control else ''}:\n{format_frames(pdos[:5])}"
     )

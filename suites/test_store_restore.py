@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.checks import assert_abort, expected_aborts
+from encoder_conformance.checks import assert_abort, documented_quirk, expected_aborts
 from encoder_conformance.dut import sdo_frames
-from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter
+from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter, other_valid_value, parse_key
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.13/§7.5.2.14"), pytest.mark.destructive,
               pytest.mark.requires("store_subindices")]
@@ -72,3 +72,31 @@ def test_wrong_signature_refused(dut, index, name, evidence):
     assert_abort(dut, response, expected_aborts(dut, "store_signature", evidence),
                  f"{name} {index:04X}h.{subs[0]:02X} with signature 'SAVE'")
 
+
+
+@pytest.fixture
+def reload_quirk(dut, evidence):
+    """The params of a device whose 1011h sub-indices load saved values at once (quirk reload_immediate)."""
+    return documented_quirk(dut, "reload_immediate", evidence, "every restore acts after a reset",
+                            needs=("test_object",))
+
+
+def test_reload_takes_effect_without_reset(dut, reload_quirk, settings_journal, evidence):
+    """Each documented reload sub: save, change, 1011h 'load' -> the saved value is back at once, no reset."""
+    index, sub = parse_key(reload_quirk["test_object"])
+    failures = []
+    for reload_sub, save_sub in sorted((int(r), int(s)) for r, s in reload_quirk["reload_immediate"].items()):
+        saved = dut.read_uint(index, sub)
+        changed = other_valid_value(dut.profile, index, sub, saved)
+        assert changed is not None, f"{index:04X}h.{sub:02X}: no other valid value next to {saved}"
+        size = len(dut.read(index, sub))
+        dut.write(0x1010, save_sub, SAVE)
+        settings_journal.write(index, sub, changed.to_bytes(size, "little"))
+        dut.write(0x1011, reload_sub, LOAD)
+        observed = dut.read_uint(index, sub)
+        evidence.note(f"1010h.{save_sub:02X} saved {saved}, changed to {changed}, "
+                      f"1011h.{reload_sub:02X} 'load' -> {observed}")
+        if observed != saved:
+            failures.append(f"1011h.{reload_sub:02X} (loads what 1010h.{save_sub:02X} saved): {index:04X}h.{sub:02X} "
+                            f"reads {observed}, expected the saved {saved} at once")
+    assert not failures, "documented immediate reload did not act:\n" + "\n".join(failures)

@@ -425,7 +425,10 @@ def assert_round_trip(profile: DeviceProfile, path: Path) -> None:
         back = entry_of(result.objects, index, sub)
         assert back["name"] == entry.name
         assert back.get("default") == entry.default, f"0x{index:04X}.{sub}"
-        assert (back.get("min"), back.get("max")) == (entry.min, entry.max)
+        allowed = entry.value_set  # an EDS has no value list: its bounds stand in for absent min/max
+        low = allowed.minimum if entry.min is None and allowed else entry.min
+        high = allowed.maximum if entry.max is None and allowed else entry.max
+        assert (back.get("min"), back.get("max")) == (low, high), f"0x{index:04X}.{sub}"
         assert back.get("pdo_mappable", False) == entry.pdo_mappable
         assert (result.objects[index].get("kind") == "array") == (obj.object_kind == "array")
 

@@ -8,15 +8,27 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.fault_matrix import format_matrix, run_matrix, run_until_caught
-from encoder_conformance.sim.faults import FAULTS
+from encoder_conformance.fault_matrix import REPO_ROOT, format_matrix, run_matrix, run_until_caught
+from encoder_conformance.profile.loader import load_profile
+from encoder_conformance.sim.faults import FAULTS, faults_for
 
 MAIN_PROFILE = "wachendorff-wdga-mt"
-#: profiles with what the WDGA lacks (a write-only object; a store-by-reboot command), tried in order
+#: profiles with what the WDGA lacks, tried in order: a write-only object; a store-by-reboot command;
+#: the quirks other families document (guarding/heartbeat exclusivity and immediate reload on the
+#: FAULHABER, a second store object and type 255 without timer on the WayCon, send-repeat counters
+#: and PDO2 disabled at init on the SIKO)
 COMPLEMENT_PROFILES = [
     "tests/data/profiles/minimal-encoder.yaml",
     "tests/data/profiles/posital-fast-reboot.yaml",
+    "faulhaber-mc5005",
+    "waycon-sx",
+    "siko-wx58m-1212-mt",
 ]
+
+
+def _effects(profile: str) -> frozenset[str]:
+    """Quirk effects of a profile id or of a profile file relative to the repository."""
+    return load_profile(str(REPO_ROOT / profile) if "/" in profile else profile).profile.effects
 
 
 def _functions(result, outcome: str) -> set[str]:
@@ -25,7 +37,9 @@ def _functions(result, outcome: str) -> set[str]:
 
 @pytest.fixture(scope="module")
 def main_matrix(tmp_path_factory):
-    return run_matrix(MAIN_PROFILE, sorted(FAULTS), tmp_path_factory.mktemp("matrix-main"), workers=2)
+    """Every fault that can show on the main profile (faults of quirks it lacks go to the complements)."""
+    faults = faults_for(_effects(MAIN_PROFILE))
+    return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=2)
 
 
 @pytest.fixture(scope="module")
@@ -37,16 +51,20 @@ def complement_matrices(main_matrix, tmp_path_factory):
     """
     baseline, results = main_matrix
     uncovered = _functions(baseline, "skipped")
-    unseen = frozenset(r.fault for r in results if not r.keys_with("failed") | r.keys_with("error"))
+    caught = {r.fault for r in results if r.keys_with("failed") | r.keys_with("error")}
+    unseen = frozenset(FAULTS) - caught
     order = sorted(unseen) + sorted(set(FAULTS) - unseen)
     matrices = []
     for profile in COMPLEMENT_PROFILES:
         if not uncovered:
             break
         folder = tmp_path_factory.mktemp("matrix-extra")
-        matrix = run_until_caught(profile, order, folder, " or ".join(sorted(uncovered)), workers=2, must_try=unseen)
+        applicable = set(faults_for(_effects(profile)))
+        matrix = run_until_caught(profile, [f for f in order if f in applicable], folder,
+                                  " or ".join(sorted(uncovered)), workers=2, must_try=unseen & applicable)
         matrices.append(matrix)
         uncovered -= _functions(matrix[0], "passed")
+        unseen -= {r.fault for r in matrix[1] if r.keys_with("failed") | r.keys_with("error")}
     return matrices, uncovered
 
 

@@ -190,3 +190,15 @@ def test_nvm_in_memory_writes_no_file(tmp_path):
     nvm.put_many({(0x6001, 0): 2048})
     assert nvm.get((0x6001, 0)) == 2048
     assert list(tmp_path.iterdir()) == []
+
+
+def test_quirk_faults_name_known_faults_and_effects():
+    from encoder_conformance.profile.quirks import EFFECTS
+    from encoder_conformance.sim.faults import FAULTS, QUIRK_EFFECT_OF_FAULT, faults_for
+
+    assert set(QUIRK_EFFECT_OF_FAULT) <= set(FAULTS)
+    assert set(QUIRK_EFFECT_OF_FAULT.values()) <= set(EFFECTS)
+    assert faults_for(EFFECTS) == sorted(FAULTS)
+    general = faults_for(())
+    assert "reload_not_immediate" not in general
+    assert "wrong_vendor_id" in general

@@ -272,6 +272,98 @@ def test_siko_abort_code_quirks(rig, siko_mt):
     assert abort_code(client, 0x6001, 0, b"\x01") == 0x06070010
 
 
+# -- SIKO: send-repeat counters 2800h/2801h, PDO2 disabled at every init -----------------------------
+
+
+def _pdo1(m) -> bool:
+    return m.is_rx and m.arbitration_id == 0x181
+
+
+def test_siko_pdo1_timer_only_without_send_repeat_counter(rig, siko_mt):
+    """2800h = 0: PDO1 (type FEh) follows only its event timer; timer 0 sends nothing, not even on a change."""
+    node, client = rig.boot(siko_mt)
+    mark = rig.nmt(0x01, 1)
+    node.shaft.turn_by(0.25)
+    assert rig.scheduler_drained(0.03)  # several change polls
+    assert rig.frames(0x181, mark) == [], "PDO1 sent on a change with 2800h = 0"
+    rig.nmt(0x80, 1)
+    write(client, 0x1800, 5, 10, 2)
+    mark = rig.nmt(0x01, 1)
+    assert len(rig.log.wait_count(_pdo1, 5, WAIT_S, mark)) == 5, "PDO1 not sent cyclically by the event timer"
+
+
+@pytest.mark.parametrize("faults", [(), ("send_repeat_counter_ignored",)], ids=["twin", "fault"])
+def test_siko_pdo1_sent_n_times_per_change(rig, siko_mt, faults):
+    """2800h = 3, timer 0: each change gives PDO1 three times, one per change poll; none while still."""
+    expected = 1 if faults else 3
+    node, client = rig.boot(siko_mt, faults=faults)
+    write(client, 0x2800, 0, 3, 1)
+    mark = rig.nmt(0x01, 1)
+    assert rig.scheduler_drained(0.03)
+    assert rig.frames(0x181, mark) == [], "PDO1 without a change"
+    for turn in (1, 2):
+        mark = rig.log.mark()
+        node.shaft.turn_by(0.25)
+        frames = rig.log.wait_count(_pdo1, expected, WAIT_S, mark)
+        assert rig.scheduler_drained(0.03)
+        assert len(rig.frames(0x181, mark)) == expected, f"change {turn}"
+        assert {bytes(m.data) for m in frames} == {struct.pack("<i", read_i(client, 0x6004))}
+
+
+def test_siko_pdo1_timer_wins_over_send_repeat_counter(rig, siko_mt):
+    """2800h = 3 with timer 20 ms: PDO1 stays timer-driven (the change trigger needs timer 0)."""
+    node, client = rig.boot(siko_mt)
+    write(client, 0x2800, 0, 3, 1)
+    write(client, 0x1800, 5, 20, 2)
+    mark = rig.nmt(0x01, 1)
+    first = rig.log.wait_for(_pdo1, WAIT_S, mark)
+    assert first is not None
+    node.shaft.turn_by(0.25)
+    frames = rig.log.wait_count(_pdo1, 4, WAIT_S, mark)
+    gaps = [b.timestamp - a.timestamp for a, b in itertools.pairwise(frames)]
+    assert min(gaps) > 0.010, f"PDO1 sent between timer periods: {gaps}"
+
+
+@pytest.mark.parametrize("faults", [(), ("send_repeat_counter_ignored",)], ids=["twin", "fault"])
+def test_siko_pdo2_limited_by_2801h(rig, siko_mt, faults):
+    """1801h sub 2 = 3, 2801h = 4: PDO2 after SYNC 3, 6, 9, 12 and no more; a change restarts the count."""
+    node, client = rig.boot(siko_mt, faults=faults)
+    write(client, 0x1801, 1, 0x281, 4)
+    write(client, 0x1801, 2, 3, 1)
+    write(client, 0x2801, 0, 4, 1)
+    rig.nmt(0x01, 1)
+    for turn in (0, 0.25):
+        node.shaft.turn_by(turn)
+        mark = rig.log.mark()
+        counts = []
+        for _ in range(18):
+            rig.send(0x80)
+            read_u(client, 0x1000)  # the SYNC before this read was handled
+            counts.append(len(rig.frames(0x281, mark)))
+        if faults:
+            assert counts[-1] == 6, "the fault sends on every 3rd SYNC without limit"
+        else:
+            assert counts == [0, 0, 1, 1, 1, 2, 2, 2, 3, 3, 3, 4, 4, 4, 4, 4, 4, 4], f"turned by {turn}"
+
+
+@pytest.mark.parametrize("faults", [(), ("forced_bits_not_applied",)], ids=["twin", "fault"])
+def test_siko_pdo2_disabled_again_at_every_init(rig, siko_mt, faults):
+    """1801h sub 1 bit 31 is set again at power-on, 81h and 82h; the stored value stays 281h."""
+    node, client = rig.boot(siko_mt, faults=faults)
+    expected = 0x281 if faults else 0x80000281
+    for init in (0x81, 0x82, "power"):
+        write(client, 0x1801, 1, 0x281, 4)
+        assert read_u(client, 0x1801, 1) == 0x281
+        if init == "power":
+            mark = rig.log.mark()
+            node.power_cycle()
+            assert rig.wait_bootup(1, mark) is not None
+        else:
+            assert rig.wait_bootup(1, rig.nmt(init, 1)) is not None
+        assert read_u(client, 0x1801, 1) == expected, f"after {init}"
+        assert node.nvm.get((0x1801, 1)) == 0x281, "the stored value itself is kept"
+
+
 # -- WayCon MH: the redundant interface's second node -------------------------------------------------
 
 

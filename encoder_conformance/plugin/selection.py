@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 
-from ..profile.model import Capabilities, EntrySpec
+from ..profile.model import Capabilities, DeviceProfile, EntrySpec
+from ..value_domain import probe_values
 from .options import settings_of
 
 #: fixture name -> which profile entries it is parametrised with
@@ -15,12 +18,17 @@ ENTRY_FIXTURES = {
     "write_only_entry": lambda e: e.access == "wo",
     "default_entry": lambda e: e.checks_default,
 }
+#: fixture name -> which entries, where the choice needs the profile: (profile, index, sub, entry)
+PROFILE_ENTRY_FIXTURES = {
+    "value_domain_entry": lambda p, i, s, e: e.writable and bool(probe_values(p, i, s)),
+}
 EMPTY_REASON = {
     "od_entry": "the profile declares no objects",
     "readable_entry": "the profile declares no readable objects",
     "read_only_entry": "the profile declares no read-only objects",
     "write_only_entry": "the profile declares no write-only objects",
     "default_entry": "the profile declares no factory defaults to check",
+    "value_domain_entry": "the profile declares no writable entry with a restricted value domain (min/max/allowed)",
 }
 
 
@@ -29,15 +37,20 @@ def entry_id(index: int, sub: int, entry: EntrySpec) -> str:
     return f"0x{index:04X}.{sub:02X} {entry.name}"
 
 
+def _selectors() -> dict[str, Callable[[DeviceProfile, int, int, EntrySpec], bool]]:
+    by_entry = {name: (lambda w: lambda p, i, s, e: w(e))(wanted) for name, wanted in ENTRY_FIXTURES.items()}
+    return {**by_entry, **PROFILE_ENTRY_FIXTURES}
+
+
 def parametrize_from_profile(metafunc: pytest.Metafunc) -> None:
     profile = settings_of(metafunc.config).loaded.profile
-    for fixture, wanted in ENTRY_FIXTURES.items():
+    for fixture, wanted in _selectors().items():
         if fixture not in metafunc.fixturenames:
             continue
         params = [
             pytest.param((index, sub, obj, entry), id=entry_id(index, sub, entry))
             for index, sub, obj, entry in profile.iter_entries()
-            if wanted(entry)
+            if wanted(profile, index, sub, entry)
         ]
         if not params:
             params = [pytest.param(None, id="none", marks=pytest.mark.skip(reason=EMPTY_REASON[fixture]))]

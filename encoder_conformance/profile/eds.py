@@ -1005,6 +1005,19 @@ def _only_profile_defaults(profile: DeviceProfile, od: canopen.ObjectDictionary)
             var.value = None  # canopen's DCF writer wants bytes here
 
 
+def _limits_from_allowed(profile: DeviceProfile, od: canopen.ObjectDictionary) -> None:
+    """An EDS has no value list: LowLimit/HighLimit are the ``allowed`` set's bounds where min/max are absent."""
+    for index, sub, _obj, entry in profile.iter_entries():
+        allowed = entry.value_set
+        if not allowed:
+            continue
+        var = _od_variable(od, index, sub)
+        if entry.min is None:
+            var.min = allowed.minimum
+        if entry.max is None:
+            var.max = allowed.maximum
+
+
 def export_eds(profile: DeviceProfile, path: Path, node_id: int | None = None) -> Path:
     """Write ``profile`` as an EDS (or a DCF with the twin's values if ``path`` ends in .dcf)."""
     from .od_builder import build_object_dictionary
@@ -1012,6 +1025,7 @@ def export_eds(profile: DeviceProfile, path: Path, node_id: int | None = None) -
     path = Path(path)
     od = build_object_dictionary(profile, node_id)
     _only_profile_defaults(profile, od)
+    _limits_from_allowed(profile, od)
     info = od.device_information
     info.LSS_supported = bool(profile.capabilities.lss)
     revision = profile.identity.revision

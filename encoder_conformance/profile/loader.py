@@ -175,7 +175,7 @@ def deep_merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]
     """Merge ``override`` into ``base``: mappings merge, other values replace, null deletes."""
     merged = dict(base)
     for key, value in override.items():
-        if value is None and key in merged and key not in ("default", "min", "max", "notes", "effect"):
+        if value is None and key in merged and key not in ("default", "min", "max", "allowed", "notes", "effect"):
             del merged[key]
         elif isinstance(value, dict) and isinstance(merged.get(key), dict):
             merged[key] = deep_merge(merged[key], value)

@@ -14,6 +14,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from . import datatypes
 from .quirks import EFFECTS
+from .value_set import ValueSet
 
 SCHEMA_VERSION = 1
 
@@ -59,6 +60,32 @@ def is_node_id_expression(value: object) -> bool:
     return isinstance(value, str) and bool(_NODEID_EXPR.match(value.strip()))
 
 
+def _allowed_text(value: Any) -> Any:
+    """``allowed`` must parse as a value set; the error names the text and the bad part."""
+    if value is not None:
+        ValueSet.parse(value)
+    return value
+
+
+def _check_allowed(entry: EntrySpec, limits: tuple[int, int] | None) -> None:
+    """``allowed`` must lie inside the type range and min/max, and hold the default."""
+    values = entry.value_set
+    if values is None:
+        return
+    text = entry.allowed
+    if limits is None:
+        raise ValueError(f"allowed {text!r}: only integer types have allowed values, not {entry.type}")
+    low, high = values.minimum, values.maximum
+    if low < limits[0] or high > limits[1]:
+        raise ValueError(f"allowed {text!r} goes outside {entry.type} ({limits[0]}..{limits[1]})")
+    if entry.min is not None and low < entry.min:
+        raise ValueError(f"allowed {text!r} holds {low}, below min {entry.min}")
+    if entry.max is not None and high > entry.max:
+        raise ValueError(f"allowed {text!r} holds {high}, above max {entry.max}")
+    if isinstance(entry.default, int) and entry.default not in values:
+        raise ValueError(f"default {entry.default} is not in allowed {text!r}")
+
+
 class EntrySpec(StrictModel):
     """One value in the object dictionary (a VAR, or one sub-index of a RECORD/ARRAY)."""
 
@@ -74,12 +101,18 @@ class EntrySpec(StrictModel):
     per_unit: bool = Field(default=False, description="value differs per unit, e.g. a serial number")
     min: int | None = None
     max: int | None = None
+    allowed: str | None = Field(
+        default=None,
+        description="values the device accepts, e.g. '0..4, 6..9' (integers and inclusive a..b ranges)",
+    )
     pdo_mappable: bool = False
     persisted_by: Persistence = "none"
     manual: str | None = Field(default=None, description="manual section/table the facts come from")
     notes: str | None = None
 
     _check_access = field_validator("access", mode="before")(_access)
+
+    _check_allowed_text = field_validator("allowed", mode="before")(_allowed_text)
 
     @field_validator("type")
     @classmethod
@@ -101,7 +134,13 @@ class EntrySpec(StrictModel):
             raise ValueError(f"default {self.default} does not fit {self.type} ({limits[0]}..{limits[1]})")
         if self.min is not None and self.max is not None and self.min > self.max:
             raise ValueError(f"min {self.min} is greater than max {self.max}")
+        _check_allowed(self, limits)
         return self
+
+    @property
+    def value_set(self) -> ValueSet | None:
+        """``allowed`` parsed, or None when the entry declares none."""
+        return None if self.allowed is None else ValueSet.parse(self.allowed)
 
     @property
     def checks_default(self) -> bool:
@@ -132,11 +171,13 @@ class ObjectSpec(StrictModel):
     per_unit: bool = False
     min: int | None = None
     max: int | None = None
+    allowed: str | None = None
     pdo_mappable: bool = False
     persisted_by: Persistence = "none"
     notes: str | None = None
 
     _check_access = field_validator("access", mode="before")(_access)
+    _check_allowed_text = field_validator("allowed", mode="before")(_allowed_text)
 
     @model_validator(mode="after")
     def _var_or_record(self) -> ObjectSpec:
@@ -172,6 +213,7 @@ class ObjectSpec(StrictModel):
             "per_unit": self.per_unit,
             "min": self.min,
             "max": self.max,
+            "allowed": self.allowed,
             "pdo_mappable": self.pdo_mappable,
             "persisted_by": self.persisted_by,
             "manual": self.manual,
@@ -355,6 +397,11 @@ class DeviceProfile(StrictModel):
             if quirk.effect == effect:
                 return quirk_id, quirk
         return None
+
+    @property
+    def effects(self) -> frozenset[str]:
+        """The quirk effects this profile declares."""
+        return frozenset(q.effect for q in self.quirks.values() if q.effect)
 
     def iter_entries(self) -> list[tuple[int, int, ObjectSpec, EntrySpec]]:
         """All (index, sub, object, entry) in index order."""

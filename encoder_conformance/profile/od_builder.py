@@ -28,8 +28,10 @@ def initial_value(profile: DeviceProfile, index: int, sub: int, entry: EntrySpec
     if (index, sub) in per_unit and entry.default is None:
         return per_unit[(index, sub)]
     value = resolve_node_id_expression(entry.default, node_id)
-    if value is None:
-        return "" if entry.type in datatypes.STRING_TYPES else 0
+    if value is None:  # no default given: the lowest valid value, so the twin never holds an invalid one
+        if entry.type in datatypes.STRING_TYPES:
+            return ""
+        return entry.min if entry.min is not None and entry.min > 0 else 0
     return value
 
 

@@ -35,6 +35,22 @@ EFFECTS: dict[str, str] = {
     "transmission_type_255_timer_0_disables": (
         "a TPDO with transmission type 255 and event timer 0 is not sent at all. params: {}"
     ),
+    "pdo_send_repeat_counters": (
+        "manufacturer send-repeat counters (e.g. SIKO 2800h/2801h). params: {tpdo1: {counter: index, "
+        "comm: index (optional, default 1800h), ...}: the event-driven TPDO (type 254/255); counter 0 = "
+        "sent by its event timer only (timer 0 = not sent, no change-driven sending); n >= 1 with event "
+        "timer 0 = each position change sends it n times (the twin: one frame per change poll, 5 ms); "
+        "timer > 0 = the timer wins, the counter is ignored; tpdo2: {counter: index, comm: index "
+        "(optional, default 1801h), ...}: the SYNC-driven TPDO; counter 0 = every n-th SYNC without "
+        "limit; k >= 1 = every n-th SYNC but only k times, the count restarting when the payload differs "
+        "from the last one sent and when the TPDOs restart (NMT reset, start, a PDO parameter written); "
+        "counter_max: int (larger counter values count as counter_max)}. Other keys are documentation"
+    ),
+    "bits_forced_at_init": (
+        "bits of a (stored) value are forced to 1 at initialisation; the stored value itself is kept. "
+        "params: {index: int, subindex: int, forced_bits: int, at: [power_on, nmt_81h, nmt_82h] "
+        "(the events; default all three)}"
+    ),
     "store_reboots_without_reply": (
         "writing the signature to the store object is not answered by SDO; the device stores its "
         "storable values, reboots (silent) and sends a boot-up after reboot_ms. params: {index: int, "
@@ -79,6 +95,24 @@ EFFECTS: dict[str, str] = {
         "[[index, sub, bits], ...]}, cyclic: {tpdo, period_object, period_unit_ms} (optional: sent "
         "every period, sub 2 ignored), sync: {tpdo, counter_subindex} (optional: every n-th SYNC, "
         "n = 1..255), polled: {tpdo} (optional: answers an RTR on its COB-ID in operational)}"
+    ),
+    "guarding_heartbeat_exclusive": (
+        "node guarding and the heartbeat producer exclude each other: a producer time > 0 sets the guard "
+        "time to 0; a non-zero guard time written while the producer runs is refused. params: "
+        "{producer_object: index, guard_time_object: index, guard_time_write_while_producer_abort: int}"
+    ),
+    "reload_immediate": (
+        "1011h sub-indices that make saved values current at once (no reset), and parameter sets saved "
+        "by 1010h sub-indices. params: {reload_immediate: {1011h sub: 1010h sub whose saved values it "
+        "loads}, app_sets: {saved_by: {1010h sub: set number}, objects: ['0xIIII.S', ...]}, "
+        "test_object: '0xIIII.S' (the parameter the suite may change: in every set and saved by every "
+        "source sub; omit to skip the test)}"
+    ),
+    "manufacturer_store_object": (
+        "a second 'save' object stores manufacturer parameters that 1010h does not; they take effect "
+        "after a reset. params: {index, subindex, signature: int, saves: ['0xIIII', ...], "
+        "test_object: '0xIIII.S' (the saved parameter the suite may change; omit to skip the test), "
+        "wrong_signature_abort: int (optional)}"
     ),
     "signed_position_range": (
         "position and preset are SIGNED32; multiturn profiles split the measuring range into "

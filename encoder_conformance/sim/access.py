@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING
 
 from ..profile import datatypes
 from ..profile.model import DeviceProfile
+from ..profile.value_set import ValueSet
+from ..value_domain import declared_domain
 from .sdo_server import SdoAbort
 
 if TYPE_CHECKING:
@@ -64,6 +66,7 @@ class NodeObjectAccess:
     def __init__(self, node: SimulatedNode) -> None:
         self.node = node
         self.codes = situation_codes(node.profile)
+        self._domains: dict[tuple[int, int], ValueSet | None] = {}
 
     # -- shared checks -------------------------------------------------------------------
     def _locate(self, index: int, sub: int) -> tuple[int, int]:
@@ -102,15 +105,22 @@ class NodeObjectAccess:
         if size is not None and len(data) != size:
             raise SdoAbort(self.codes["length_high"] if len(data) > size else self.codes["length_low"])
         value = node.store.decode(key, data)
-        if isinstance(value, int):
-            self._check_limits(entry.min, entry.max, value)
-        node.quirk_write_gate(key)
+        if isinstance(value, int) and not node.faults.active("value_domain_ignored"):
+            self._check_domain(key, value)
+        node.quirk_write_gate(key, value)
         if node.faults.active("write_rw_ignored"):
             return
         node.apply_write(key, value)
 
-    def _check_limits(self, minimum: int | None, maximum: int | None, value: int) -> None:
-        if maximum is not None and value > maximum:
+    def _check_domain(self, key: tuple[int, int], value: int) -> None:
+        """Refuse a value outside the declared domain (type range, min/max, allowed, TPDO types)."""
+        if key not in self._domains:
+            self._domains[key] = declared_domain(self.node.profile, *key)
+        domain = self._domains[key]
+        if domain is None or value in domain:
+            return
+        if domain.maximum is not None and value > domain.maximum:
             raise SdoAbort(self.codes["value_high"])
-        if minimum is not None and value < minimum:
+        if domain.minimum is not None and value < domain.minimum:
             raise SdoAbort(self.codes["value_low"])
+        raise SdoAbort(VALUE_INVALID)  # in a gap of the allowed values (or nothing is allowed)

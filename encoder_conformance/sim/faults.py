@@ -31,6 +31,7 @@ FAULTS: dict[str, str] = {
     "no_sdo_response": "SDO requests are never answered (the device looks dead)",
     "ignore_unknown_command": "SDO requests with a reserved or block command specifier get no answer",
     "abort_without_multiplexer": "SDO abort frames carry index 0000h sub 00 instead of the request's",
+    "value_domain_ignored": "writes outside an entry's declared min/max/allowed values are accepted",
     # NMT
     "no_bootup_after_reset": "no boot-up message after reset node / reset communication",
     "ignore_start": "NMT start remote node is ignored",
@@ -45,8 +46,19 @@ FAULTS: dict[str, str] = {
     "respond_to_other_node": "NMT commands addressed to another node-id are obeyed",
     # PDO
     "sync_tpdo_every_sync": "a TPDO with transmission type n (1..240) is sent on every SYNC, not every n-th",
+    "type_255_timer_0_sends": "type 255 with event timer 0 sends on change (quirk says it disables the TPDO)",
     "event_timer_slow_20pct": "TPDO event timers run 20 % slower than 18xxh sub 5 says",
+    "send_repeat_counter_ignored": (
+        "quirk pdo_send_repeat_counters ignored: the change-driven TPDO goes out once per change whatever "
+        "its counter (e.g. SIKO 2800h), the SYNC-driven one on every n-th SYNC without the limit (2801h)"
+    ),
+    "forced_bits_not_applied": (
+        "quirk bits_forced_at_init ignored: the value (e.g. SIKO 1801h sub 1) keeps its stored bits at init"
+    ),
     # heartbeat
+    "guarding_heartbeat_coexist": (
+        "a heartbeat producer leaves the guard time alone, and guard times are accepted meanwhile"
+    ),
     "heartbeat_slow_20pct": "the heartbeat period is 20 % longer than 1017h says",
     "heartbeat_jitter": "every 4th heartbeat comes 30 % of the period late",
     "heartbeat_ignores_zero": "writing 0 to 1017h does not stop the heartbeat",
@@ -55,9 +67,28 @@ FAULTS: dict[str, str] = {
     "store_not_persisted": "1010h 'save' is confirmed but nothing reaches non-volatile memory",
     "store_wrong_signature_accepted": "1010h/1011h accept any signature",
     "restore_ineffective": "1011h 'load' is confirmed but stored values survive the next reset",
+    "reload_not_immediate": "1011h reload sub-indices (quirk reload_immediate) act only after a reset",
+    "manufacturer_store_not_persisted": "the manufacturer store object (quirk manufacturer_store_object) saves nothing",
     # emcy
     "emcy_wrong_cob_id": "EMCY frames are sent on 080h + node-id + 1",
 }
+
+
+#: faults that break a documented quirk's behaviour: they can only show on a profile with that effect
+QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
+    "guarding_heartbeat_coexist": "guarding_heartbeat_exclusive",
+    "reload_not_immediate": "reload_immediate",
+    "manufacturer_store_not_persisted": "manufacturer_store_object",
+    "type_255_timer_0_sends": "transmission_type_255_timer_0_disables",
+    "send_repeat_counter_ignored": "pdo_send_repeat_counters",
+    "forced_bits_not_applied": "bits_forced_at_init",
+}
+
+
+def faults_for(effects: Iterable[str]) -> list[str]:
+    """The faults that can show on a device whose profile quirks have ``effects`` (sorted)."""
+    present = set(effects)
+    return sorted(f for f in FAULTS if QUIRK_EFFECT_OF_FAULT.get(f) in (None, *present))
 
 
 class FaultSet:

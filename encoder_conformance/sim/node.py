@@ -21,12 +21,15 @@ from .access import NodeObjectAccess
 from .emcy import EmcyProducer
 from .encoder import EncoderFunction
 from .faults import FaultSet
+from .forced_bits import force_bits
+from .guarding import GuardingHeartbeatExclusion
 from .nmt import TARGET, NmtCommand, NmtState, pdo_allowed, sdo_allowed, sync_allowed
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
 from .pdo_layout import FixedTpdoLayout
 from .scheduler import DeadlineScheduler, JobHandle
 from .sdo_server import SdoAbort, SdoServer
+from .send_repeat import SendRepeatCounters
 from .shaft import Shaft
 from .store_commands import StoreCommands
 from .tpdo import TpdoEngine
@@ -84,6 +87,8 @@ class SimulatedNode:
             without_generic_bit=self.quirk_params("error_register_without_generic_bit") is not None,
             cob_offset=1 if self.faults.active("emcy_wrong_cob_id") else 0,
         )
+        exclusion = self.quirk_params("guarding_heartbeat_exclusive")
+        self.guarding = None if exclusion is None else GuardingHeartbeatExclusion.from_params(exclusion, self.faults)
         self.tpdo = TpdoEngine(
             scheduler,
             read=self._read_int,
@@ -93,12 +98,22 @@ class SimulatedNode:
             timer_zero_disables_255=self.quirk_params("transmission_type_255_timer_0_disables") is not None,
             layout=self._fixed_tpdo_layout(),
             faults=self.faults,
+            repeat=self._send_repeat_counters(),
         )
 
     # -- helpers -------------------------------------------------------------------------
     def _fixed_tpdo_layout(self) -> FixedTpdoLayout | None:
         params = self.quirk_params("fixed_tpdo_mapping")
         return None if params is None else FixedTpdoLayout.from_params(params)
+
+    def _send_repeat_counters(self) -> SendRepeatCounters | None:
+        params = self.quirk_params("pdo_send_repeat_counters")
+        return None if params is None else SendRepeatCounters.from_params(params)
+
+    def _force_bits(self, event: str) -> None:
+        """Quirk bits_forced_at_init at power_on / nmt_81h / nmt_82h (not stored, only current)."""
+        if not self.faults.active("forced_bits_not_applied"):
+            force_bits(self.quirk_params("bits_forced_at_init"), self.store, event)
 
     def quirk_params(self, effect: str) -> dict | None:
         """The params of the profile's quirk with ``effect``, or None if it has none."""
@@ -165,6 +180,7 @@ class SimulatedNode:
         self.store.reload(lambda index: True, self.node_id)
         self.encoder.reload(self.nvm)
         self._apply_value_faults()
+        self._force_bits("power_on")
         self.emcy.clear_history()
 
     def power_off(self) -> None:
@@ -220,6 +236,7 @@ class SimulatedNode:
             else:
                 self.store.reload(lambda index: 0x1000 <= index <= 0x1FFF, self.node_id)
             self._apply_value_faults()
+            self._force_bits("nmt_81h" if node else "nmt_82h")
             self._schedule_boot(power_on=False)
 
     # -- heartbeat -----------------------------------------------------------------------
@@ -381,8 +398,10 @@ class SimulatedNode:
         return self.encode_current(key, "tpdo").ljust(bits // 8, b"\x00")[: bits // 8]
 
     # -- writes: gates and effects ---------------------------------------------------------
-    def quirk_write_gate(self, key: Key) -> None:
+    def quirk_write_gate(self, key: Key, value: int | str | bytes) -> None:
         """Profile quirks that refuse a write in the current situation."""
+        if self.guarding is not None:
+            self.guarding.gate(key, value, self._read_int)
         gate = self.quirk_params("writes_preop_only")
         if gate and key[0] in gate.get("objects", []) and self.state is not NmtState.PRE_OPERATIONAL:
             raise SdoAbort(int(gate.get("abort_code", self.access.codes["wrong_state"])))
@@ -402,6 +421,8 @@ class SimulatedNode:
         self.encoder.on_write(key, value)
         self.store.set(key, value)
         self.store_commands.after_write(key, value)
+        if self.guarding is not None:
+            self.guarding.after_write(key, value, self.store.set)
         if index == 0x1017:
             if value == 0 and self.faults.active("heartbeat_ignores_zero"):
                 return

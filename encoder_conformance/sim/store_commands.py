@@ -11,6 +11,7 @@ from . import access as codes
 from .nvm import Key
 from .object_store import SUB_TO_GROUP
 from .sdo_server import SdoAbort, SdoNoReply
+from .store_variants import ManufacturerStoreObject, ParameterSets
 
 if TYPE_CHECKING:
     from .node import SimulatedNode
@@ -27,13 +28,21 @@ class StoreCommands:
         self.node = node
         self.reboot = node.quirk_params("store_reboots_without_reply")
         self.automatic = node.quirk_params("store_automatic") is not None
-        node_id = node.quirk_params("node_id_object")
-        self.node_id_store = node_id if node_id and "store_index" in node_id else None
+        extra = node.quirk_params("manufacturer_store_object")
+        self.extra_store = None if extra is None else ManufacturerStoreObject.from_params(extra)
+        sets = node.quirk_params("reload_immediate")
+        self.sets = None if sets is None else ParameterSets.from_params(sets)
 
     def on_write(self, key: Key, value: object) -> bool:
         """Carry out a store/restore command; True when ``key`` was one (the value is not kept)."""
         if self.reboot is not None and key == _key(self.reboot, "index", "subindex", (0x1010, 1)):
             self._store_and_reboot(value, self.reboot)
+        if self.extra_store is not None and key == self.extra_store.key:
+            self._manufacturer_store(value, self.extra_store)
+            return True
+        if self.sets is not None and self.sets.handles(key):
+            self._parameter_set_command(key, value, self.sets)
+            return True
         if key[0] in (0x1010, 0x1011):
             self._store_or_restore(key[0], key[1], value)
             return True
@@ -45,18 +54,34 @@ class StoreCommands:
         store.persist_auto(key)
         if self.automatic:
             store.persist(key)
-        params = self.node_id_store
-        if (params and key == _key(params, "store_index", "store_subindex", (0, 0))
-                and value == int(params.get("store_signature", codes.SAVE))):
-            node_id_key = _key(params, "index", "subindex", (0, 0))
-            store.nvm.put_many({node_id_key: store.get(node_id_key)})  # effective after the next reset
+
+    def _check_signature(self, value: object, signature: int, abort_code: int | None = None) -> None:
+        node = self.node
+        if value != signature and not node.faults.active("store_wrong_signature_accepted"):
+            raise SdoAbort(node.access.codes["store_signature"] if abort_code is None else abort_code)
+
+    def _manufacturer_store(self, value: object, command: ManufacturerStoreObject) -> None:
+        """Quirk manufacturer_store_object: its own 'save' persists its objects (effective after reset)."""
+        self._check_signature(value, command.signature, command.wrong_signature_abort)
+        node = self.node
+        if not node.faults.active("manufacturer_store_not_persisted"):
+            node.store.nvm.put_many({k: node.store.get(k) for k in command.saves if node.store.has(k)})  # type: ignore[misc]
+
+    def _parameter_set_command(self, key: Key, value: object, sets: ParameterSets) -> None:
+        """Quirk reload_immediate: save a parameter set, or load saved values at once (no reset)."""
+        index, sub = key
+        self._check_signature(value, codes.SAVE if index == 0x1010 else codes.LOAD)
+        node = self.node
+        if index == 0x1010:
+            sets.save_set(sub, node.store, node.nvm)
+        elif not node.faults.active("reload_not_immediate"):
+            group = lambda store_sub: node.store.storable_keys(SUB_TO_GROUP.get(store_sub, "store_manufacturer"))  # noqa: E731
+            sets.reload(sub, node.store, node.nvm, node.default_value, group)
 
     def _store_or_restore(self, index: int, sub: int, value: object) -> None:
         node = self.node
         storing = index == 0x1010
-        signature = codes.SAVE if storing else codes.LOAD
-        if value != signature and not node.faults.active("store_wrong_signature_accepted"):
-            raise SdoAbort(node.access.codes["store_signature"])
+        self._check_signature(value, codes.SAVE if storing else codes.LOAD)
         group = SUB_TO_GROUP.get(sub, "store_manufacturer")
         if storing:
             if not node.faults.active("store_not_persisted"):
@@ -73,9 +98,9 @@ class StoreCommands:
         CiA 'cannot store' code) and changes nothing: the manual leaves this case open.
         """
         node = self.node
+        wrong = params.get("wrong_signature_abort")
         signature = int(params.get("signature_u32", codes.SAVE))
-        if value != signature and not node.faults.active("store_wrong_signature_accepted"):
-            raise SdoAbort(int(params.get("wrong_signature_abort", node.access.codes["store_signature"])))
+        self._check_signature(value, signature, None if wrong is None else int(wrong))
         if not node.faults.active("store_not_persisted"):
             node.store.store_all_storable()
             node.encoder.persist(node.nvm)

@@ -3,6 +3,7 @@
 Reads its configuration from 1800h+n (communication) and 1A00h+n (mapping) whenever the node
 enters operational or a PDO parameter is written. A FixedTpdoLayout (quirk ``fixed_tpdo_mapping``)
 replaces mapping objects and transmission types the device does not have, and adds RTR answers.
+SendRepeatCounters (quirk ``pdo_send_repeat_counters``) add sends per change and a SYNC send limit.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from dataclasses import dataclass, field
 from .faults import FaultSet
 from .pdo_layout import FixedTpdoLayout
 from .scheduler import DeadlineScheduler, JobHandle
+from .send_repeat import SendRepeatCounters, within_sync_limit
 
 CHANGE_POLL_S = 0.005
 
@@ -32,6 +34,10 @@ class TpdoConfig:
     acyclic_sync: bool = False  # type 0: sent on a SYNC after the payload changed
     rtr: bool = False  # answers a remote frame on its COB-ID
     sync_count: int = 0
+    sends_per_change: int = 1  # frames per detected change (send-repeat counter)
+    repeats_left: int = 0  # frames of the last change still to send, one per change poll
+    sync_limit: int = 0  # SYNC-driven frames in all until the payload changes (0: no limit)
+    sync_sent: int = 0
     last_payload: bytes | None = None
     last_sent: float = field(default=-1e9)
 
@@ -49,8 +55,10 @@ class TpdoEngine:
         timer_zero_disables_255: bool = False,
         layout: FixedTpdoLayout | None = None,
         faults: FaultSet | None = None,
+        repeat: SendRepeatCounters | None = None,
     ) -> None:
         self._scheduler = scheduler
+        self._repeat = repeat
         self._read = read
         self._mapped_bytes = mapped_bytes
         self._send = send
@@ -65,7 +73,8 @@ class TpdoEngine:
     @property
     def reload_indices(self) -> frozenset[int]:
         """Objects outside 1800h..1BFFh whose write changes the TPDO configuration."""
-        return self._layout.timer_objects if self._layout else frozenset()
+        timers = self._layout.timer_objects if self._layout else frozenset()
+        return timers | (self._repeat.counter_objects if self._repeat else frozenset())
 
     def _load(self) -> list[TpdoConfig]:
         configs: list[TpdoConfig] = []
@@ -87,6 +96,8 @@ class TpdoEngine:
             self._cia_semantics(config)
             if self._layout is not None:
                 self._layout_semantics(comm, config, self._layout)
+            if self._repeat is not None and not self._faults.active("send_repeat_counter_ignored"):
+                self._repeat.configure(comm, config, self._read)
             configs.append(config)
         return configs
 
@@ -108,7 +119,8 @@ class TpdoEngine:
             config.sync_every = 1
         config.acyclic_sync = kind == 0
         event_driven = kind in (254, 255)
-        if kind == 255 and config.event_timer_ms == 0 and self._timer_zero_disables_255:
+        disables = self._timer_zero_disables_255 and not self._faults.active("type_255_timer_0_sends")
+        if kind == 255 and config.event_timer_ms == 0 and disables:
             event_driven = False
         config.on_change = event_driven
         if not event_driven:
@@ -161,7 +173,8 @@ class TpdoEngine:
                 config.sync_count += 1
                 if config.sync_count >= config.sync_every:
                     config.sync_count = 0
-                    self._transmit(config)
+                    if within_sync_limit(config, self._payload(config)):
+                        self._transmit(config)
             elif config.acyclic_sync and self._payload(config) != config.last_payload:
                 self._transmit(config)
 
@@ -176,6 +189,10 @@ class TpdoEngine:
     def _poll_changes(self) -> None:
         for config in self._configs:
             if config.on_change and self._payload(config) != config.last_payload:
+                self._transmit(config)
+                config.repeats_left = config.sends_per_change - 1
+            elif config.repeats_left > 0:
+                config.repeats_left -= 1
                 self._transmit(config)
 
     def _payload(self, config: TpdoConfig) -> bytes:

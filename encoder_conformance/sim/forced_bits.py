@@ -1,0 +1,25 @@
+"""Bits a device forces to 1 in a stored value at initialisation (quirk effect ``bits_forced_at_init``).
+
+Example (SIKO WV58M/WH58M, M §5.2.15): 1801h sub 1 is stored in EEPROM, yet bit 31 (PDO2 not
+valid) is set again at every power-on and NMT reset node / reset communication. Only the current
+value changes; the stored one stays as written.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .object_store import ObjectStore
+
+#: the initialisation events a quirk can name in ``at``
+EVENTS = ("power_on", "nmt_81h", "nmt_82h")
+
+
+def force_bits(params: dict[str, Any] | None, store: ObjectStore, event: str) -> None:
+    """Set ``forced_bits`` in the current value of index/subindex if ``event`` is listed in ``at``."""
+    if params is None or event not in params.get("at", EVENTS):
+        return
+    key = (int(params["index"]), int(params.get("subindex", 0)))
+    value = store.get(key) if store.has(key) else None
+    if isinstance(value, int):
+        store.set(key, value | int(params["forced_bits"]))

@@ -1,0 +1,145 @@
+"""Documented manufacturer PDO behaviour: send-repeat counters and TPDO bits forced at init.
+
+These tests apply only to profiles whose quirks declare the effect (e.g. SIKO WV58M/WH58M: 2800h
+sends PDO1 n times per position change, 2801h limits the SYNC-driven PDO2, 1801h sub 1 bit 31 is
+set again at every init). Each cites the quirk; every changed value is put back afterwards.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.checks import documented_quirk
+from encoder_conformance.dut.frames import Mark, format_frames
+
+SYNC = 0x80
+RESET_EVENTS = {"reset-node": "nmt_81h", "reset-communication": "nmt_82h"}
+
+
+def _quirk_params(dut, effect: str, evidence) -> dict:
+    return documented_quirk(dut, effect, evidence, "the profile documents no such behaviour")
+
+
+def _counter_spec(params: dict, key: str, default_comm: int) -> tuple[int, int]:
+    """(comm index, counter object) of the quirk's ``tpdo1``/``tpdo2`` entry."""
+    spec = params.get(key)
+    if not spec:
+        pytest.skip(f"not applicable: the quirk names no {key} counter")
+    return int(spec.get("comm", default_comm)), int(spec["counter"])
+
+
+def _valid_cob_id(dut, comm: int, settings_journal) -> int:
+    """The TPDO's 11-bit COB-ID, after clearing 18xxh sub 1 bit 31 (valid) if it was set."""
+    cob_id = dut.read_uint(comm, 1)
+    if cob_id & 0x80000000:
+        settings_journal.write(comm, 1, (cob_id & 0x7FFFFFFF).to_bytes(4, "little"))
+    return cob_id & 0x7FF
+
+
+def _start(dut, request) -> None:
+    """NMT start; returns once the device shows operational (heartbeat 05h, else an SDO answer)."""
+    if not dut.profile.capabilities.heartbeat_producer:
+        dut.nmt("start")
+        assert dut.responds(), "no SDO answer after NMT start"
+        return
+    period = request.getfixturevalue("heartbeat")
+    mark = dut.nmt("start")
+    window = (dut.profile.timing.nmt_settle_ms + 2 * period) / 1000
+    assert dut.wait_heartbeat(mark, window, state=0x05) is not None, "no heartbeat 05h after NMT start"
+
+
+def _window(dut) -> float:
+    return dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
+
+
+def _is(cob_id: int):
+    return lambda m: m.is_rx and m.arbitration_id == cob_id and not m.is_remote_frame
+
+
+@pytest.mark.spec("CiA 301 §7.2.2.2 (event-driven TPDO); manufacturer send-repeat counter (quirk)")
+@pytest.mark.requires("tpdos")
+def test_send_repeat_counter_sends_each_change_n_times(
+    dut, settings_journal, back_to_preoperational, shaft, request, evidence
+):
+    """Counter 3, event timer 0: one position change gives exactly 3 frames, a still shaft none."""
+    params = _quirk_params(dut, "pdo_send_repeat_counters", evidence)
+    comm, counter = _counter_spec(params, "tpdo1", 0x1800)
+    if shaft is None:
+        pytest.skip("needs a turning shaft: the simulator's shaft control (no bench drive configured)")
+    repeats = min(3, int(params.get("counter_max", 3)))
+    cob_id = _valid_cob_id(dut, comm, settings_journal)
+    settings_journal.write(comm, 5, (0).to_bytes(2, "little"))
+    settings_journal.write(counter, 0, bytes([repeats]))
+    mark = dut.frames.mark()
+    _start(dut, request)
+    turned = dut.frames.mark()
+    shaft.turn_by(0.25)
+    pdos = dut.frames.wait_count(_is(cob_id), repeats + 1, _window(dut), turned)
+    since_start = dut.frames.since(mark, _is(cob_id))
+    after_turn = {id(m) for m in dut.frames.since(turned)}
+    standing = [m for m in since_start if id(m) not in after_turn]
+    evidence.measure(f"TPDO {cob_id:03X}h frames for one position change", len(pdos), "frames", repeats, repeats)
+    trace = format_frames(dut.frames.since(mark)[:30])
+    assert not standing, f"{len(standing)} TPDO(s) on {cob_id:03X}h before the shaft moved:\n{trace}"
+    assert len(pdos) == repeats, (
+        f"{counter:04X}h = {repeats}, {comm:04X}h.05 = 0: expected {repeats} TPDOs on {cob_id:03X}h for one "
+        f"position change (and none after), observed {len(pdos)} within {_window(dut) * 1000:.0f} ms\n{trace}"
+    )
+
+
+def _sync_burst(dut, cob_id: int, syncs: int, expected: int) -> tuple[list, Mark]:
+    """Send ``syncs`` SYNCs; the TPDOs on ``cob_id`` (waiting for one more than ``expected``) and a mark."""
+    mark = dut.frames.mark()
+    for _ in range(syncs):
+        dut.network.send_message(SYNC, b"")
+    return dut.frames.wait_count(_is(cob_id), expected + 1, _window(dut), mark), mark
+
+
+@pytest.mark.spec("CiA 301 §7.2.2.2 (synchronous TPDO); manufacturer send-repeat counter (quirk)")
+@pytest.mark.requires("tpdos")
+def test_send_repeat_counter_limits_sync_tpdo(
+    dut, settings_journal, back_to_preoperational, shaft, request, evidence
+):
+    """Type 1, counter 2: 6 SYNCs with a still shaft give 2 frames; after a position change 2 more."""
+    params = _quirk_params(dut, "pdo_send_repeat_counters", evidence)
+    comm, counter = _counter_spec(params, "tpdo2", 0x1801)
+    limit = min(2, int(params.get("counter_max", 2)))
+    cob_id = _valid_cob_id(dut, comm, settings_journal)
+    settings_journal.write(comm, 2, b"\x01")
+    settings_journal.write(counter, 0, bytes([limit]))
+    _start(dut, request)
+    for step in ("still shaft", "after a position change"):
+        if step != "still shaft":
+            if shaft is None:
+                evidence.note("restart of the count after a position change not checked: no shaft drive")
+                return
+            shaft.turn_by(0.25)
+        pdos, mark = _sync_burst(dut, cob_id, 6, limit)
+        evidence.measure(f"TPDO {cob_id:03X}h frames for 6 SYNCs, {step}", len(pdos), "frames", limit, limit)
+        assert len(pdos) == limit, (
+            f"{comm:04X}h.02 = 1, {counter:04X}h = {limit}: expected {limit} TPDOs on {cob_id:03X}h for 6 SYNCs "
+            f"({step}), observed {len(pdos)}\n{format_frames(dut.frames.since(mark)[:20])}"
+        )
+
+
+@pytest.mark.spec("CiA 301 §7.3.2.2.3 (reset: stored values reloaded); bits forced at init (quirk)")
+@pytest.mark.parametrize("reset", sorted(RESET_EVENTS))
+def test_bits_forced_again_at_init(dut, settings_journal, back_to_preoperational, reset, evidence):
+    """The forced bits (SIKO: 1801h sub 1 bit 31, PDO2 disabled) are set again after NMT reset."""
+    params = _quirk_params(dut, "bits_forced_at_init", evidence)
+    if RESET_EVENTS[reset] not in params.get("at", list(RESET_EVENTS.values())):
+        pytest.skip(f"not applicable: the quirk does not force the bits at {reset}")
+    index, sub, bits = int(params["index"]), int(params.get("subindex", 0)), int(params["forced_bits"])
+    label = f"{index:04X}h.{sub:02X}"
+    size = len(dut.read(index, sub))
+    settings_journal.write(index, sub, (dut.read_uint(index, sub) & ~bits).to_bytes(size, "little"))
+    cleared = dut.read_uint(index, sub)
+    assert not cleared & bits, f"{label} = {cleared:08X}h after writing it with {bits:08X}h cleared"
+    mark = dut.nmt(reset)
+    assert dut.wait_bootup(mark) is not None, f"no boot-up after {reset}"
+    observed = dut.read_uint(index, sub)
+    evidence.note(f"{label}: {cleared:08X}h written, {observed:08X}h after {reset}")
+    assert observed & bits == bits, (
+        f"{label} = {observed:08X}h after {reset}: bits {bits:08X}h must be set again at init "
+        f"(written and stored as {cleared:08X}h)"
+    )
