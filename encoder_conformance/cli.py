@@ -94,7 +94,8 @@ def _cmd_fault_matrix(args: argparse.Namespace, extra: list[str]) -> int:
 
     faults = args.fault or faults_for(load_profile(args.profile).profile.effects)
     with tempfile.TemporaryDirectory(prefix="fault-matrix-") as workdir:
-        baseline, results = run_matrix(args.profile, faults, Path(workdir), args.select, workers=args.workers)
+        baseline, results = run_matrix(args.profile, faults, Path(workdir), args.select, workers=args.workers,
+                                       targeted=args.targeted)
     print(format_matrix(baseline, results))
     broken = {n for n, o in baseline.outcomes.items() if o in ("failed", "error")}
     uncaught = [t for t in baseline.keys_with("passed")
@@ -160,9 +161,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     matrix = sub.add_parser("fault-matrix", help="run the suites once per fault: which tests catch which fault")
     matrix.add_argument("--profile", default=DEFAULT_PROFILE)
-    matrix.add_argument("--fault", action="append", default=[], help="only these faults (default: all)")
+    matrix.add_argument("--fault", action="append", default=[],
+                        help="only these faults (default: every fault that can show on the profile)")
     matrix.add_argument("-k", dest="select", help="pytest -k expression selecting the tests")
     matrix.add_argument("--workers", type=int, default=2, help="suite runs in parallel (default 2)")
+    matrix.add_argument("--targeted", action="store_true",
+                        help="run each fault only against the suite modules it is made for (faster)")
     matrix.set_defaults(func=_cmd_fault_matrix)
 
     faults = sub.add_parser("faults", help="list the simulator's named faults")

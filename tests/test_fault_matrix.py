@@ -1,7 +1,9 @@
 """Every conformance test fails against at least one simulator fault and passes without faults.
 
-Runs the real suites (separate pytest processes, simulator in its own process) once per fault.
-The matrix is printed in the test output (run with -s, or see the captured stdout on failure).
+Runs the real suites (separate pytest processes, simulator in its own process) once per fault,
+each fault against the suite modules it is made for (sim/faults.py FAULT_GROUPS); the full
+product of faults and suites is `encoder-conformance fault-matrix`. The matrix is printed in the
+test output (run with -s, or see the captured stdout on failure).
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ def _functions(result, outcome: str) -> set[str]:
 def main_matrix(tmp_path_factory):
     """Every fault that can show on the main profile (faults of quirks it lacks go to the complements)."""
     faults = faults_for(_effects(MAIN_PROFILE))
-    return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=2)
+    return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=2, targeted=True)
 
 
 @pytest.fixture(scope="module")
@@ -61,7 +63,8 @@ def complement_matrices(main_matrix, tmp_path_factory):
         folder = tmp_path_factory.mktemp("matrix-extra")
         applicable = set(faults_for(_effects(profile)))
         matrix = run_until_caught(profile, [f for f in order if f in applicable], folder,
-                                  " or ".join(sorted(uncovered)), workers=2, must_try=unseen & applicable)
+                                  " or ".join(sorted(uncovered)), workers=2, must_try=unseen & applicable,
+                                  targeted=True)
         matrices.append(matrix)
         uncovered -= _functions(matrix[0], "passed")
         unseen -= {r.fault for r in matrix[1] if r.keys_with("failed") | r.keys_with("error")}

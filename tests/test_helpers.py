@@ -202,3 +202,15 @@ def test_quirk_faults_name_known_faults_and_effects():
     general = faults_for(())
     assert "reload_not_immediate" not in general
     assert "wrong_vendor_id" in general
+
+
+def test_every_suite_module_is_the_target_of_a_fault_group():
+    """A new suite module needs faults made for it (sim/faults.py FAULT_GROUPS), and targets must exist."""
+    from pathlib import Path
+
+    from encoder_conformance.sim.faults import TARGET_MODULES
+
+    suites = {p.stem for p in (Path(__file__).resolve().parents[1] / "suites").glob("test_*.py")}
+    targets = {module for modules in TARGET_MODULES.values() for module in modules}
+    assert suites - targets == set(), "suite modules no fault is made for"
+    assert targets - suites == set(), "fault targets that are not suite modules"
