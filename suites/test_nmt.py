@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import pytest
 
+from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.device import STATE_NAMES
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
+from encoder_conformance.dut.persist import CannotPersist, persist_entry
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter
 
@@ -177,3 +180,48 @@ def test_reset_communication_reloads_communication_parameters(dut, settings_jour
     assert observed == found.entry.default, (
         f"{found.label} = {observed} after reset communication, expected the default {found.entry.default}"
     )
+
+
+def _boots_into(dut, settings_journal, evidence) -> int:
+    """Reset node; after the boot-up, switch the heartbeat on (RAM only) and return the state it reports."""
+    dut.reset_node_and_wait()
+    period = dut.profile.timing.heartbeat_test_period_ms
+    mark = dut.frames.mark()
+    settings_journal.write(0x1017, 0, period.to_bytes(2, "little"))
+    beat = dut.wait_heartbeat(mark, (dut.profile.timing.nmt_settle_ms + 3 * period) / 1000)
+    assert beat is not None, f"no heartbeat within {3 * period} ms after 1017h = {period} ms"
+    evidence.note(f"heartbeat after reset node reports {beat.data[0]:02X}h ({STATE_NAMES.get(beat.data[0], '?')})")
+    return beat.data[0]
+
+
+@pytest.mark.destructive
+@pytest.mark.requires("heartbeat_producer")
+def test_autostart_object_starts_device_after_reset(dut, settings_journal, evidence):
+    """Documented autostart object set and stored: after reset node the device is operational without NMT start.
+
+    Put back afterwards (value, store, reset node), and the device must then boot into pre-operational again.
+    """
+    params = documented_quirk(dut, "nmt_autostart_object", evidence,
+                              "the device boots into pre-operational and waits for NMT start (CiA 301)")
+    index, sub = int(params["index"]), int(params.get("subindex", 0))
+    original = dut.read(index, sub)
+    operational = int(params["operational_value"]).to_bytes(len(original), "little")
+    dut.write(index, sub, operational)
+    try:
+        try:
+            how = persist_entry(dut, index, sub)
+        except CannotPersist as exc:
+            pytest.skip(f"not applicable: {exc}")
+        evidence.note(f"{index:04X}h.{sub:02X} = {operational.hex(' ').upper()}, stored with {how}")
+        state = _boots_into(dut, settings_journal, evidence)
+        assert state == 0x05, (
+            f"documented: {index:04X}h = {int(params['operational_value'])} starts the device after boot-up; "
+            f"the heartbeat reports {state:02X}h ({STATE_NAMES.get(state, '?')}) instead of 05h (operational)"
+        )
+    finally:
+        if not dut.lost:
+            dut.write(index, sub, original)
+            persist_entry(dut, index, sub)
+            settings_journal.restore()
+    state = _boots_into(dut, settings_journal, evidence)
+    assert state == 0x7F, f"after putting {index:04X}h back the device boots into {state:02X}h, not pre-operational"

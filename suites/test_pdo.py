@@ -29,20 +29,32 @@ def _fixed_behaviour(dut, evidence) -> set[int]:
     return fixed
 
 
-def _configurable_tpdo(dut, sub: int, evidence) -> int:
-    """The first TPDO whose communication sub-index ``sub`` is writable and which maps something."""
+def _configurable_tpdo(dut, sub: int, evidence, settings_journal, usable_types: list[int]) -> tuple[int, int]:
+    """(comm index, transmission type to use) of the first TPDO that maps something, whose sub-index
+    ``sub`` is writable and whose type is one of ``usable_types`` (in order of preference): to be
+    written if sub 2 is writable, else as the device has it fixed. A disabled TPDO (sub 1 bit 31)
+    is enabled for the test if sub 1 is writable.
+    """
     fixed = _fixed_behaviour(dut, evidence)
+    accepted = set(dut.profile.capabilities.tpdo_transmission_types)
     for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF and i not in fixed):
-        entry = dut.profile.entry(comm, sub)
-        kind = dut.profile.entry(comm, 2)
-        if entry is None or kind is None or not (entry.writable and kind.writable):
+        entry, kind, cob = (dut.profile.entry(comm, s) for s in (sub, 2, 1))
+        if entry is None or kind is None or cob is None or not entry.writable:
             continue
-        if dut.read_uint(comm, 1) & 0x80000000:
-            continue  # not valid
         if dut.profile.entry(comm + 0x200, 0) is not None and dut.read_uint(comm + 0x200, 0) == 0:
             continue  # nothing mapped
-        return comm
-    pytest.skip(f"not applicable: no TPDO with writable transmission type and sub-index {sub}")
+        candidates = [t for t in usable_types if t in accepted] if kind.writable else [dut.read_uint(comm, 2)]
+        chosen = next((t for t in candidates if t in usable_types), None)
+        cob_id = dut.read_uint(comm, 1)
+        if chosen is None or (cob_id & 0x80000000 and not cob.writable):
+            continue
+        if cob_id & 0x80000000:
+            settings_journal.write(comm, 1, (cob_id & 0x7FFFFFFF).to_bytes(4, "little"))
+            evidence.note(f"{comm:04X}h.01 bit 31 cleared (TPDO enabled) for the test")
+        if not kind.writable:
+            evidence.note(f"{comm:04X}h.02 is read-only: its fixed type {chosen} is used")
+        return comm, chosen
+    pytest.skip(f"not applicable: no mapped TPDO with writable sub-index {sub} and a usable transmission type")
 
 
 def _start(dut):
@@ -51,33 +63,32 @@ def _start(dut):
 
 def test_sync_tpdo_sent_on_every_nth_sync(dut, settings_journal, back_to_preoperational, evidence):
     """Transmission type 3: the TPDO follows every third SYNC, so 9 SYNCs give exactly 3 frames."""
-    if 3 not in dut.profile.capabilities.tpdo_transmission_types:
-        pytest.skip("not applicable: transmission type 3 is not among the profile's accepted types")
-    comm = _configurable_tpdo(dut, 2, evidence)
+    comm, every = _configurable_tpdo(dut, 2, evidence, settings_journal, [3, *range(2, 241), 1])
     cob_id = dut.read_uint(comm, 1) & 0x7FF
-    settings_journal.write(comm, 2, b"\x03")
+    if dut.profile.entry(comm, 2).writable:
+        settings_journal.write(comm, 2, bytes([every]))
     _start(dut)
     mark = dut.frames.mark()
-    for _ in range(9):
+    syncs = 3 * every
+    for _ in range(syncs):
         dut.network.send_message(0x80, b"")
     window = dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
     pdos = dut.frames.wait_count(lambda m: m.is_rx and m.arbitration_id == cob_id, 4, window, mark)
-    evidence.measure(f"TPDO {cob_id:03X}h frames for 9 SYNCs", len(pdos), "frames", 3, 3)
+    evidence.measure(f"TPDO {cob_id:03X}h frames for {syncs} SYNCs", len(pdos), "frames", 3, 3)
     assert len(pdos) == 3, (
-        f"{comm:04X}h.02 = 3: expected 3 TPDOs on {cob_id:03X}h for 9 SYNCs, observed {len(pdos)}\n"
+        f"{comm:04X}h.02 = {every}: expected 3 TPDOs on {cob_id:03X}h for {syncs} SYNCs, observed {len(pdos)}\n"
         f"{format_frames(dut.frames.since(mark)[:20])}"
     )
 
 
 def test_event_timer_period_within_tolerance(dut, settings_journal, back_to_preoperational, evidence):
     """Transmission type 255 with event timer T: the TPDO comes every T ms (>= 20 intervals, profile tolerance)."""
-    if 255 not in dut.profile.capabilities.tpdo_transmission_types:
-        pytest.skip("not applicable: transmission type 255 is not among the profile's accepted types")
-    comm = _configurable_tpdo(dut, 5, evidence)
+    comm, kind = _configurable_tpdo(dut, 5, evidence, settings_journal, [255, 254])
     cob_id = dut.read_uint(comm, 1) & 0x7FF
     timing = dut.profile.timing
     period = timing.heartbeat_test_period_ms
-    settings_journal.write(comm, 2, b"\xff")
+    if dut.profile.entry(comm, 2).writable:
+        settings_journal.write(comm, 2, bytes([kind]))
     settings_journal.write(comm, 5, period.to_bytes(2, "little"))
     _start(dut)
     mark = dut.frames.mark()
@@ -101,9 +112,10 @@ def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_
     """Documented quirk: transmission type 255 with event timer 0 switches the TPDO off (no SYNC, no change)."""
     documented_quirk(dut, "transmission_type_255_timer_0_disables", evidence,
                      "CiA 301 type 255 without timer is event-driven")
-    comm = _configurable_tpdo(dut, 5, evidence)
+    comm, _ = _configurable_tpdo(dut, 5, evidence, settings_journal, [255])
     cob_id = dut.read_uint(comm, 1) & 0x7FF
-    settings_journal.write(comm, 2, b"\xff")
+    if dut.profile.entry(comm, 2).writable:
+        settings_journal.write(comm, 2, b"\xff")
     settings_journal.write(comm, 5, b"\x00\x00")
     _start(dut)
     control = shaft

@@ -101,6 +101,10 @@ EFFECTS: dict[str, str] = {
         "time to 0; a non-zero guard time written while the producer runs is refused. params: "
         "{producer_object: index, guard_time_object: index, guard_time_write_while_producer_abort: int}"
     ),
+    "nmt_autostart_object": (
+        "after boot-up the device enters operational by itself when an object holds a given value "
+        "(instead of CiA 302-2 1F80h bit semantics). params: {index, subindex, operational_value: int}"
+    ),
     "reload_immediate": (
         "1011h sub-indices that make saved values current at once (no reset), and parameter sets saved "
         "by 1010h sub-indices. params: {reload_immediate: {1011h sub: 1010h sub whose saved values it "

@@ -57,6 +57,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "pdo_outside_operational": "TPDOs are also sent in pre-operational and stopped",
             "wrong_heartbeat_state": "the heartbeat reports operational (05h) while pre-operational",
             "respond_to_other_node": "NMT commands addressed to another node-id are obeyed",
+            "autostart_ignored": "the device stays pre-operational although its autostart object says start",
         },
     ),
     (  # PDO
@@ -120,6 +121,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
     "type_255_timer_0_sends": "transmission_type_255_timer_0_disables",
     "send_repeat_counter_ignored": "pdo_send_repeat_counters",
     "forced_bits_not_applied": "bits_forced_at_init",
+    "autostart_ignored": "nmt_autostart_object",
 }
 
 

@@ -222,6 +222,16 @@ class SimulatedNode:
                 self.send(0x700 + self.node_id, b"\x00")
             self._enter(NmtState.PRE_OPERATIONAL)
             self._restart_heartbeat()
+            if self._starts_itself():
+                self._enter(NmtState.OPERATIONAL)
+
+    def _starts_itself(self) -> bool:
+        """Quirk nmt_autostart_object: the object holds the value that means 'enter operational by itself'."""
+        params = self.quirk_params("nmt_autostart_object")
+        if params is None or self.faults.active("autostart_ignored"):
+            return False
+        value = self._read_int(int(params["index"]), int(params.get("subindex", 0)))
+        return value == int(params["operational_value"])
 
     def _reset(self, node: bool) -> None:
         """NMT reset node (everything) or reset communication (1000h-1FFFh) and boot again."""

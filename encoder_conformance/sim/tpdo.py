@@ -96,6 +96,8 @@ class TpdoEngine:
             self._cia_semantics(config)
             if self._layout is not None:
                 self._layout_semantics(comm, config, self._layout)
+            if config.sync_every and self._faults.active("sync_tpdo_every_sync"):
+                config.sync_every = 1
             if self._repeat is not None and not self._faults.active("send_repeat_counter_ignored"):
                 self._repeat.configure(comm, config, self._read)
             configs.append(config)
@@ -115,8 +117,6 @@ class TpdoEngine:
         """CiA 301 transmission types: 1..240 every n-th SYNC, 254/255 on change and event timer."""
         kind = config.transmission_type
         config.sync_every = kind if 1 <= kind <= 240 else 0
-        if config.sync_every and self._faults.active("sync_tpdo_every_sync"):
-            config.sync_every = 1
         config.acyclic_sync = kind == 0
         event_driven = kind in (254, 255)
         disables = self._timer_zero_disables_255 and not self._faults.active("type_255_timer_0_sends")
