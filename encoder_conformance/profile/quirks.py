@@ -101,6 +101,10 @@ EFFECTS: dict[str, str] = {
         "time to 0; a non-zero guard time written while the producer runs is refused. params: "
         "{producer_object: index, guard_time_object: index, guard_time_write_while_producer_abort: int}"
     ),
+    "restore_excludes": (
+        "1011h restore-all leaves the listed objects as they are (CiA 301: every parameter, including "
+        "those the device stores by itself, returns to its default). params: {objects: [index, ...]}"
+    ),
     "nmt_autostart_object": (
         "after boot-up the device enters operational by itself when an object holds a given value "
         "(instead of CiA 302-2 1F80h bit semantics). params: {index, subindex, operational_value: int}"

@@ -90,7 +90,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
     (  # store / restore
         ("test_store_restore", "test_manufacturer_store"),
         {
-            "store_not_persisted": "1010h 'save' is confirmed but nothing reaches non-volatile memory",
+            "store_not_persisted": "1010h 'save' is confirmed, automatic storing claimed, but nothing is kept",
             "store_wrong_signature_accepted": "1010h/1011h accept any signature",
             "restore_ineffective": "1011h 'load' is confirmed but stored values survive the next reset",
             "reload_not_immediate": "1011h reload sub-indices (quirk reload_immediate) act only after a reset",

@@ -30,6 +30,9 @@ class ObjectStore:
             (index, sub): entry for index, sub, _, entry in profile.iter_entries()
         }
         self.values: dict[Key, int | str | bytes] = {}
+        excludes = profile.quirk_with_effect("restore_excludes")
+        listed = excludes[1].params.get("objects", []) if excludes else []
+        self.restore_excluded = frozenset(int(index) for index in listed)
         self.reload(lambda index: True, node_id)
 
     # -- lookup --------------------------------------------------------------------------
@@ -112,8 +115,15 @@ class ObjectStore:
             self.nvm.put_many({key: self.values[key]})
 
     def restore_defaults(self, group: str) -> None:
-        """Forget stored values of the group; defaults become active at the next reset."""
-        self.nvm.remove_many(self.storable_keys(group))
+        """Forget stored values of the group; defaults become active at the next reset.
+
+        Restore-all also covers what the device stores by itself (persisted_by: auto), except the
+        objects a ``restore_excludes`` quirk lists.
+        """
+        keys = self.storable_keys(group)
+        if group == "store_all":
+            keys += [key for key, entry in self.entries.items() if entry.writable and entry.persisted_by == "auto"]
+        self.nvm.remove_many([key for key in keys if key[0] not in self.restore_excluded])
 
     def persist_auto(self, key: Key) -> None:
         """Entries with persisted_by: auto go to NVM on every write."""

@@ -51,6 +51,8 @@ class StoreCommands:
     def after_write(self, key: Key, value: object) -> None:
         """A value was written: persist it if the device does that by itself."""
         store = self.node.store
+        if self.node.faults.active("store_not_persisted"):
+            return
         store.persist_auto(key)
         if self.automatic:
             store.persist(key)
