@@ -100,8 +100,8 @@ def _decode(entry, data: bytes):
 def test_factory_default(dut, default_entry, factory_state):
     """Right after restore-defaults and reset, each entry shows the factory default the manual gives."""
     index, sub, _, entry = default_entry
-    excluded = dut.profile.quirk_with_effect("restore_excludes")
-    if excluded is not None and index in {int(i) for i in excluded[1].params.get("objects", [])}:
+    excluded = dut.profile.quirk_objects("restore_excludes")
+    if excluded is not None and index in excluded[1]:
         pytest.skip(f"not applicable: restore-defaults leaves {index:04X}h as it was (quirk {excluded[0]})")
     expected = resolve_node_id_expression(entry.default, dut.node_id)
     observed = _decode(entry, _read_or_fail(dut, index, sub))

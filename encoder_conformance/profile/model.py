@@ -398,6 +398,13 @@ class DeviceProfile(StrictModel):
                 return quirk_id, quirk
         return None
 
+    def quirk_objects(self, effect: str) -> tuple[str, frozenset[int]] | None:
+        """(quirk id, the indices its ``objects`` param lists) of the quirk with ``effect``, if any."""
+        found = self.quirk_with_effect(effect)
+        if found is None:
+            return None
+        return found[0], frozenset(int(index) for index in found[1].params.get("objects", []))
+
     @property
     def effects(self) -> frozenset[str]:
         """The quirk effects this profile declares."""

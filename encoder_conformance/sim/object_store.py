@@ -30,9 +30,8 @@ class ObjectStore:
             (index, sub): entry for index, sub, _, entry in profile.iter_entries()
         }
         self.values: dict[Key, int | str | bytes] = {}
-        excludes = profile.quirk_with_effect("restore_excludes")
-        listed = excludes[1].params.get("objects", []) if excludes else []
-        self.restore_excluded = frozenset(int(index) for index in listed)
+        excluded = profile.quirk_objects("restore_excludes")
+        self.restore_excluded = excluded[1] if excluded else frozenset()
         self.reload(lambda index: True, node_id)
 
     # -- lookup --------------------------------------------------------------------------

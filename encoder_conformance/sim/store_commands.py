@@ -77,8 +77,11 @@ class StoreCommands:
         if index == 0x1010:
             sets.save_set(sub, node.store, node.nvm)
         elif not node.faults.active("reload_not_immediate"):
-            group = lambda store_sub: node.store.storable_keys(SUB_TO_GROUP.get(store_sub, "store_manufacturer"))  # noqa: E731
-            sets.reload(sub, node.store, node.nvm, node.default_value, group)
+            sets.reload(sub, node.store, node.nvm, node.default_value, self._keys_stored_by)
+
+    def _keys_stored_by(self, store_sub: int) -> list[Key]:
+        """The entries 1010h ``store_sub`` writes to NVM."""
+        return self.node.store.storable_keys(SUB_TO_GROUP.get(store_sub, "store_manufacturer"))
 
     def _store_or_restore(self, index: int, sub: int, value: object) -> None:
         node = self.node

@@ -18,15 +18,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from ..parameters import parse_key
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
-
-
-def _parse_key(text: str | int) -> Key:
-    if isinstance(text, int):
-        return text, 0
-    index, _, sub = str(text).partition(".")
-    return int(index, 16), int(sub or "0", 0)
 
 
 def set_slot(set_number: int, key: Key) -> Key:
@@ -46,7 +40,7 @@ class ParameterSets:
         return cls(
             saves_set={int(sub): int(number) for sub, number in sets.get("saved_by", {}).items()},
             reloads={int(sub): int(source) for sub, source in params.get("reload_immediate", {}).items()},
-            set_objects=tuple(_parse_key(k) for k in sets.get("objects", [])),
+            set_objects=tuple(parse_key(k) for k in sets.get("objects", [])),
         )
 
     def handles(self, key: Key) -> bool:
@@ -87,6 +81,6 @@ class ManufacturerStoreObject:
         return cls(
             key=(int(params["index"]), int(params.get("subindex", 0))),
             signature=int(params.get("signature", 0x65766173)),
-            saves=tuple(_parse_key(k) for k in params.get("saves", [])),
+            saves=tuple(parse_key(k) for k in params.get("saves", [])),
             wrong_signature_abort=None if wrong is None else int(wrong),
         )
