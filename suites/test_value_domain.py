@@ -32,8 +32,8 @@ def _skip_reason(profile, index: int, entry) -> str | None:
     size = datatypes.size_bytes(entry.type)
     if size is None or size > 4:
         return f"not covered: {entry.type} does not fit an expedited download"
-    found = profile.quirk_with_effect("writes_need_scaling_bit")
-    if found and index in found[1].params.get("objects", []):
+    found = profile.quirk_objects("writes_need_scaling_bit")
+    if found and index in found[1]:
         return (f"not applicable: writes to {index:04X}h are refused unless 6000h bit 2 (scaling) is set "
                 f"(quirk {found[0]}); this test does not switch scaling on")
     found = profile.quirk_with_effect("store_reboots_without_reply")

@@ -23,6 +23,8 @@ PROFILES = [ref.id for ref in iter_profile_ids() if not ref.abstract]
 def _expected_cost(profile_id: str) -> float:
     """Boot-up delay dominates a run (every reset waits for it): start the slow twins first."""
     return load_profile(profile_id).profile.simulator.bootup_delay_ms
+
+
 #: two runs at a time on two cores: more makes the simulators' heartbeat timing jitter past tolerance
 PARALLEL_RUNS = 2
 
