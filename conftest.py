@@ -11,9 +11,9 @@ import os
 import pytest
 from hypothesis import HealthCheck, settings
 
-from encoder_conformance.errors import BusSetupError, ProfileError
+from encoder_conformance.errors import BusSetupError, DutLostError, ProfileError
+from encoder_conformance.plugin import lifecycle, reporting, selection
 from encoder_conformance.plugin import options as opts
-from encoder_conformance.plugin import reporting, selection
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.evidence"]
 
@@ -42,6 +42,7 @@ def pytest_configure(config: pytest.Config) -> None:
 
 def pytest_sessionstart(session: pytest.Session) -> None:
     reporting.set_metadata(session.config)
+    lifecycle.start(session.config)
 
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
@@ -52,6 +53,18 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     selection.apply_capability_marks(config, items)
 
 
+def pytest_collection_finish(session: pytest.Session) -> None:
+    lifecycle.note_collected(session)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None):
+    lifecycle.stop_if_gone(item.config)  # the device or bus is gone: one reason, the rest not run
+    result = yield
+    lifecycle.stop_if_gone(item.config)
+    return result
+
+
 def pytest_runtest_setup(item: pytest.Item) -> None:
     selection.check_gates(item)
 
@@ -59,7 +72,11 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]):
     outcome = yield
-    reporting.attach_evidence(item, call, outcome.get_result())
+    report = outcome.get_result()
+    if call.excinfo is not None and isinstance(call.excinfo.value, DutLostError):
+        report.longrepr = f"could not test: {call.excinfo.value}"  # one line: the device or bus is gone
+    reporting.attach_evidence(item, call, report)
+    lifecycle.note_report(item.config, report)
 
 
 def pytest_report_header(config: pytest.Config) -> list[str]:
@@ -73,12 +90,18 @@ def pytest_html_report_title(report) -> None:
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_html_results_summary(prefix: list[str], summary: list[str], postfix: list[str], session) -> None:
-    reporting.html_summary(prefix, session)
+    reporting.html_summary(prefix, session, lifecycle.summary_lines(session.config))
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:
-    reporting.terminal_summary(terminalreporter, config)
+    reporting.terminal_summary(terminalreporter, config, lifecycle.summary_lines(config))
 
 
-def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
-    reporting.fail_all_skipped(session)
+@pytest.hookimpl(wrapper=True, tryfirst=True)
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int):
+    lifecycle.give_back(session.config)  # after Ctrl-C or a stop: first thing, while the bus is still open
+    result = yield
+    if not lifecycle.ended_early(session.config):
+        reporting.fail_all_skipped(session)
+    lifecycle.final_exit_status(session)
+    return result

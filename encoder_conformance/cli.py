@@ -1,4 +1,8 @@
-"""Command line: ``encoder-conformance run | sim | profile ... | faults``."""
+"""Command line: ``encoder-conformance run | restore | sim | sim-control | profile ... | faults | fault-matrix``.
+
+Exit codes of ``run`` and ``restore`` follow exit_codes.RunExit; a usage error (bad option,
+unreadable profile) is 4 for every command.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +10,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from .errors import ProfileError
+from .errors import BusSetupError, ProfileError
+from .exit_codes import RunExit
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_PROFILE = "wachendorff-wdga-mt"
@@ -16,12 +21,14 @@ def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
     import pytest
 
     argv = [str(REPO_ROOT / "suites"), "--device-profile", args.profile, "-p", "no:cacheprovider"]
-    for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir"):
+    for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir", "station",
+                   "power_off_cmd", "power_on_cmd", "power_off_time"):
         value = getattr(args, option)
         if value is not None:
             argv += [f"--{option.replace('_', '-')}", str(value)]
-    if args.allow_destructive:
-        argv.append("--allow-destructive")
+    for flag in ("allow_destructive", "power_manual", "delivery_state"):
+        if getattr(args, flag):
+            argv.append(f"--{flag.replace('_', '-')}")
     for fault in args.sim_fault:
         argv += ["--sim-fault", fault]
     return int(pytest.main(argv + extra))
@@ -31,6 +38,39 @@ def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
     from .sim.serve import serve
 
     return serve(args.profile, args.listen, args.control, args.node_id, args.fault, args.nvm, args.ready_line)
+
+
+def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
+    from .bus_config import resolve_bus_config
+    from .restore_command import RestoreRequest, restore_from_snapshot
+
+    try:
+        bus = resolve_bus_config(args.can_interface, args.can_channel, args.can_bitrate)
+    except BusSetupError as exc:
+        print(f"restore: {exc}", file=sys.stderr)
+        return RunExit.USAGE_ERROR
+    if bus.simulated:
+        print("restore: name the bus with --can-interface/--can-channel (or python-can's configuration); "
+              "a built-in simulator has nothing to restore", file=sys.stderr)
+        return RunExit.USAGE_ERROR
+    request = RestoreRequest(Path(args.snapshot), bus, args.node_id, args.timeout, args.force)
+    return restore_from_snapshot(request)
+
+
+def _cmd_sim_control(args: argparse.Namespace, extra: list[str]) -> int:
+    from .sim.serve import parse_address
+    from .sim_control import SimulatorControl
+
+    try:
+        control = SimulatorControl(parse_address(args.control))
+    except (OSError, ValueError) as exc:
+        print(f"sim-control: cannot reach the control channel {args.control}: {exc}", file=sys.stderr)
+        return RunExit.COULD_NOT_TEST
+    try:
+        getattr(control, args.action.replace("-", "_"))()
+    finally:
+        control.close()
+    return 0
 
 
 def _cmd_profile_validate(args: argparse.Namespace, extra: list[str]) -> int:
@@ -115,21 +155,56 @@ def _cmd_faults(args: argparse.Namespace, extra: list[str]) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the suite's usage-error exit code (4) instead of argparse's 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.print_usage(sys.stderr)
+        self.exit(RunExit.USAGE_ERROR, f"{self.prog}: error: {message}\n")
+
+
+def _bus_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--can-interface", help="python-can interface (pcan, kvaser, socketcan, remote ...)")
+    parser.add_argument("--can-channel")
+    parser.add_argument("--can-bitrate", type=int)
+    parser.add_argument("--node-id", type=int)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="encoder-conformance", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser = _Parser(prog="encoder-conformance", description=__doc__,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     run = sub.add_parser("run", help="run the conformance suites (extra arguments go to pytest)")
     run.add_argument("--profile", default=DEFAULT_PROFILE,
                      help=f"device profile id or file (default {DEFAULT_PROFILE})")
-    run.add_argument("--can-interface", help="python-can interface (pcan, kvaser, socketcan, remote ...)")
-    run.add_argument("--can-channel")
-    run.add_argument("--can-bitrate", type=int)
-    run.add_argument("--node-id", type=int)
+    _bus_arguments(run)
     run.add_argument("--report-dir", help="where to write the reports (default reports/<timestamp>-<profile>)")
-    run.add_argument("--allow-destructive", action="store_true")
+    run.add_argument("--allow-destructive", action="store_true",
+                     help="allow tests that change what the device remembers; the run puts it all back")
+    run.add_argument("--station", help="station file: the bench's CAN adapter, node-id and power switch")
+    run.add_argument("--power-off-cmd", help="shell command that switches the device off")
+    run.add_argument("--power-on-cmd", help="shell command that switches the device on")
+    run.add_argument("--power-manual", action="store_true", help="ask the operator to switch the power")
+    run.add_argument("--power-off-time", type=float, help="seconds the power stays off (default 1.0)")
+    run.add_argument("--delivery-state", action="store_true",
+                     help="the device is fresh from the factory: check its factory defaults as found")
     run.add_argument("--sim-fault", action="append", default=[], help="simulator fault (see 'faults')")
     run.set_defaults(func=_cmd_run)
+
+    restore = sub.add_parser("restore", help="put a device back as a run's snapshot found it (after a crash)")
+    restore.add_argument("--from", dest="snapshot", required=True,
+                         help="the run's device-snapshot.json (in its report directory)")
+    _bus_arguments(restore)
+    restore.add_argument("--timeout", type=float, default=60.0, help="seconds the restore may take (default 60)")
+    restore.add_argument("--force", action="store_true",
+                         help="restore even if the device's serial number differs from the snapshot's")
+    restore.set_defaults(func=_cmd_restore)
+
+    sim_control = sub.add_parser("sim-control", help="switch a served simulator's power (a bench power switch)")
+    sim_control.add_argument("--control", required=True, help="HOST:PORT of the simulator's control channel")
+    sim_control.add_argument("action", choices=["power-off", "power-on", "power-cycle"])
+    sim_control.set_defaults(func=_cmd_sim_control)
 
     sim = sub.add_parser("sim", help="serve simulated devices on a python-can-remote endpoint")
     sim.add_argument("--profile", action="append", required=True, help="profile id or file (repeat for more nodes)")
@@ -180,10 +255,10 @@ def main(argv: list[str] | None = None) -> int:
     if extra and args.command != "run":
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     try:
-        return args.func(args, extra)
+        return int(args.func(args, extra))
     except ProfileError as exc:
         print(exc, file=sys.stderr)
-        return 2
+        return RunExit.USAGE_ERROR
 
 
 if __name__ == "__main__":

@@ -26,3 +26,12 @@ class BusSetupError(EncoderConformanceError):
 
 class DutLostError(EncoderConformanceError):
     """The device stopped answering; later tests fail fast with this reason."""
+
+
+class BusLostError(DutLostError):
+    """The tester lost the CAN bus itself (connection closed, interface error): nothing can be tested."""
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """Raised by device calls once the run is stopping (Ctrl-C, SIGTERM): a test's own clean-up must not
+    race the restore. A KeyboardInterrupt, so ``except Exception`` in a test cannot swallow it."""

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 READY_TIMEOUT_S = 30.0
+STOP_TIMEOUT_S = 1.0
 
 
 @dataclass
@@ -30,10 +31,11 @@ class SimulatorProcess:
         return {"interface": "remote", "channel": self.can_url, "receive_own_messages": False}
 
     def stop(self) -> None:
+        """SIGTERM, then SIGKILL after STOP_TIMEOUT_S: a run's end never waits long for its twin."""
         if self.process.poll() is None:
             self.process.terminate()
             try:
-                self.process.wait(timeout=5)
+                self.process.wait(timeout=STOP_TIMEOUT_S)
             except subprocess.TimeoutExpired:
                 self.process.kill()
 
@@ -56,7 +58,9 @@ def start_simulator(
         command += ["--nvm", str(nvm_path)]
     stderr = open(log_path, "w", encoding="utf-8") if log_path else subprocess.DEVNULL  # noqa: SIM115
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True, env=env)
+    # a session of its own: the terminal's Ctrl-C reaches only the run, which gives the device back first
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True, env=env,
+                               start_new_session=True)
     line = _read_ready_line(process)
     if line is None:
         process.kill()

@@ -60,7 +60,7 @@ def test_store_by_reboot_keeps_value(dut, reboot_store, evidence):
         observed = dut.read_uint(found.index, found.sub)
         assert observed == found.new_value, f"{found.label}: stored {found.new_value}, {observed} after reset node"
     finally:
-        if not dut.lost:  # put the device back as it was, and store that
+        if dut.usable:  # put the device back as it was, and store that
             dut.write(found.index, found.sub, original)
             _store_by_reboot(dut, quirk.params)
 
@@ -90,7 +90,7 @@ def test_manufacturer_store_object_keeps_value(dut, extra_store, evidence):
             f"{index:04X}h.{sub:02X}: saved {changed} with {command[0]:04X}h, {observed} after reset node"
         )
     finally:
-        if not dut.lost:  # put the device back as it was, store that, and make it effective
+        if dut.usable:  # put the device back as it was, store that, and make it effective
             dut.write(index, sub, original)
             dut.write(*command, signature)
             dut.reset_node_and_wait()

@@ -5,13 +5,13 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.checks import documented_quirk
+from encoder_conformance.cia301 import STATE_NAMES
 from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.device import STATE_NAMES
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
 from encoder_conformance.dut.stimulus import pdo_stimulus
-from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter
+from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2 (NMT state machine)")
 
@@ -147,38 +147,53 @@ def test_stopped_sends_only_error_control(dut, nmt, shaft):
     assert not others, f"frames other than heartbeat in stopped:\n{format_frames(others[:5])}"
 
 
+def _unstored_change(dut, settings_journal, wanted, prefer=()):
+    """Change one storable parameter without storing it; (what, the value it had = its stored value).
+
+    Between tests the device's values are its stored configuration (each test puts back what it
+    changes, the run restored nothing yet), so the value read before the change is what a reset
+    must bring back (CiA 301: the stored value, the factory default only where nothing is stored).
+    """
+    found = changeable_parameter(dut.profile, wanted, prefer=prefer)
+    if found is None:
+        return None, None
+    stored = dut.read(found.index, found.sub)
+    new_value = found.new_value.to_bytes(len(stored), "little")
+    if new_value == stored:  # the stored configuration holds the value the profile suggests: take another
+        other = other_valid_value(dut.profile, found.index, found.sub, found.new_value)
+        if other is None:
+            return None, None
+        new_value = other.to_bytes(len(stored), "little")
+    settings_journal.write(found.index, found.sub, new_value)
+    return found, int.from_bytes(stored, "little")
+
+
 @pytest.mark.spec("CiA 301 §7.3.2.2.3 (reset node: application parameters to their stored/default values)")
-def test_reset_node_reloads_application_parameters(dut, settings_journal):
-    """An unstored change of an application parameter is undone by NMT reset node."""
-    found = changeable_parameter(
-        dut.profile, lambda index, e: index >= 0x2000 and e.persisted_by in STORE_GROUPS
-    )
+def test_reset_node_reloads_application_parameters(dut, settings_journal, evidence):
+    """An unstored change of an application parameter is undone by NMT reset node (back to the stored value)."""
+    found, stored = _unstored_change(dut, settings_journal, lambda index, e: index >= 0x2000
+                                     and e.persisted_by in STORE_GROUPS)
     if found is None:
         pytest.skip("not applicable: the profile declares no writable application parameter with a default")
-    size = len(dut.read(found.index, found.sub))
-    settings_journal.write(found.index, found.sub, found.new_value.to_bytes(size, "little"))
     dut.reset_node_and_wait()
     observed = dut.read_uint(found.index, found.sub)
-    assert observed == found.entry.default, (
-        f"{found.label}: {observed} after reset node, expected the default {found.entry.default}"
-    )
+    evidence.note(f"{found.label}: stored {stored}, changed without storing, {observed} after reset node")
+    assert observed == stored, f"{found.label}: {observed} after reset node, expected the stored value {stored}"
 
 
 @pytest.mark.spec("CiA 301 §7.3.2.2.3 (reset communication: 1000h-1FFFh to their stored/default values)")
-def test_reset_communication_reloads_communication_parameters(dut, settings_journal):
+def test_reset_communication_reloads_communication_parameters(dut, settings_journal, evidence):
     """An unstored change of a communication parameter (1017h first) is undone by NMT reset communication."""
-    found = changeable_parameter(
-        dut.profile, lambda index, e: index < 0x2000 and e.persisted_by in STORE_GROUPS, prefer=(0x1017,)
-    )
+    found, stored = _unstored_change(dut, settings_journal, lambda index, e: index < 0x2000
+                                     and e.persisted_by in STORE_GROUPS, prefer=(0x1017,))
     if found is None:
         pytest.skip("not applicable: no communication parameter is stored on command (all persisted_by auto/none)")
-    size = len(dut.read(found.index, found.sub))
-    settings_journal.write(found.index, found.sub, found.new_value.to_bytes(size, "little"))
     mark = dut.nmt("reset-communication")
     assert dut.wait_bootup(mark) is not None, "no boot-up after reset communication"
     observed = dut.read_uint(found.index, found.sub)
-    assert observed == found.entry.default, (
-        f"{found.label} = {observed} after reset communication, expected the default {found.entry.default}"
+    evidence.note(f"{found.label}: stored {stored}, changed without storing, {observed} after reset communication")
+    assert observed == stored, (
+        f"{found.label} = {observed} after reset communication, expected the stored value {stored}"
     )
 
 
@@ -219,7 +234,7 @@ def test_autostart_object_starts_device_after_reset(dut, settings_journal, evide
             f"the heartbeat reports {state:02X}h ({STATE_NAMES.get(state, '?')}) instead of 05h (operational)"
         )
     finally:
-        if not dut.lost:
+        if dut.usable:
             dut.write(index, sub, original)
             persist_entry(dut, index, sub)
             settings_journal.restore()

@@ -39,7 +39,7 @@ def stored_change(dut, settings_journal, evidence):
         pytest.skip(f"not applicable: {exc}")
     evidence.note(f"{found.label} = {value}, stored with {how}")
     yield index, sub, entry, value
-    if not dut.lost:
+    if dut.usable:
         dut.write(index, sub, original)
         _store(dut, index, sub)
 

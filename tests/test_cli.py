@@ -75,9 +75,9 @@ def test_profile_list_shows_every_profile(runs):
 
 
 def test_missing_command_is_an_argparse_error(runs):
-    """No sub-command: usage message, exit 2, no traceback."""
+    """No sub-command: usage message, exit 4 (usage error), no traceback."""
     result = runs["no-command"]
-    assert result.returncode == 2
+    assert result.returncode == 4  # usage error (RunExit.USAGE_ERROR)
     assert "usage:" in result.stderr
     assert "Traceback" not in result.stderr
 
@@ -85,7 +85,7 @@ def test_missing_command_is_an_argparse_error(runs):
 def test_unknown_argument_is_refused(runs):
     """Extra arguments are only passed on by 'run'; elsewhere they are refused."""
     result = runs["stray-argument"]
-    assert result.returncode == 2
+    assert result.returncode == 4  # usage error (RunExit.USAGE_ERROR)
     assert "--bogus" in result.stderr
     assert "Traceback" not in result.stderr
 
@@ -120,8 +120,8 @@ def test_sim_serves_the_bus_and_the_control_channel(tmp_path):
 
 
 def test_sim_with_unknown_profile_exits_without_traceback(runs):
-    """'sim --profile does-not-exist' fails with the profile error and exit 2, no traceback."""
+    """'sim --profile does-not-exist' fails with the profile error and exit 4, no traceback."""
     result = runs["sim-unknown-profile"]
-    assert result.returncode == 2
+    assert result.returncode == 4  # usage error (RunExit.USAGE_ERROR)
     assert "does-not-exist" in result.stderr
     assert "Traceback" not in result.stderr

@@ -1,25 +1,31 @@
 """The device under test as the suites see it: one object for SDO, NMT, waits and raw frames.
 
 Suites talk only to this class; whether a simulator or a real encoder is on the bus is
-invisible here. Once the device stops answering, ``lost`` is set and every later call fails
-at once with the first reason (labgrid's "broken strategy" pattern).
+invisible here. Once the device stops answering (or the bus is gone), ``lost`` is set and every
+later call fails at once with the first reason (labgrid's "broken strategy" pattern). Once the run
+is stopping (Ctrl-C), calls raise RunInterrupted except inside ``custody()``, the restore's own access.
 """
 
 from __future__ import annotations
 
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import can
 import canopen
 from canopen.sdo.exceptions import SdoCommunicationError
 
-from ..errors import DutLostError
+from ..cia301 import NMT_COMMAND_NAMES
+from ..errors import BusLostError, DutLostError, RunInterrupted
 from ..profile.model import DeviceProfile
 from . import sdo_frames
 from .frames import FrameLog, Mark, format_frames
 
-NMT_COMMANDS = {"start": 0x01, "stop": 0x02, "pre-operational": 0x80, "reset-node": 0x81, "reset-communication": 0x82}
-STATE_NAMES = {0x00: "boot-up", 0x04: "stopped", 0x05: "operational", 0x7F: "pre-operational"}
+__all__ = ["DeviceUnderTest", "HeartbeatSample", "wake_if_silent"]
+#: failed probes in a row before the device counts as gone (one late answer on a busy PC is not a dead device)
+LOST_AFTER_PROBES = 2
 
 
 @dataclass(frozen=True)
@@ -40,15 +46,48 @@ class DeviceUnderTest:
         self.node = canopen.RemoteNode(node_id, canopen.ObjectDictionary())
         network.add_node(self.node)
         self.node.sdo.RESPONSE_TIMEOUT = max(0.3, 4 * profile.timing.sdo_response_max_ms / 1000)
-        self.lost: str | None = None
+        self._lost: str | None = None
+        self.stopping: str | None = None  # why the run is ending early (Ctrl-C, SIGTERM)
+        self._custody = threading.local()
 
     # -- liveness ------------------------------------------------------------------------
+    @property
+    def lost(self) -> str | None:
+        """Why the device can no longer be tested (bus gone, device silent, wrong device), or None."""
+        return self.frames.closed_reason or self._lost
+
+    @property
+    def bus_lost(self) -> bool:
+        return self.frames.closed_reason is not None
+
+    @property
+    def usable(self) -> bool:
+        """True while tests (and their clean-up) may talk to the device."""
+        return not self.lost and not self.stopping
+
     def _check_alive(self) -> None:
-        if self.lost:
-            raise DutLostError(f"device stopped answering earlier: {self.lost}")
+        if self.frames.closed_reason:
+            raise BusLostError(self.frames.closed_reason)
+        if self._lost:
+            raise DutLostError(f"device stopped answering earlier: {self._lost}")
+        if self.stopping and not getattr(self._custody, "active", False):
+            raise RunInterrupted(self.stopping)
 
     def mark_lost(self, reason: str) -> None:
-        self.lost = self.lost or reason
+        self._lost = self._lost or reason
+
+    def stop(self, reason: str) -> None:
+        """The run is ending early: from now on only ``custody()`` may talk to the device."""
+        self.stopping = self.stopping or reason
+
+    @contextmanager
+    def custody(self) -> Iterator[DeviceUnderTest]:
+        """Device access for the snapshot and the restore, also while the run is stopping."""
+        self._custody.active = True
+        try:
+            yield self
+        finally:
+            self._custody.active = False
 
     @property
     def sdo_timeout(self) -> float:
@@ -77,8 +116,8 @@ class DeviceUnderTest:
         self.write(index, sub, value.to_bytes(size, "little"))
 
     def _timeout(self, what: str, exc: Exception) -> AssertionError:
-        if not self.responds():
-            self.mark_lost(f"no answer to {what}")
+        if not any(self.responds() for _ in range(LOST_AFTER_PROBES)):
+            self.mark_lost(f"no answer to {what} nor to {LOST_AFTER_PROBES} probes of 1000h")
         return AssertionError(f"{what}: {exc}\nlast frames:\n{format_frames(self.frames.last(12))}")
 
     def responds(self) -> bool:
@@ -108,12 +147,20 @@ class DeviceUnderTest:
             )
         return response
 
+    def send(self, cob_id: int, data: bytes = b"", remote: bool = False) -> Mark:
+        """Send one raw frame (SYNC, a request the DUT layer has no helper for); a mark before it."""
+        self._check_alive()
+        mark = self.frames.mark()
+        self.network.send_message(cob_id, data, remote=remote)
+        return mark
+
     # -- NMT -----------------------------------------------------------------------------
     def nmt(self, command: str, node_id: int | None = None) -> Mark:
         """Send an NMT command (to this node, or ``node_id``; 0 = all). Returns a mark before it."""
         mark = self.frames.mark()
         target = self.node_id if node_id is None else node_id
-        self.network.send_message(0x000, bytes([NMT_COMMANDS[command], target]))
+        self._check_alive()
+        self.network.send_message(0x000, bytes([NMT_COMMAND_NAMES[command], target]))
         return mark
 
     def _is_heartbeat(self, msg: can.Message) -> bool:
@@ -168,5 +215,5 @@ def wake_if_silent(dut: DeviceUnderTest) -> str | None:
     found = dut.profile.quirk_with_effect("silent_until_bus_traffic")
     if found is None:
         return None
-    dut.network.send_message(0x80, b"")
+    dut.send(0x80, b"")
     return found[0]

@@ -2,7 +2,8 @@
 
 One FrameLog listens on the tester's bus and also records the tester's own transmissions
 (through TracingBus), so traces show both directions. Waits block on a condition variable
-until a matching frame arrives or the timeout expires.
+until a matching frame arrives or the timeout expires. When the bus is lost (``close``), every
+wait raises BusLostError at once: a dead bus must not look like a silent device.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import can
+
+from ..errors import BusLostError
 
 Predicate = Callable[[can.Message], bool]
 
@@ -34,6 +37,21 @@ class FrameLog(can.Listener):
         self._seq = 0
         self._cond = threading.Condition()
         self._listeners: list[can.Listener] = []
+        self.closed_reason: str | None = None
+
+    def close(self, reason: str) -> None:
+        """The bus is gone: wake every wait (they raise BusLostError from now on)."""
+        with self._cond:
+            self.closed_reason = self.closed_reason or reason
+            self._cond.notify_all()
+
+    def on_error(self, exc: Exception) -> None:
+        """python-can Listener hook: the interface failed while receiving."""
+        self.close(f"the CAN bus failed on receive: {type(exc).__name__}: {exc}")
+
+    def _raise_if_closed(self) -> None:
+        if self.closed_reason:
+            raise BusLostError(self.closed_reason)
 
     # can.Listener
     def on_message_received(self, msg: can.Message) -> None:
@@ -86,6 +104,7 @@ class FrameLog(can.Listener):
         deadline = time.monotonic() + timeout
         with self._cond:
             while True:
+                self._raise_if_closed()
                 for seq, msg in self._frames:
                     if seq > start.seq and predicate(msg):
                         return msg
@@ -102,6 +121,7 @@ class FrameLog(can.Listener):
         deadline = time.monotonic() + timeout
         with self._cond:
             while True:
+                self._raise_if_closed()
                 hits = [m for s, m in self._frames if s > start.seq and predicate(m)]
                 remaining = deadline - time.monotonic()
                 if len(hits) >= count or remaining <= 0:
@@ -114,7 +134,9 @@ class FrameLog(can.Listener):
         end = time.monotonic() + duration
         with self._cond:
             while (remaining := end - time.monotonic()) > 0:
+                self._raise_if_closed()
                 self._cond.wait(remaining)
+            self._raise_if_closed()
             return [m for s, m in self._frames if s > start.seq and predicate(m)]
 
 

@@ -10,7 +10,8 @@ from __future__ import annotations
 import time
 from typing import Protocol
 
-from .device import NMT_COMMANDS, STATE_NAMES, DeviceUnderTest
+from ..cia301 import NMT_COMMAND_NAMES, STATE_NAMES
+from .device import DeviceUnderTest
 from .frames import Mark, format_frames
 from .sdo_frames import upload_request
 
@@ -36,7 +37,7 @@ class _Commands:
     dut: DeviceUnderTest
 
     def command(self, name: str, node_id: int | None = None) -> Mark:
-        if name not in NMT_COMMANDS:
+        if name not in NMT_COMMAND_NAMES:
             raise ValueError(f"unknown NMT command {name!r}")
         return self.dut.nmt(name, node_id)
 

@@ -1,17 +1,34 @@
-"""A bus wrapper that copies every transmitted frame into the FrameLog (both directions traced).
+"""The tester's bus wrapper: traces what it sends, and turns a lost bus into one clear state.
 
 Same idea as python-can's ThreadSafeBus proxy: everything else is forwarded unchanged, so
-canopen's Network and Notifier use it like the real bus.
+canopen's Network and Notifier use it like the real bus. On top of that:
+
+- every transmitted frame is copied into the FrameLog (both directions traced);
+- the first send or receive error (connection closed, interface gone) closes the FrameLog with
+  the reason: every wait then raises BusLostError at once, and later receives idle quietly
+  instead of raising in a loop (python-can's Notifier would call them again and again);
+- ``shutdown`` has a bound: python-can-remote's shutdown waits for the server's close frame
+  forever when the server is frozen (measured: a run hung 25 min).
 """
 
 from __future__ import annotations
 
 import contextlib
+import logging
+import socket
+import threading
 from typing import Any
 
 import can
 
+from ..errors import BusLostError
 from .frames import FrameLog
+
+log = logging.getLogger(__name__)
+
+#: a socket-based interface (python-can-remote) whose peer stalls mid-frame raises after this long
+SOCKET_TIMEOUT_S = 3.0
+SHUTDOWN_TIMEOUT_S = 1.0
 
 
 class TracingBus:
@@ -20,14 +37,53 @@ class TracingBus:
     def __init__(self, bus: can.BusABC, log: FrameLog) -> None:
         self._bus = bus
         self._log = log
+        self._idle = threading.Event()  # never set: a lost bus's recv waits on it for its timeout
+        sock = getattr(bus, "socket", None)
+        if isinstance(sock, socket.socket):  # bound blocking reads/writes of network interfaces
+            with contextlib.suppress(OSError):
+                sock.settimeout(SOCKET_TIMEOUT_S)
+
+    @property
+    def lost(self) -> str | None:
+        return self._log.closed_reason
 
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
-        self._bus.send(msg, timeout)
+        if self.lost:
+            raise BusLostError(self.lost)
+        try:
+            self._bus.send(msg, timeout)
+        except (can.CanError, OSError, ValueError, RuntimeError) as exc:
+            reason = f"the CAN bus failed on send: {type(exc).__name__}: {exc}"
+            self._log.close(reason)
+            raise BusLostError(reason) from None
         self._log.record_sent(msg)
+
+    def recv(self, timeout: float | None = None) -> can.Message | None:
+        if self.lost:
+            self._idle.wait(timeout if timeout is not None else 0.1)
+            return None
+        try:
+            return self._bus.recv(timeout)
+        except Exception as exc:  # any interface error ends the bus for this run
+            self._log.close(f"the CAN bus failed on receive: {type(exc).__name__}: {exc}")
+            return None
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._bus, name)
 
     def shutdown(self) -> None:
-        with contextlib.suppress(OSError):  # python-can-remote: the server may already be gone
-            self._bus.shutdown()
+        """Shut the interface down, waiting at most SHUTDOWN_TIMEOUT_S (then abandon it)."""
+        finished = threading.Event()
+
+        def close() -> None:
+            with contextlib.suppress(Exception):  # the server may already be gone
+                self._bus.shutdown()
+            finished.set()
+
+        threading.Thread(target=close, name="bus-shutdown", daemon=True).start()
+        if not finished.wait(SHUTDOWN_TIMEOUT_S):
+            log.warning("the CAN interface did not shut down within %.1f s; abandoned", SHUTDOWN_TIMEOUT_S)
+            sock = getattr(self._bus, "socket", None)
+            if isinstance(sock, socket.socket):
+                with contextlib.suppress(OSError):
+                    sock.close()

@@ -11,9 +11,21 @@ import pytest
 from ..bus_config import BusConfig, resolve_bus_config
 from ..profile.loader import LoadedProfile, load_profile
 from ..sim.faults import FAULTS
+from ..station import Station, StationError, StationPower, load_station
 
 DEFAULT_PROFILE = "wachendorff-wdga-mt"
 PROFILE_ENV = "ENCODER_CONFORMANCE_PROFILE"
+
+
+@dataclass(frozen=True)
+class PowerSettings:
+    """How the bench switches the device off and on (shell commands or the operator)."""
+
+    manual: bool
+    off_command: str | None
+    on_command: str | None
+    off_time_s: float
+    source: str
 
 
 @dataclass(frozen=True)
@@ -28,6 +40,9 @@ class RunSettings:
     sim_faults: tuple[str, ...]
     sim_inprocess: bool
     sim_profile: LoadedProfile
+    power: PowerSettings | None = None
+    station: Station | None = None
+    delivery_state: bool = False
 
 
 SETTINGS = pytest.StashKey[RunSettings]()
@@ -57,6 +72,20 @@ def add_options(parser: pytest.Parser) -> None:
     group.addoption("--sim-inprocess", action="store_true", default=False,
                     help="simulator only: run it in the test process on the virtual interface "
                          "(faster start, less accurate timing)")
+    group.addoption("--station", default=None,
+                    help="station file (YAML): the bench's CAN adapter, node-id and power switch; "
+                         "command-line options override it")
+    group.addoption("--power-off-cmd", default=None,
+                    help="shell command that switches the device off (with --power-on-cmd): the power-cycle "
+                         "tests run on the bench instead of skipping")
+    group.addoption("--power-on-cmd", default=None, help="shell command that switches the device on")
+    group.addoption("--power-manual", action="store_true", default=False,
+                    help="ask the operator at the terminal to switch the power off and on")
+    group.addoption("--power-off-time", default=None, type=float,
+                    help="seconds the power stays off in a power cycle (default 1.0, 0 on the simulator)")
+    group.addoption("--delivery-state", action="store_true", default=False,
+                    help="the device is in its delivery state (never configured): check factory defaults "
+                         "as found, without restoring defaults first (no --allow-destructive needed)")
     group.addoption("--report-dir", default=None,
                     help="directory for report.html, junit.xml and allure-results "
                          "(default reports/<timestamp>-<profile>/ when the suites run)")
@@ -71,11 +100,16 @@ def configure(config: pytest.Config) -> None:
             f"--device-profile {name}: this profile is abstract (a base for variants); "
             f"choose one of the profiles that extend it (encoder-conformance profile list)"
         )
-    bus = resolve_bus_config(
-        config.getoption("--can-interface"), config.getoption("--can-channel"), config.getoption("--can-bitrate")
-    )
+    station_path = config.getoption("--station")
+    try:
+        station = load_station(Path(station_path)) if station_path else None
+    except StationError as exc:
+        raise pytest.UsageError(str(exc)) from None
+    bus = _bus_settings(config, station, station_path)
     node_id = config.getoption("--node-id")
     source = "command line"
+    if node_id is None and station is not None and station.node_id is not None:
+        node_id, source = station.node_id, f"station {station_path}"
     if node_id is None:
         node_id, source = loaded.profile.bus.node_id, f"profile {loaded.profile.id} (delivery state)"
     if not 1 <= node_id <= 127:
@@ -97,7 +131,50 @@ def configure(config: pytest.Config) -> None:
         sim_faults=faults,
         sim_inprocess=bool(config.getoption("--sim-inprocess")),
         sim_profile=load_profile(config.getoption("--sim-profile")) if config.getoption("--sim-profile") else loaded,
+        power=_power_settings(config, station, station_path, bus.simulated),
+        station=station,
+        delivery_state=bool(config.getoption("--delivery-state")),
     )
+
+
+def _bus_settings(config: pytest.Config, station: Station | None, station_path: str | None) -> BusConfig:
+    """Command line over the station file over python-can's own configuration."""
+    given = {key: config.getoption(f"--can-{key}") for key in ("interface", "channel", "bitrate")}
+    from_station = set()
+    if station is not None and station.can is not None:
+        for key, value in station.can.model_dump().items():
+            if given[key] is None and value is not None:
+                given[key] = value
+                from_station.add(key)
+    bus = resolve_bus_config(given["interface"], given["channel"], given["bitrate"])
+    for key in from_station:
+        bus.sources[key] = f"station {station_path}"
+    return bus
+
+
+def _power_settings(config: pytest.Config, station: Station | None, station_path: str | None,
+                    simulated: bool) -> PowerSettings | None:
+    """The bench's power switch from the options (or the station file); None if there is none."""
+    off_cmd, on_cmd = config.getoption("--power-off-cmd"), config.getoption("--power-on-cmd")
+    manual = bool(config.getoption("--power-manual"))
+    off_time = config.getoption("--power-off-time")
+    if (off_cmd is None) != (on_cmd is None):
+        raise pytest.UsageError("--power-off-cmd and --power-on-cmd go together: give both commands")
+    if manual and off_cmd:
+        raise pytest.UsageError("--power-manual and --power-off-cmd/--power-on-cmd exclude each other: choose one")
+    if off_time is not None and not 0 <= off_time <= 60:
+        raise pytest.UsageError(f"--power-off-time {off_time}: give 0 .. 60 seconds")
+    if (off_cmd or manual) and simulated:
+        raise pytest.UsageError("--power-* options are for a bench: the built-in simulator has its own power switch")
+    if off_cmd or manual:
+        return PowerSettings(manual, off_cmd, on_cmd, 1.0 if off_time is None else off_time, "command line")
+    power = station.power if station is not None else None
+    if power == "manual":
+        return PowerSettings(True, None, None, off_time or 0.0, f"station {station_path}")
+    if isinstance(power, StationPower):
+        return PowerSettings(False, power.off, power.on, power.off_time_s if off_time is None else off_time,
+                             f"station {station_path}")
+    return None
 
 
 def settings_of(config: pytest.Config) -> RunSettings:

@@ -15,7 +15,8 @@ REPORT_DIR = pytest.StashKey[Path]()
 IDENTITY = pytest.StashKey[dict[str, str]]()
 
 
-def _runs_suites(config: pytest.Config) -> bool:
+def runs_suites(config: pytest.Config) -> bool:
+    """True when this pytest run includes the conformance suites (not only the self-tests)."""
     suites = repo_root() / "suites"
     paths = [Path(a.split("::")[0]).resolve() for a in config.args] or [suites]
     return any(p == suites or suites in p.parents for p in paths)
@@ -23,7 +24,7 @@ def _runs_suites(config: pytest.Config) -> bool:
 
 def configure_outputs(config: pytest.Config) -> None:
     """Conformance runs write report.html, junit.xml and allure-results into one folder."""
-    if not _runs_suites(config) or hasattr(config, "workerinput"):
+    if not runs_suites(config) or hasattr(config, "workerinput"):
         return
     settings = settings_of(config)
     given = config.getoption("--report-dir")
@@ -123,8 +124,15 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
         report.user_properties.append(("documented_deviation", quirk_id))
 
 
-def html_summary(prefix: list[str], session: pytest.Session) -> None:
+def html_summary(prefix: list[str], session: pytest.Session, run_lines: list[tuple[str, bool]]) -> None:
+    """Run outcome and device custody (alarms in red), the identity read, the documented deviations."""
     config = session.config
+    if run_lines:
+        items = "".join(
+            f"<li style='color:{'#c00;font-weight:bold' if alarm else 'inherit'}'>{html.escape(text)}</li>"
+            for text, alarm in run_lines
+        )
+        prefix.append(f"<h2>The device on the bench: snapshot and restore</h2><ul>{items}</ul>")
     settings = settings_of(config)
     profile = settings.loaded.profile
     identity = config.stash.get(IDENTITY, {})
@@ -143,9 +151,14 @@ def html_summary(prefix: list[str], session: pytest.Session) -> None:
     )
 
 
-def terminal_summary(terminalreporter, config: pytest.Config) -> None:  # noqa: ANN001 - pytest type
+def terminal_summary(terminalreporter, config: pytest.Config,  # noqa: ANN001 - pytest type
+                     run_lines: list[tuple[str, bool]]) -> None:
     if REPORT_DIR not in config.stash:
         return
+    if run_lines:
+        terminalreporter.write_sep("-", "the device on the bench")
+        for text, alarm in run_lines:
+            terminalreporter.write_line(text, red=alarm, bold=alarm)
     stats = terminalreporter.stats
     skipped = stats.get("skipped", [])
     if skipped:

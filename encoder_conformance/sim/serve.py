@@ -15,8 +15,11 @@ from .faults import FaultSet
 from .host import SimulatorHost
 
 
-def _address(text: str) -> tuple[str, int]:
+def parse_address(text: str) -> tuple[str, int]:
+    """'HOST:PORT' (or ':PORT') -> (host, port); ValueError names the text."""
     host, _, port = text.rpartition(":")
+    if not port.isdigit():
+        raise ValueError(f"{text!r} is not HOST:PORT")
     return host or "127.0.0.1", int(port)
 
 
@@ -41,8 +44,8 @@ def serve(
         nvm_path = None if nvm is None else nvm.with_name(f"{nvm.stem}-{i}{nvm.suffix}") if i else nvm
         host.add_node(loaded.profile, node_id, nvm_path, FaultSet(faults))
     host.add_siblings()  # second_node quirk: the redundant interface's other node
-    can_host, can_port = host.serve_remote(*_address(listen))
-    control_address = serve_control(host, _address(control)) if control else None
+    can_host, can_port = host.serve_remote(*parse_address(listen))
+    control_address = serve_control(host, parse_address(control)) if control else None
     info = {
         "can": f"ws://{can_host}:{can_port}/",
         "control": control_address,

@@ -1,0 +1,292 @@
+"""A device on a bench belongs to someone: take it into the run's custody and give it back as found.
+
+``take`` is the pre-flight and the snapshot: the node answers at its node-id, it is the profile's
+product, every configurable value is read as found, the node is reset, and the values it loads
+from its memory are read as stored; the snapshot file is written before the first test.
+
+``give_back`` runs at the end of the run, on Ctrl-C/SIGTERM and after a crash (and later from
+``encoder-conformance restore --from``). When the run sent anything that may have changed the
+stored configuration, it resets the node, writes back what differs from the stored snapshot,
+stores it with the device's own store commands, resets again and checks; then it writes back the
+values that were in use when the run began, and checks them. Every step has a deadline.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from canopen.sdo.exceptions import SdoAbortedError
+
+from ..cia301 import COMMAND_FOR_STATE, STATE_NAMES, NmtState
+from ..errors import DutLostError
+from .device import DeviceUnderTest
+from .identity import DeviceIdentity, identity_mismatch, read_identity
+from .persist import CannotPersist, store_commands_for
+from .sdo_frames import abort_name
+from .snapshot import Key, Snapshot, SnapshotEntry, custody_keys, hex_or_none, is_stored, read_values
+from .store_watch import StoreWatch
+from .write_plan import plan_writes
+
+
+class PreflightError(Exception):
+    """The run cannot start: one line saying what failed and what to check."""
+
+
+@dataclass
+class Change:
+    """An entry that differs from the snapshot."""
+
+    label: str
+    expected: str | None
+    observed: str | None
+
+    def describe(self) -> str:
+        return f"{self.label} = {self.observed or 'unreadable'} instead of {self.expected}"
+
+
+@dataclass
+class RestoreRecord:
+    """What the give-back found, did and could not do (shown in the report, kept as JSON)."""
+
+    snapshot: str | None
+    left_changed: list[Change] = field(default_factory=list)  # values in use at the end of the run
+    stored_changed: list[Change] = field(default_factory=list)  # stored values after a reset
+    written: list[str] = field(default_factory=list)
+    store_commands: list[str] = field(default_factory=list)
+    failures: list[str] = field(default_factory=list)
+    run_store_commands: dict[str, int] = field(default_factory=dict)  # what the tests sent (EEPROM wear)
+    restore_store_commands: int = 0
+    seconds: float = 0.0
+    done: bool = False
+
+    @property
+    def ok(self) -> bool:
+        return self.done and not self.failures
+
+    def fail(self, text: str) -> None:
+        self.failures.append(text)
+
+    def save(self, path: Path) -> None:
+        import json
+
+        path.write_text(json.dumps(asdict(self), indent=1), encoding="utf-8")
+
+
+class Deadline:
+    """A point in time the restore must not pass."""
+
+    def __init__(self, seconds: float) -> None:
+        self.end = time.monotonic() + seconds
+        self.seconds = seconds
+
+    def expired(self) -> bool:
+        return time.monotonic() >= self.end
+
+    def shorten(self, seconds: float) -> None:
+        self.end = min(self.end, time.monotonic() + seconds)
+
+
+class Custody:
+    """One device's snapshot and restore for one run."""
+
+    def __init__(self, dut: DeviceUnderTest, snapshot_path: Path | None, watch: StoreWatch) -> None:
+        self.dut = dut
+        self.snapshot_path = snapshot_path
+        self.watch = watch
+        self.snapshot: Snapshot | None = None
+        self.identity: DeviceIdentity | None = None
+        self.record: RestoreRecord | None = None
+        self.deadline: Deadline | None = None
+
+    # -- take --------------------------------------------------------------------------------------
+    def take(self, profile_sha256: str) -> Snapshot:
+        """Pre-flight and snapshot; raises PreflightError with what to check."""
+        dut = self.dut
+        keys = custody_keys(dut.profile)
+        with dut.custody():
+            before = dut.frames.mark()
+            answered = dut.responds() or dut.responds()  # the first request may only wake the device
+            snapshot = Snapshot(dut.profile.id, profile_sha256, dut.node_id, {}, answered, None)
+            self.snapshot = snapshot
+            if answered:
+                self._check_identity(snapshot)
+                found = read_values(dut, keys)
+                snapshot.entries = [self._entry(k, found[k], None) for k in keys]
+                snapshot.found_state = self._state_seen(before)
+                self._save()
+            mark = dut.nmt("reset-node")
+            if dut.wait_bootup(mark) is None and not dut.responds():
+                raise PreflightError(
+                    f"no answer from node {dut.node_id}: no SDO answer and no boot-up after NMT reset node. "
+                    "Check --node-id, the bit rate, termination, wiring and power"
+                )
+            if not answered:
+                self._check_identity(snapshot)
+            stored = read_values(dut, keys)
+            found_values = {e.key: e.found for e in snapshot.entries}
+            snapshot.entries = [self._entry(k, None, stored[k], found_values.get(k)) for k in keys]
+            return self._save()
+
+    def _entry(self, key: Key, found: bytes | None, stored: bytes | None,
+               found_hex: str | None = None) -> SnapshotEntry:
+        entry = self.dut.profile.entry(*key)
+        assert entry is not None
+        return SnapshotEntry(key[0], key[1], entry.name, entry.persisted_by,
+                             found_hex if found is None else found.hex(), hex_or_none(stored))
+
+    def _check_identity(self, snapshot: Snapshot) -> None:
+        self.identity = read_identity(self.dut)
+        snapshot.identity = self.identity.as_report()
+        problem = identity_mismatch(self.identity, self.dut.profile)
+        if problem:
+            raise PreflightError(problem)
+
+    def _state_seen(self, since: object) -> int | None:
+        """The NMT state of the last heartbeat the node sent before the run touched it (None: none seen)."""
+        beats = self.dut.frames.since(since, self.dut._is_heartbeat)  # type: ignore[arg-type]
+        states = [b.data[0] for b in beats if b.data and b.data[0] != NmtState.BOOT_UP]
+        return states[-1] if states else None
+
+    def _save(self) -> Snapshot:
+        assert self.snapshot is not None
+        if self.snapshot_path is not None:
+            self.snapshot.save(self.snapshot_path)
+        return self.snapshot
+
+    def stored_changes_since_snapshot(self) -> list[str]:
+        """After the tests sent store commands: reset node and list the stored values that now differ."""
+        if self.snapshot is None or self.watch.total == 0:
+            return []
+        keys = [e.key for e in self.snapshot.entries if e.stored is not None]
+        self.dut.reset_node_and_wait()
+        loaded = read_values(self.dut, keys)
+        return [c.describe() for c in self._differences(loaded, lambda e: e.target_stored(), keys)]
+
+    # -- give back ---------------------------------------------------------------------------------
+    def give_back(self, seconds: float, check_stored: bool = False) -> RestoreRecord:
+        """Put the device back as found within ``seconds``; idempotent (the first call does the work)."""
+        if self.record is not None:
+            return self.record
+        started = time.monotonic()
+        self.deadline = Deadline(seconds)
+        record = RestoreRecord(None if self.snapshot_path is None else str(self.snapshot_path))
+        record.run_store_commands = dict(self.watch.counts)
+        self.record = record
+        if self.snapshot is None or not self.snapshot.entries:
+            record.done = True
+            return record
+        self.watch.restoring = True
+        try:
+            with self.dut.custody():
+                self._give_back(record, self.deadline, check_stored or self.watch.total > 0)
+            record.done = True
+        except DutLostError as exc:
+            record.fail(f"the device could not be reached: {exc}")
+        except TimeoutError as exc:
+            record.fail(str(exc))
+        finally:
+            self.watch.restoring = False
+            record.restore_store_commands = self.watch.total_by_restore
+            record.seconds = round(time.monotonic() - started, 3)
+        return record
+
+    def _give_back(self, record: RestoreRecord, deadline: Deadline, check_stored: bool) -> None:
+        dut = self.dut
+        snapshot = self.snapshot
+        assert snapshot is not None
+        if dut.lost:
+            raise DutLostError(dut.lost)
+        dut.nmt("pre-operational")
+        if not (dut.responds() or dut.responds()):
+            raise DutLostError("no SDO answer after NMT enter pre-operational")
+        keys = [e.key for e in snapshot.entries]
+        now = read_values(dut, keys)
+        record.left_changed = self._differences(now, lambda e: e.target_found())
+        if check_stored:
+            self._give_back_stored(record, deadline)
+            now = read_values(dut, keys)
+        targets = {e.key: e.target_found() for e in snapshot.entries}
+        self._write(record, deadline, {k: v for k, v in targets.items() if v is not None and now.get(k) != v}, now)
+        after = read_values(dut, keys)
+        for change in self._differences(after, lambda e: e.target_found()):
+            record.fail(f"not restored: {change.describe()}")
+        self._back_to_found_state(record)
+
+    def _give_back_stored(self, record: RestoreRecord, deadline: Deadline) -> None:
+        """Reset, compare with what was stored, write and store what differs, reset and check."""
+        dut = self.dut
+        snapshot = self.snapshot
+        assert snapshot is not None
+        stored_keys = [e.key for e in snapshot.entries if e.stored is not None and is_stored(dut.profile.entry(*e.key))]
+        self._reset(deadline)
+        loaded = read_values(dut, stored_keys)
+        record.stored_changed = self._differences(loaded, lambda e: e.target_stored(), stored_keys)
+        if not record.stored_changed:
+            return
+        targets = {k: snapshot.entry(k).target_stored() for k in stored_keys}  # type: ignore[union-attr]
+        differing = {k: v for k, v in targets.items() if v is not None and loaded.get(k) != v}
+        self._write(record, deadline, differing, loaded)
+        try:
+            commands = store_commands_for(dut.profile, sorted(differing))
+        except CannotPersist as exc:
+            record.fail(f"cannot store the restored values: {exc}")
+            return
+        for command in commands:
+            self._check_time(deadline, f"storing with {command.label}")
+            command.issue(dut)
+            record.store_commands.append(command.label)
+        self._reset(deadline)
+        reloaded = read_values(dut, stored_keys)
+        for change in self._differences(reloaded, lambda e: e.target_stored(), stored_keys):
+            record.fail(f"stored value not restored: {change.describe()}")
+
+    def _differences(self, values: dict[Key, bytes | None], target, keys: list[Key] | None = None) -> list[Change]:  # noqa: ANN001
+        assert self.snapshot is not None
+        changes = []
+        for entry in self.snapshot.entries:
+            if keys is not None and entry.key not in keys:
+                continue
+            expected = target(entry)
+            if expected is not None and values.get(entry.key) != expected:
+                changes.append(Change(entry.label, expected.hex(), hex_or_none(values.get(entry.key))))
+        return changes
+
+    def _write(self, record: RestoreRecord, deadline: Deadline, targets: dict[Key, bytes],
+               current: dict[Key, bytes | None]) -> None:
+        """Carry out the write plan; refused steps are tried once more after the others."""
+        refused = []
+        for step in plan_writes(self.dut.profile, targets, current):
+            self._check_time(deadline, f"writing {step.label}")
+            try:
+                self.dut.write(*step.key, step.value)
+                record.written.append(step.label)
+            except SdoAbortedError as exc:
+                refused.append((step, exc))
+        for step, _ in [r for r in refused if not r[0].temporary]:
+            self._check_time(deadline, f"writing {step.label}")
+            try:
+                self.dut.write(*step.key, step.value)
+                record.written.append(step.label + " (second attempt)")
+            except SdoAbortedError as exc:
+                record.fail(f"{step.label} refused: {abort_name(exc.code)}")
+
+    def _reset(self, deadline: Deadline) -> None:
+        dut = self.dut
+        self._check_time(deadline, "reset node")
+        mark = dut.nmt("reset-node")
+        if dut.wait_bootup(mark) is None and not dut.responds():
+            raise DutLostError(f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after reset node")
+
+    def _back_to_found_state(self, record: RestoreRecord) -> None:
+        state = self.snapshot.found_state if self.snapshot else None
+        command = COMMAND_FOR_STATE.get(state) if state is not None else None  # type: ignore[call-overload]
+        if command is not None and command != "pre-operational":
+            self.dut.nmt(command)
+            record.written.append(f"NMT {command} (found {STATE_NAMES.get(state, '?')})")  # type: ignore[arg-type]
+
+    @staticmethod
+    def _check_time(deadline: Deadline, doing: str) -> None:
+        if deadline.expired():
+            raise TimeoutError(f"the restore ran out of time ({deadline.seconds:.1f} s) before {doing}")

@@ -1,0 +1,71 @@
+"""Count the commands a run sends that change what the device remembers (EEPROM/flash wear).
+
+Watches the tester's own frames (FrameLog listener), so every path counts: canopen's client, raw
+SDO frames, fixtures, the restore. A download to 1010h/1011h, to a manufacturer store object, or
+to an entry the device stores by itself (``persisted_by: auto``) may change the stored
+configuration: the restore then checks and puts back what is stored.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import Counter
+
+import can
+
+from ..cia301 import RESTORE_DEFAULT_PARAMETERS, STORE_PARAMETERS
+from ..profile.model import DeviceProfile
+
+#: SDO client command specifiers that start a download (CiA 301 §7.2.4.3): initiate, block initiate
+_DOWNLOAD_INITIATE = {1, 6}
+
+
+def store_command_objects(profile: DeviceProfile) -> frozenset[int]:
+    """Indices whose writes are commands that store or restore (1010h, 1011h, manufacturer ones)."""
+    indices = {STORE_PARAMETERS, RESTORE_DEFAULT_PARAMETERS}
+    for effect in ("manufacturer_store_object", "store_reboots_without_reply"):
+        found = profile.quirk_with_effect(effect)
+        if found is not None and "index" in found[1].params:
+            indices.add(int(found[1].params["index"]))
+    return frozenset(indices)
+
+
+class StoreWatch(can.Listener):
+    """Counts store/restore commands and self-storing writes the tester sends to one node."""
+
+    def __init__(self, profile: DeviceProfile, node_id: int) -> None:
+        self._request_id = 0x600 + node_id
+        self._commands = store_command_objects(profile)
+        self._auto = frozenset((i, s) for i, s, _, e in profile.iter_entries() if e.persisted_by == "auto")
+        self._lock = threading.Lock()
+        self.counts: Counter[str] = Counter()
+        self.by_restore: Counter[str] = Counter()
+        self.restoring = False
+
+    def on_message_received(self, msg: can.Message) -> None:
+        if msg.is_rx or msg.arbitration_id != self._request_id or len(msg.data) < 4:
+            return
+        if msg.data[0] >> 5 not in _DOWNLOAD_INITIATE:
+            return
+        index, sub = msg.data[1] | msg.data[2] << 8, msg.data[3]
+        if index == STORE_PARAMETERS or (index in self._commands and index != RESTORE_DEFAULT_PARAMETERS):
+            kind = f"store {index:04X}h.{sub:02X}"
+        elif index == RESTORE_DEFAULT_PARAMETERS:
+            kind = f"restore defaults {index:04X}h.{sub:02X}"
+        elif (index, sub) in self._auto:
+            kind = "writes the device stores by itself"
+        else:
+            return
+        with self._lock:
+            (self.by_restore if self.restoring else self.counts)[kind] += 1
+
+    @property
+    def total(self) -> int:
+        """Commands the tests sent (not the restore's own)."""
+        with self._lock:
+            return sum(self.counts.values())
+
+    @property
+    def total_by_restore(self) -> int:
+        with self._lock:
+            return sum(self.by_restore.values())

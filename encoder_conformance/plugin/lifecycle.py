@@ -1,0 +1,178 @@
+"""The run as a bench sees it: custody of the device, one reason when it is gone, exit codes, Ctrl-C.
+
+pre-flight and snapshot (the dut fixture) -> tests -> give the device back (end of the run, or at
+once on Ctrl-C/SIGTERM, or after the bus or device is lost) -> report. When the device or the bus
+is gone, the run stops with one message and exit code COULD_NOT_TEST; the tests not run are
+reported as not run. The exit status follows exit_codes.RunExit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import pytest
+
+from ..dut.custody import Custody, RestoreRecord
+from ..exit_codes import RunExit
+from .interrupt import InterruptGuard
+from .reporting import report_dir, runs_suites
+
+
+@dataclass
+class RunState:
+    """What the lifecycle knows about this run."""
+
+    guard: InterruptGuard
+    custody: Custody | None = None
+    stopped: str | None = None  # could not test: why
+    collected: int = 0
+    reported: set[str] = field(default_factory=set)  # test ids with a call-phase report
+
+    @property
+    def record(self) -> RestoreRecord | None:
+        return None if self.custody is None else self.custody.record
+
+
+STATE = pytest.StashKey[RunState]()
+
+
+def state_of(config: pytest.Config) -> RunState | None:
+    return config.stash.get(STATE, None)
+
+
+def start(config: pytest.Config) -> None:
+    """Install the Ctrl-C/SIGTERM handling for a conformance run."""
+    if not runs_suites(config):
+        return
+    state = RunState(InterruptGuard(on_stop=lambda reason: _stop_device(config, reason)))
+    config.stash[STATE] = state
+    state.guard.install()
+
+
+def _stop_device(config: pytest.Config, reason: str) -> None:
+    state = state_of(config)
+    if state is not None and state.custody is not None:
+        state.custody.dut.stop(reason)
+
+
+def adopt(config: pytest.Config, custody: Custody) -> None:
+    """The dut fixture took the device into custody: give it back when the run ends, however it ends."""
+    state = state_of(config)
+    if state is not None:
+        state.custody = custody
+        if state.guard.signum is not None:
+            custody.dut.stop(state.guard.reason)
+
+
+def custody_of(config: pytest.Config) -> Custody | None:
+    state = state_of(config)
+    return None if state is None else state.custody
+
+
+def normal_budget_s(custody: Custody) -> float:
+    """Time the restore may take at the end of a run: resets, stores and reboots the profile allows, and reads."""
+    timing = custody.dut.profile.timing
+    entries = len(custody.snapshot.entries) if custody.snapshot else 0
+    return 10.0 + 3 * timing.bootup_max_ms / 1000 + 2 * timing.store_max_ms / 1000 + 0.05 * entries
+
+
+def give_back(config: pytest.Config) -> RestoreRecord | None:
+    """Restore the device as found (once); within the interrupt budget after Ctrl-C."""
+    state = state_of(config)
+    if state is None or state.custody is None:
+        return None
+    custody = state.custody
+    if custody.record is None:
+        interrupted = state.guard.signum is not None
+        seconds = state.guard.remaining() if interrupted else normal_budget_s(custody)
+        with state.guard.shield():
+            record = custody.give_back(seconds)
+        folder = report_dir(config)
+        if folder is not None:
+            record.save(folder / "device-restore.json")
+    return custody.record
+
+
+def device_gone(config: pytest.Config) -> str | None:
+    """Why the run cannot go on (bus lost, device silent, wrong device), or None."""
+    state = state_of(config)
+    if state is None or state.custody is None:
+        return None
+    return state.custody.dut.lost
+
+
+def stop_if_gone(config: pytest.Config) -> None:
+    """Before each test: if the device or the bus is gone, end the run with one reason (could not test)."""
+    reason = device_gone(config)
+    state = state_of(config)
+    if reason and state is not None:
+        state.stopped = state.stopped or reason
+        pytest.exit(f"could not test: {reason}", returncode=RunExit.COULD_NOT_TEST)
+
+
+def note_report(config: pytest.Config, report: pytest.TestReport) -> None:
+    state = state_of(config)
+    if state is not None and (report.when == "call" or report.outcome != "passed"):
+        state.reported.add(report.nodeid)
+
+
+def final_exit_status(session: pytest.Session) -> None:
+    """Interrupted > device not restored > could not test > pytest's own verdict."""
+    state = state_of(session.config)
+    if state is None:
+        return
+    state.guard.uninstall()
+    record = state.record
+    if state.guard.exit_code is not None:
+        session.exitstatus = state.guard.exit_code
+    elif record is not None and not record.ok:
+        session.exitstatus = RunExit.NOT_RESTORED
+    elif state.stopped or session.exitstatus == RunExit.COULD_NOT_TEST:
+        session.exitstatus = RunExit.COULD_NOT_TEST
+
+
+def ended_early(config: pytest.Config) -> bool:
+    """Interrupted or stopped: 'every test skipped' means nothing then."""
+    state = state_of(config)
+    return state is not None and (state.guard.signum is not None or state.stopped is not None)
+
+
+def note_collected(session: pytest.Session) -> None:
+    state = state_of(session.config)
+    if state is not None:
+        state.collected = len(session.items)
+
+
+def summary_lines(config: pytest.Config) -> list[tuple[str, bool]]:
+    """(text, alarm) lines for the terminal and the HTML summary."""
+    state = state_of(config)
+    if state is None:
+        return []
+    lines: list[tuple[str, bool]] = []
+    not_run = max(0, state.collected - len(state.reported))
+    if state.guard.signum is not None:
+        lines.append((f"{state.guard.reason}: {not_run} test(s) not run", True))
+    elif state.stopped:
+        lines.append((f"could not test: {state.stopped}; {not_run} test(s) not run", True))
+    record = state.record
+    if record is None:
+        return lines
+    if state.custody and state.custody.snapshot_path:
+        lines.append((f"device snapshot: {state.custody.snapshot_path}", False))
+    wear = sum(record.run_store_commands.values())
+    detail = ", ".join(f"{count} x {kind}" for kind, count in sorted(record.run_store_commands.items()))
+    lines.append((f"store/restore commands (EEPROM wear): {wear} by the tests{f' ({detail})' if detail else ''}, "
+                  f"{record.restore_store_commands} by the restore", False))
+    lines.append((f"left changed by the run: {len(record.left_changed)} value(s) in use, "
+                  f"{len(record.stored_changed)} stored value(s); restore wrote {len(record.written)} value(s) "
+                  f"and stored with {', '.join(record.store_commands) or 'nothing'} in {record.seconds:.2f} s", False))
+    if record.ok:
+        lines.append(("device restored as found: every value checked", False))
+    else:
+        for failure in record.failures:
+            lines.append((f"NOT RESTORED: {failure}", True))
+        snapshot = state.custody.snapshot_path if state.custody else None
+        if snapshot:
+            lines.append((f"put the device back with: encoder-conformance restore --from {snapshot} "
+                          "(and the same --can-*/--node-id options)", True))
+    return lines

@@ -1,0 +1,100 @@
+"""``encoder-conformance restore --from SNAPSHOT``: finish a restore a run could not (crash, power loss, Ctrl-C).
+
+Connects to the device the snapshot was taken from (the serial number must match), resets it,
+writes back and stores what differs from the stored snapshot, then the values that were in use.
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from .bus_config import BusConfig
+from .dut import connection
+from .dut.custody import Custody, RestoreRecord
+from .dut.device import DeviceUnderTest
+from .dut.frames import FrameLog
+from .dut.identity import read_identity
+from .dut.snapshot import Snapshot
+from .dut.store_watch import StoreWatch
+from .errors import BusSetupError, DutLostError
+from .exit_codes import RunExit
+from .profile.loader import load_profile
+
+
+@dataclass(frozen=True)
+class RestoreRequest:
+    snapshot_path: Path
+    bus: BusConfig
+    node_id: int | None
+    timeout_s: float
+    force: bool
+
+
+def restore_from_snapshot(request: RestoreRequest) -> int:
+    """Run the restore; print what it did; the exit code (RunExit)."""
+    try:
+        snapshot = Snapshot.load(request.snapshot_path)
+    except ValueError as exc:
+        return _fail(str(exc), RunExit.USAGE_ERROR)
+    loaded = load_profile(snapshot.profile_id)
+    if loaded.sha256 != snapshot.profile_sha256:
+        print(f"note: profile {snapshot.profile_id} changed since the snapshot; restoring the snapshot's values")
+    frames = FrameLog()
+    try:
+        network = connection.connect(request.bus.kwargs, request.bus.describe(), frames)
+    except BusSetupError as exc:
+        return _fail(str(exc), RunExit.COULD_NOT_TEST)
+    try:
+        node_id = request.node_id or snapshot.node_id
+        dut = DeviceUnderTest(network, frames, loaded.profile, node_id)
+        problem = _wrong_device(dut, snapshot, request.force)
+        if problem:
+            return _fail(problem, RunExit.COULD_NOT_TEST)
+        watch = StoreWatch(loaded.profile, node_id)
+        frames.add_listener(watch)
+        custody = Custody(dut, None, watch)
+        custody.snapshot = snapshot
+        record = custody.give_back(request.timeout_s, check_stored=True)
+    finally:
+        connection.disconnect(network)
+    _print(record)
+    return RunExit.PASSED if record.ok else RunExit.NOT_RESTORED
+
+
+def _wrong_device(dut: DeviceUnderTest, snapshot: Snapshot, force: bool) -> str | None:
+    """None if the node answers and is the snapshot's unit (same serial number); else why not."""
+    try:
+        with dut.custody():
+            if not (dut.responds() or dut.responds()):
+                mark = dut.nmt("reset-node")
+                if dut.wait_bootup(mark) is None and not dut.responds():
+                    return (f"no answer from node {dut.node_id}: check --node-id, the bit rate, termination and "
+                            "power")
+            identity = read_identity(dut).as_report()
+    except DutLostError as exc:
+        return f"the device could not be reached: {exc}"
+    serial, expected = identity.get("serial number (1018h.4)"), snapshot.serial
+    if expected not in (None, "-") and serial != expected and not force:
+        return (f"node {dut.node_id} is not the device of the snapshot: serial {serial}, the snapshot has "
+                f"{expected}. Connect that device, or give --force to write this snapshot onto another unit")
+    return None
+
+
+def _print(record: RestoreRecord) -> None:
+    print(f"found {len(record.stored_changed)} stored value(s) and {len(record.left_changed)} value(s) in use "
+          f"that differ from the snapshot")
+    for line in record.written:
+        print(f"  wrote {line}")
+    for command in record.store_commands:
+        print(f"  stored with {command}")
+    if record.ok:
+        print(f"device restored as found: every value checked ({record.seconds:.2f} s)")
+    for failure in record.failures:
+        print(f"NOT RESTORED: {failure}", file=sys.stderr)
+
+
+def _fail(text: str, code: int) -> int:
+    print(f"restore: {text}", file=sys.stderr)
+    return code
