@@ -11,7 +11,7 @@ import os
 import pytest
 from hypothesis import HealthCheck, settings
 
-from encoder_conformance.errors import BusSetupError, DutLostError, ProfileError
+from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
 from encoder_conformance.plugin import lifecycle, reporting, selection
 from encoder_conformance.plugin import options as opts
 
@@ -73,8 +73,12 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
 def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]):
     outcome = yield
     report = outcome.get_result()
-    if call.excinfo is not None and isinstance(call.excinfo.value, DutLostError):
-        report.longrepr = f"could not test: {call.excinfo.value}"  # one line: the device or bus is gone
+    if call.excinfo is not None and isinstance(call.excinfo.value, BusLostError):
+        # the tester lost its bus: not the device's failure, and the test did not run to its end
+        report.outcome = "skipped"
+        report.longrepr = (str(item.path), item.location[1] or 0, f"not run to the end: {call.excinfo.value}")
+    elif call.excinfo is not None and isinstance(call.excinfo.value, DutLostError):
+        report.longrepr = f"could not test: {call.excinfo.value}"  # one line: the device is gone
     reporting.attach_evidence(item, call, report)
     lifecycle.note_report(item.config, report)
 
@@ -95,6 +99,11 @@ def pytest_html_results_summary(prefix: list[str], summary: list[str], postfix: 
 
 def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:
     reporting.terminal_summary(terminalreporter, config, lifecycle.summary_lines(config))
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_keyboard_interrupt(excinfo) -> None:
+    lifecycle.give_back_now(excinfo)  # Ctrl-C or a stop: before pytest formats the traceback (slow)
 
 
 @pytest.hookimpl(wrapper=True, tryfirst=True)

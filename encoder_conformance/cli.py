@@ -31,7 +31,9 @@ def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
             argv.append(f"--{flag.replace('_', '-')}")
     for fault in args.sim_fault:
         argv += ["--sim-fault", fault]
-    return int(pytest.main(argv + extra))
+    status = int(pytest.main(argv + extra))
+    # pytest's own 'interrupted' (2) comes only from a Ctrl-C before the run's signal handling was set up
+    return RunExit.INTERRUPTED if status == pytest.ExitCode.INTERRUPTED else status
 
 
 def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
@@ -53,7 +55,7 @@ def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
         print("restore: name the bus with --can-interface/--can-channel (or python-can's configuration); "
               "a built-in simulator has nothing to restore", file=sys.stderr)
         return RunExit.USAGE_ERROR
-    request = RestoreRequest(Path(args.snapshot), bus, args.node_id, args.timeout, args.force)
+    request = RestoreRequest(Path(args.snapshot), bus, args.node_id, args.timeout, args.force, args.power_on_cmd)
     return restore_from_snapshot(request)
 
 
@@ -197,6 +199,8 @@ def build_parser() -> argparse.ArgumentParser:
                          help="the run's device-snapshot.json (in its report directory)")
     _bus_arguments(restore)
     restore.add_argument("--timeout", type=float, default=60.0, help="seconds the restore may take (default 60)")
+    restore.add_argument("--power-on-cmd", help="shell command that switches the device on first (a crash during "
+                         "a power cycle leaves it off)")
     restore.add_argument("--force", action="store_true",
                          help="restore even if the device's serial number differs from the snapshot's")
     restore.set_defaults(func=_cmd_restore)
@@ -259,6 +263,9 @@ def main(argv: list[str] | None = None) -> int:
     except ProfileError as exc:
         print(exc, file=sys.stderr)
         return RunExit.USAGE_ERROR
+    except KeyboardInterrupt:  # before the run took the device into custody: nothing to put back
+        print("interrupted", file=sys.stderr)
+        return RunExit.INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -13,9 +13,10 @@ from pathlib import Path
 from .bus_config import BusConfig
 from .dut import connection
 from .dut.custody import Custody, RestoreRecord
-from .dut.device import DeviceUnderTest
+from .dut.device import DeviceUnderTest, wake_if_silent
 from .dut.frames import FrameLog
 from .dut.identity import read_identity
+from .dut.power import PowerSwitchError, ShellPowerSwitch
 from .dut.snapshot import Snapshot
 from .dut.store_watch import StoreWatch
 from .errors import BusSetupError, DutLostError
@@ -30,6 +31,7 @@ class RestoreRequest:
     node_id: int | None
     timeout_s: float
     force: bool
+    power_on_command: str | None = None
 
 
 def restore_from_snapshot(request: RestoreRequest) -> int:
@@ -41,6 +43,11 @@ def restore_from_snapshot(request: RestoreRequest) -> int:
     loaded = load_profile(snapshot.profile_id)
     if loaded.sha256 != snapshot.profile_sha256:
         print(f"note: profile {snapshot.profile_id} changed since the snapshot; restoring the snapshot's values")
+    if request.power_on_command:  # a crash between power off and on leaves the device switched off
+        try:
+            ShellPowerSwitch("true", request.power_on_command).on()
+        except PowerSwitchError as exc:
+            return _fail(str(exc), RunExit.COULD_NOT_TEST)
     frames = FrameLog()
     try:
         network = connection.connect(request.bus.kwargs, request.bus.describe(), frames)
@@ -67,6 +74,7 @@ def _wrong_device(dut: DeviceUnderTest, snapshot: Snapshot, force: bool) -> str 
     """None if the node answers and is the snapshot's unit (same serial number); else why not."""
     try:
         with dut.custody():
+            wake_if_silent(dut)  # a device just switched on may wait for bus traffic
             if not (dut.responds() or dut.responds()):
                 mark = dut.nmt("reset-node")
                 if dut.wait_bootup(mark) is None and not dut.responds():

@@ -6,7 +6,7 @@ ill-typed key is an error naming the file, the key and the fix.
 station: bench-3                 # a name for the report
 can: {interface: pcan, channel: PCAN_USBBUS1, bitrate: 250000}
 node_id: 5
-power: {off: "relayctl 3 off", on: "relayctl 3 on", off_time_s: 1.0}   # or: power: manual
+power: {off_command: "relayctl 3 off", on_command: "relayctl 3 on", off_time_s: 1.0}   # or: power: manual
 ```
 """
 
@@ -30,8 +30,10 @@ class StationCan(_Strict):
 
 
 class StationPower(_Strict):
-    off: str = Field(description="shell command that switches the device off (exit status 0 = done)")
-    on: str = Field(description="shell command that switches the device on")
+    """YAML reads bare ``on``/``off`` keys as booleans, hence the longer names."""
+
+    off_command: str = Field(description="shell command that switches the device off (exit status 0 = done)")
+    on_command: str = Field(description="shell command that switches the device on")
     off_time_s: float = Field(default=1.0, ge=0, le=60)
 
 
@@ -56,5 +58,6 @@ def load_station(path: Path) -> Station:
     try:
         return Station.model_validate(raw)
     except ValidationError as exc:
-        problems = [f"{path}: {'.'.join(str(p) for p in e['loc']) or '(top level)'}: {e['msg']}" for e in exc.errors()]
+        problems = [f"{path}: {'.'.join(str(p) for p in e['loc']) or '(top level)'}: {e['msg']}"
+                    for e in exc.errors()]
         raise StationError("invalid station file:\n  " + "\n  ".join(problems)) from None

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import canopen
-from canopen.sdo.exceptions import SdoAbortedError
+from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from encoder_conformance.cia301 import SAVE
 from encoder_conformance.dut import connection
@@ -96,7 +96,7 @@ class ExternalTwin:
             node = canopen.RemoteNode(self.sim.node_id, canopen.ObjectDictionary())
             network.add_node(node)
             node.sdo.RESPONSE_TIMEOUT = 1.0
-            self._awake(network, frames)
+            self._awake(network, node)
             yield node
         finally:
             connection.disconnect(network)
@@ -115,11 +115,22 @@ class ExternalTwin:
                     values[f"{index:04X}.{sub:02X}"] = f"abort {exc.code:08X}"
             return values
 
-    def _awake(self, network: canopen.Network, frames: FrameLog) -> None:
-        """A twin powered on a moment ago may wait for bus traffic (bit-rate detection): send a SYNC, wait for it."""
-        mark = frames.mark()
+    def _awake(self, network: canopen.Network, node: canopen.RemoteNode) -> None:
+        """A twin powered on a moment ago may wait for bus traffic (bit-rate detection): send a SYNC, then
+        ask until it answers SDO (bounded)."""
         network.send_message(0x80, b"")
-        frames.wait_for(lambda m: m.is_rx and m.arbitration_id == 0x700 + self.sim.node_id, 0.3, mark)
+        deadline = time.monotonic() + 5.0
+        node.sdo.RESPONSE_TIMEOUT = 0.1
+        try:
+            while True:
+                try:
+                    node.sdo.upload(0x1000, 0)
+                    return
+                except SdoCommunicationError:
+                    if time.monotonic() > deadline:
+                        raise
+        finally:
+            node.sdo.RESPONSE_TIMEOUT = 1.0
 
     def freeze(self) -> None:
         os.kill(self.sim.process.pid, signal.SIGSTOP)

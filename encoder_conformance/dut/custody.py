@@ -21,9 +21,10 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from ..cia301 import COMMAND_FOR_STATE, STATE_NAMES, NmtState
 from ..errors import DutLostError
-from .device import DeviceUnderTest
+from .device import DeviceUnderTest, wake_if_silent
 from .identity import DeviceIdentity, identity_mismatch, read_identity
 from .persist import CannotPersist, store_commands_for
+from .power import BenchPower
 from .sdo_frames import abort_name
 from .snapshot import Key, Snapshot, SnapshotEntry, custody_keys, hex_or_none, is_stored, read_values
 from .store_watch import StoreWatch
@@ -99,6 +100,7 @@ class Custody:
         self.identity: DeviceIdentity | None = None
         self.record: RestoreRecord | None = None
         self.deadline: Deadline | None = None
+        self.power: BenchPower | None = None  # the bench's power switch, once a test used it
 
     # -- take --------------------------------------------------------------------------------------
     def take(self, profile_sha256: str) -> Snapshot:
@@ -198,6 +200,11 @@ class Custody:
         assert snapshot is not None
         if dut.lost:
             raise DutLostError(dut.lost)
+        if self.power is not None and self.power.ensure_on():  # Ctrl-C between power off and on
+            record.written.append(f"power switched on again ({self.power.description})")
+            mark = dut.frames.mark()
+            wake_if_silent(dut)
+            dut.wait_bootup(mark)
         dut.nmt("pre-operational")
         if not (dut.responds() or dut.responds()):
             raise DutLostError("no SDO answer after NMT enter pre-operational")
@@ -215,7 +222,11 @@ class Custody:
         self._back_to_found_state(record)
 
     def _give_back_stored(self, record: RestoreRecord, deadline: Deadline) -> None:
-        """Reset, compare with what was stored, write and store what differs, reset and check."""
+        """Reset, compare with what was stored, write and store what differs, reset and check.
+
+        After a restore-defaults command the device's memory may have lost groups whose values
+        equal their defaults (nothing shows it over the bus): then every group is stored again.
+        """
         dut = self.dut
         snapshot = self.snapshot
         assert snapshot is not None
@@ -223,13 +234,14 @@ class Custody:
         self._reset(deadline)
         loaded = read_values(dut, stored_keys)
         record.stored_changed = self._differences(loaded, lambda e: e.target_stored(), stored_keys)
-        if not record.stored_changed:
+        defaults_restored = any(kind.startswith("restore defaults") for kind in self.watch.counts)
+        if not record.stored_changed and not defaults_restored:
             return
         targets = {k: snapshot.entry(k).target_stored() for k in stored_keys}  # type: ignore[union-attr]
         differing = {k: v for k, v in targets.items() if v is not None and loaded.get(k) != v}
         self._write(record, deadline, differing, loaded)
         try:
-            commands = store_commands_for(dut.profile, sorted(differing))
+            commands = store_commands_for(dut.profile, stored_keys if defaults_restored else sorted(differing))
         except CannotPersist as exc:
             record.fail(f"cannot store the restored values: {exc}")
             return

@@ -47,7 +47,9 @@ class ShellPowerSwitch:
     @staticmethod
     def _run(command: str, option: str) -> None:
         try:
-            done = subprocess.run(command, shell=True, capture_output=True, text=True, timeout=COMMAND_TIMEOUT_S)
+            # a session of its own: a Ctrl-C at the terminal stops the run, not the relay command half-way
+            done = subprocess.run(command, shell=True, capture_output=True, text=True, timeout=COMMAND_TIMEOUT_S,
+                                  start_new_session=True)
         except subprocess.TimeoutExpired:
             raise PowerSwitchError(f"{option} {command!r} did not finish within {COMMAND_TIMEOUT_S:.0f} s") from None
         if done.returncode != 0:
@@ -85,9 +87,35 @@ class SimulatorPowerSwitch:
         self._control.power_on()  # type: ignore[attr-defined]
 
 
+class BenchPower:
+    """A power switch that remembers whether the run left the device off (Ctrl-C between off and on):
+    the run's restore switches it on again before anything else."""
+
+    def __init__(self, switch: PowerSwitch) -> None:
+        self.switch = switch
+        self.left_off = False
+
+    @property
+    def description(self) -> str:
+        return self.switch.description
+
+    def cycle(self) -> None:
+        """Off, keep it off for the switch's off time (so the supply really drops), on."""
+        self.left_off = True  # also when 'off' is interrupted half-way: the state is not known then
+        self.switch.off()
+        if self.switch.off_time_s > 0:
+            threading.Event().wait(self.switch.off_time_s)  # a hold time of the stimulus, not a wait for the device
+        self.switch.on()
+        self.left_off = False
+
+    def ensure_on(self) -> bool:
+        """Switch on if a cycle was cut short; True if it had to."""
+        if not self.left_off:
+            return False
+        self.switch.on()
+        self.left_off = False
+        return True
+
+
 def power_cycle(switch: PowerSwitch) -> None:
-    """Off, keep it off for the switch's off time (so the device's supply really drops), on."""
-    switch.off()
-    if switch.off_time_s > 0:
-        threading.Event().wait(switch.off_time_s)  # a hold time of the stimulus, not a wait for the device
-    switch.on()
+    BenchPower(switch).cycle()

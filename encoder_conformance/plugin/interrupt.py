@@ -21,7 +21,7 @@ from types import FrameType
 from ..exit_codes import interrupted_by
 
 #: the restore's share of the 2 s a Ctrl-C may take (the rest: reports, bus and simulator shutdown)
-RESTORE_BUDGET_S = 1.0
+RESTORE_BUDGET_S = 1.2
 HARD_LIMIT_S = 1.95
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -96,6 +96,11 @@ class InterruptGuard:
             raise KeyboardInterrupt
         self.say(f"still putting the device back (at most {self.remaining():.1f} s); "
                  "interrupt twice more to abandon it")
+
+    def trace(self, phase: str) -> None:
+        """Debug aid (ENCODER_CONFORMANCE_TRACE_STOP=1): seconds since the signal at each phase of the stop."""
+        if self.at is not None and os.environ.get("ENCODER_CONFORMANCE_TRACE_STOP"):
+            self.say(f"T+{time.monotonic() - self.at:.3f} {phase}")
 
     def _hard_exit(self) -> None:
         self.say(f"the run did not end within {HARD_LIMIT_S:.2f} s of the interrupt: exiting now")

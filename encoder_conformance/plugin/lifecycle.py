@@ -46,6 +46,7 @@ def start(config: pytest.Config) -> None:
         return
     state = RunState(InterruptGuard(on_stop=lambda reason: _stop_device(config, reason)))
     config.stash[STATE] = state
+    _CONFIG.append(config)
     state.guard.install()
 
 
@@ -85,12 +86,34 @@ def give_back(config: pytest.Config) -> RestoreRecord | None:
     if custody.record is None:
         interrupted = state.guard.signum is not None
         seconds = state.guard.remaining() if interrupted else normal_budget_s(custody)
+        state.guard.trace(f"restore starts ({seconds:.2f} s)")
         with state.guard.shield():
             record = custody.give_back(seconds)
+        state.guard.trace("restore done")
         folder = report_dir(config)
         if folder is not None:
             record.save(folder / "device-restore.json")
     return custody.record
+
+
+_CONFIG: list[pytest.Config] = []  # the run's config, for hooks that get none (pytest_keyboard_interrupt)
+
+
+def give_back_now(excinfo: object) -> None:
+    """Interrupted or stopped: restore at once, before pytest spends time formatting the traceback."""
+    if _CONFIG:
+        trace(_CONFIG[-1], "keyboard interrupt hook")
+        give_back(_CONFIG[-1])
+    traceback = getattr(excinfo, "traceback", None)
+    if traceback and type(getattr(excinfo, "value", None)) is KeyboardInterrupt:
+        # pytest shows only the last entry of a Ctrl-C; a repr of the whole deep stack takes ~0.5 s
+        excinfo.traceback = traceback[-1:]  # type: ignore[attr-defined]
+
+
+def trace(config: pytest.Config, phase: str) -> None:
+    state = state_of(config)
+    if state is not None:
+        state.guard.trace(phase)
 
 
 def device_gone(config: pytest.Config) -> str | None:
@@ -101,13 +124,24 @@ def device_gone(config: pytest.Config) -> str | None:
     return state.custody.dut.lost
 
 
+def stop_run(config: pytest.Config, reason: str) -> None:
+    """The run cannot start or go on (pre-flight failed, bus gone): one reason, exit code COULD_NOT_TEST.
+
+    Raised with pytest's own 'interrupted' code, which keeps pytest's summaries; final_exit_status
+    turns it into COULD_NOT_TEST.
+    """
+    state = state_of(config)
+    if state is not None:
+        state.stopped = state.stopped or reason
+        pytest.exit(f"could not test: {reason}", returncode=pytest.ExitCode.INTERRUPTED)
+    pytest.exit(f"could not test: {reason}", returncode=RunExit.COULD_NOT_TEST)
+
+
 def stop_if_gone(config: pytest.Config) -> None:
     """Before each test: if the device or the bus is gone, end the run with one reason (could not test)."""
     reason = device_gone(config)
-    state = state_of(config)
-    if reason and state is not None:
-        state.stopped = state.stopped or reason
-        pytest.exit(f"could not test: {reason}", returncode=RunExit.COULD_NOT_TEST)
+    if reason:
+        stop_run(config, reason)
 
 
 def note_report(config: pytest.Config, report: pytest.TestReport) -> None:
@@ -117,18 +151,19 @@ def note_report(config: pytest.Config, report: pytest.TestReport) -> None:
 
 
 def final_exit_status(session: pytest.Session) -> None:
-    """Interrupted > device not restored > could not test > pytest's own verdict."""
+    """Interrupted > could not test > device not restored > pytest's own verdict."""
     state = state_of(session.config)
     if state is None:
         return
+    state.guard.trace("session finished")
     state.guard.uninstall()
     record = state.record
     if state.guard.exit_code is not None:
         session.exitstatus = state.guard.exit_code
-    elif record is not None and not record.ok:
-        session.exitstatus = RunExit.NOT_RESTORED
     elif state.stopped or session.exitstatus == RunExit.COULD_NOT_TEST:
         session.exitstatus = RunExit.COULD_NOT_TEST
+    elif record is not None and not record.ok:
+        session.exitstatus = RunExit.NOT_RESTORED
 
 
 def ended_early(config: pytest.Config) -> bool:
@@ -163,9 +198,11 @@ def summary_lines(config: pytest.Config) -> list[tuple[str, bool]]:
     detail = ", ".join(f"{count} x {kind}" for kind, count in sorted(record.run_store_commands.items()))
     lines.append((f"store/restore commands (EEPROM wear): {wear} by the tests{f' ({detail})' if detail else ''}, "
                   f"{record.restore_store_commands} by the restore", False))
-    lines.append((f"left changed by the run: {len(record.left_changed)} value(s) in use, "
-                  f"{len(record.stored_changed)} stored value(s); restore wrote {len(record.written)} value(s) "
-                  f"and stored with {', '.join(record.store_commands) or 'nothing'} in {record.seconds:.2f} s", False))
+    if record.done:
+        lines.append((f"left changed by the run: {len(record.left_changed)} value(s) in use, "
+                      f"{len(record.stored_changed)} stored value(s); restore wrote {len(record.written)} value(s) "
+                      f"and stored with {', '.join(record.store_commands) or 'nothing'} in {record.seconds:.2f} s",
+                      False))
     if record.ok:
         lines.append(("device restored as found: every value checked", False))
     else:

@@ -172,7 +172,8 @@ def _power_settings(config: pytest.Config, station: Station | None, station_path
     if power == "manual":
         return PowerSettings(True, None, None, off_time or 0.0, f"station {station_path}")
     if isinstance(power, StationPower):
-        return PowerSettings(False, power.off, power.on, power.off_time_s if off_time is None else off_time,
+        return PowerSettings(False, power.off_command, power.on_command,
+                             power.off_time_s if off_time is None else off_time,
                              f"station {station_path}")
     return None
 

@@ -1,0 +1,212 @@
+"""A device on a bench belongs to someone: the run against an external twin that holds a customer's
+stored configuration (tests/bench_twin.py), as a bench engineer runs it.
+
+- a complete --allow-destructive run leaves every value and the whole memory as found, also after
+  a power cycle, and passes everything a twin in factory state passes;
+- Ctrl-C at any moment (1-12 s, and inside the store/restore tests) ends the run within 2 s with
+  exit 130 and nothing left changed, in use or stored;
+- a run killed hard (SIGKILL) is finished by ``encoder-conformance restore --from`` its snapshot;
+- a device killed or frozen mid-run ends the run with one reason and exit code 69 within 5 s, no
+  traceback; an endpoint that accepts the connection and never answers: a start-up error within 10 s.
+"""
+
+from __future__ import annotations
+
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+import xml.etree.ElementTree as ET
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+from bench_twin import CUSTOMER_VALUES, REPO, ExternalTwin, start_twin, wait_for_line
+
+from encoder_conformance.exit_codes import RunExit
+
+#: seconds after the start of the run at which Ctrl-C arrives (the suites start about 1.5 s in)
+INTERRUPT_AT_S = [1.0, 2.0, 3.0, 4.5, 6.0, 7.5, 9.0, 10.5, 12.0]
+#: and as soon as a test reports its result (pytest -v prints the line at the end of a test), i.e. inside
+#: the next one: the factory-state preparation (1011h 'load' + reset), and the power cycle of a stored value
+INTERRUPT_AFTER = ["test_object_dictionary.py::test_undeclared_subindex_aborts",
+                   "test_store_restore.py::test_stored_value_survives_reset_node"]
+MOMENTS: list[float | str] = [*INTERRUPT_AT_S, *INTERRUPT_AFTER]
+CTRL_C_LIMIT_S = 2.0
+LOST_LIMIT_S = 5.0
+
+
+def _as_found(twin: ExternalTwin, before: dict[str, str], stored_before: dict) -> list[str]:
+    """Every difference to the device as found: values, the memory file, values after a power cycle."""
+    problems = [f"{k}: {before[k]} -> {v}" for k, v in twin.read_everything().items() if before.get(k) != v]
+    stored = twin.stored()
+    problems += [f"stored {k}: {stored_before.get(k)} -> {stored.get(k)}"
+                 for k in set(stored) | set(stored_before) if stored.get(k) != stored_before.get(k)]
+    twin.power_cycle()
+    problems += [f"after power cycle {k}: {before[k]} -> {v}"
+                 for k, v in twin.read_everything().items() if before.get(k) != v]
+    return problems
+
+
+def _outcomes(junit: Path) -> dict[str, str]:
+    outcomes = {}
+    for case in ET.parse(junit).getroot().iter("testcase"):
+        kind = next((child.tag for child in case if child.tag in ("failure", "error", "skipped")), "passed")
+        outcomes[f"{case.get('classname')}::{case.get('name')}"] = kind
+    return outcomes
+
+
+def _full_run(folder: Path, customer: dict | None) -> dict:
+    twin = start_twin(folder, customer)
+    try:
+        before, stored_before = twin.read_everything(), twin.stored()
+        run = twin.start_run(folder / "report", "-q")
+        output, _ = run.communicate(timeout=300)
+        return {"returncode": run.returncode, "output": output, "outcomes": _outcomes(folder / "report" / "junit.xml"),
+                "problems": _as_found(twin, before, stored_before), "stored_before": stored_before}
+    finally:
+        twin.close()
+
+
+@pytest.fixture(scope="module")
+def full_runs(tmp_path_factory) -> dict[str, dict]:
+    """A complete destructive run against a twin with a customer configuration and one in factory state."""
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        customer = pool.submit(_full_run, tmp_path_factory.mktemp("customer"), CUSTOMER_VALUES)
+        factory = pool.submit(_full_run, tmp_path_factory.mktemp("factory"), None)
+        return {"customer": customer.result(), "factory": factory.result()}
+
+
+def test_destructive_run_leaves_the_customer_configuration(full_runs):
+    """All five stored customer values, the whole memory and every value as found, also after a power cycle."""
+    run = full_runs["customer"]
+    for (index, sub), value in CUSTOMER_VALUES.items():
+        assert run["stored_before"][f"0x{index:04X}.{sub}"] == value
+    assert not run["problems"], "the run changed the device:\n" + "\n".join(run["problems"][:20])
+    assert "device restored as found" in run["output"]
+
+
+def test_stored_configuration_passes_what_factory_state_passes(full_runs):
+    """A device with a stored configuration passes every test a factory-state device passes."""
+    customer, factory = full_runs["customer"], full_runs["factory"]
+    assert factory["returncode"] == RunExit.PASSED, factory["output"][-3000:]
+    assert customer["returncode"] == RunExit.PASSED, customer["output"][-3000:]
+    lost = [t for t, o in factory["outcomes"].items() if o == "passed" and customer["outcomes"].get(t) != "passed"]
+    assert not lost, f"pass in factory state, not with the customer's configuration: {lost}"
+
+
+def _interrupted_run(folder: Path, at: float | str) -> dict:
+    """Start a run, send SIGINT at ``at`` seconds (or when that test starts), check the device afterwards."""
+    twin = start_twin(folder, CUSTOMER_VALUES)
+    try:
+        before, stored_before = twin.read_everything(), twin.stored()
+        run = twin.start_run(folder / "report", "-v")
+        seen: list[str] = []
+        if isinstance(at, str):
+            assert wait_for_line(run, at, 120, seen), f"{at} never ended:\n{''.join(seen[-20:])}"
+            threading.Event().wait(0.05)  # inside the next test, after its first writes
+        else:
+            threading.Event().wait(at)
+        sent = time.monotonic()
+        run.send_signal(signal.SIGINT)
+        output, _ = run.communicate(timeout=30)
+        ended = time.monotonic() - sent
+        return {"returncode": run.returncode, "seconds": ended, "output": "".join(seen) + output,
+                "problems": _as_found(twin, before, stored_before)}
+    finally:
+        twin.close()
+
+
+@pytest.fixture(scope="module")
+def interrupted_runs(tmp_path_factory) -> dict[float | str, dict]:
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        futures = {at: pool.submit(_interrupted_run, tmp_path_factory.mktemp("sigint"), at) for at in MOMENTS}
+        return {at: future.result() for at, future in futures.items()}
+
+
+@pytest.mark.parametrize("at", MOMENTS, ids=str)
+def test_ctrl_c_ends_within_2_s_and_leaves_nothing_changed(interrupted_runs, at):
+    run = interrupted_runs[at]
+    assert run["returncode"] == RunExit.INTERRUPTED, run["output"][-3000:]
+    assert run["seconds"] < CTRL_C_LIMIT_S, f"ended {run['seconds']:.2f} s after Ctrl-C"
+    assert not run["problems"], "left changed:\n" + "\n".join(run["problems"][:20]) + run["output"][-2000:]
+
+
+def test_restore_command_finishes_after_a_hard_crash(tmp_path):
+    """SIGKILL during the power cycle of the store/restore suite; 'restore --from' the snapshot (switching the
+    device on first) puts everything back."""
+    twin = start_twin(tmp_path / "twin", CUSTOMER_VALUES)
+    try:
+        before, stored_before = twin.read_everything(), twin.stored()
+        run = twin.start_run(tmp_path / "report", "-v")
+        seen: list[str] = []
+        assert wait_for_line(run, INTERRUPT_AFTER[-1], 120, seen), "".join(seen[-20:])
+        threading.Event().wait(0.05)
+        run.kill()
+        run.communicate(timeout=10)
+        snapshot = tmp_path / "report" / "device-snapshot.json"
+        assert snapshot.exists()
+        restore = subprocess.run([sys.executable, "-m", "encoder_conformance", "restore", "--from", str(snapshot),
+                                  "--can-interface", "remote", "--can-channel", twin.channel,
+                                  "--power-on-cmd", twin.power_command("power-on")],
+                                 cwd=REPO, capture_output=True, text=True, timeout=120)
+        assert restore.returncode == RunExit.PASSED, restore.stdout + restore.stderr
+        assert "device restored as found" in restore.stdout
+        problems = _as_found(twin, before, stored_before)
+        assert not problems, "left changed:\n" + "\n".join(problems[:20])
+    finally:
+        twin.close()
+
+
+def _lost_device_run(folder: Path, how: str) -> tuple[subprocess.CompletedProcess[str], float]:
+    twin = start_twin(folder)
+    try:
+        run = twin.start_run(folder / "report", "-q")
+        threading.Event().wait(3.0)
+        gone = time.monotonic()
+        twin.kill() if how == "killed" else twin.freeze()
+        output, _ = run.communicate(timeout=60)
+        return subprocess.CompletedProcess(run.args, run.returncode, output), time.monotonic() - gone
+    finally:
+        twin.close()
+
+
+@pytest.mark.parametrize("how", ["killed", "frozen"])
+def test_device_gone_mid_run_is_one_reason_not_hundreds_of_failures(tmp_path, how):
+    completed, seconds = _lost_device_run(tmp_path, how)
+    output = completed.stdout
+    assert completed.returncode == RunExit.COULD_NOT_TEST, output[-3000:]
+    assert seconds < LOST_LIMIT_S, f"the run ended {seconds:.1f} s after the device was {how}"
+    assert "Traceback" not in output
+    assert "BrokenPipeError" not in output
+    assert output.count("could not test:") <= 3, output[-3000:]  # the summary, the stop line, at most one test
+    assert "test(s) not run" in output
+    assert "NOT RESTORED" in output
+    assert "restore --from" in output
+
+
+def test_endpoint_that_never_answers_is_a_start_up_error(tmp_path):
+    """A TCP endpoint that accepts and stays silent: one start-up error within 10 s, exit 69."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(4)
+    accepted: list[socket.socket] = []
+    threading.Thread(target=lambda: accepted.append(server.accept()[0]), daemon=True).start()
+    port = server.getsockname()[1]
+    try:
+        start = time.monotonic()
+        completed = subprocess.run(
+            [sys.executable, "-m", "encoder_conformance", "run", "--can-interface", "remote", "--can-channel",
+             f"ws://127.0.0.1:{port}/", "--report-dir", str(tmp_path / "report"), "-q"],
+            cwd=REPO, capture_output=True, text=True, timeout=60)
+        seconds = time.monotonic() - start
+    finally:
+        server.close()
+        for conn in accepted:
+            conn.close()
+    assert completed.returncode == RunExit.COULD_NOT_TEST, completed.stdout[-2000:]
+    assert seconds < 10, f"took {seconds:.1f} s"
+    assert "did not open within" in completed.stdout
+    assert "Traceback" not in completed.stdout + completed.stderr
