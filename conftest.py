@@ -51,6 +51,7 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     selection.apply_capability_marks(config, items)
+    selection.destructive_last(items)
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:

@@ -6,6 +6,7 @@ is a separate pytest process (the same command a user runs), parsed from its JUn
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -51,6 +52,19 @@ def _parse_junit(path: Path) -> dict[str, str]:
     return outcomes
 
 
+#: the run's start-up check (node answers, identity matches) as a row of the matrix: a fault can make it fail
+PREFLIGHT = "pre-flight::start-up check"
+
+
+def _preflight_outcome(folder: Path) -> str:
+    """'failed' when the run stopped at its start-up check (run-outcome.json), else 'passed'."""
+    path = folder / "run-outcome.json"
+    if not path.exists():
+        return "passed"
+    stopped = json.loads(path.read_text(encoding="utf-8")).get("stopped") or ""
+    return "failed" if stopped.startswith("start-up check failed") else "passed"
+
+
 def _suite_paths(fault: str | None, targeted: bool) -> list[str]:
     """suites/ as a whole, or only the modules ``fault`` is made for."""
     if targeted and fault is not None:
@@ -72,7 +86,8 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     completed = subprocess.run(command, cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=600)
     junit = folder / "junit.xml"
     outcomes = _parse_junit(junit) if junit.exists() else {}
-    if not outcomes:
+    outcomes[PREFLIGHT] = _preflight_outcome(folder)
+    if len(outcomes) == 1:
         output = f"{completed.stdout[-3000:]}\n{completed.stderr[-3000:]}"
         raise RuntimeError(f"no results from {' '.join(command)}:\n{output}")
     return RunResult(fault, completed.returncode, outcomes)

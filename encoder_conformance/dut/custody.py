@@ -20,7 +20,7 @@ from pathlib import Path
 from canopen.sdo.exceptions import SdoAbortedError
 
 from ..cia301 import COMMAND_FOR_STATE, STATE_NAMES, NmtState
-from ..errors import DutLostError
+from ..errors import BusLostError, DutLostError
 from .device import DeviceUnderTest, wake_if_silent
 from .identity import DeviceIdentity, identity_mismatch, read_identity
 from .persist import CannotPersist, store_commands_for
@@ -105,6 +105,18 @@ class Custody:
     # -- take --------------------------------------------------------------------------------------
     def take(self, profile_sha256: str) -> Snapshot:
         """Pre-flight and snapshot; raises PreflightError with what to check."""
+        try:
+            return self._take(profile_sha256)
+        except (AssertionError, DutLostError) as exc:
+            if isinstance(exc, BusLostError):
+                raise PreflightError(str(exc)) from None
+            first = str(exc).splitlines()[0]
+            raise PreflightError(
+                f"node {self.dut.node_id} does not answer SDO reliably ({first}); a CANopen device must serve "
+                "SDO on 600h/580h + node-id. Check --node-id, the bit rate and that no other tool talks to it"
+            ) from None
+
+    def _take(self, profile_sha256: str) -> Snapshot:
         dut = self.dut
         keys = custody_keys(dut.profile)
         with dut.custody():

@@ -8,12 +8,13 @@ reported as not run. The exit status follows exit_codes.RunExit.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 
 import pytest
 
 from ..dut.custody import Custody, RestoreRecord
-from ..exit_codes import RunExit
+from ..exit_codes import DESCRIPTIONS, RunExit
 from .interrupt import InterruptGuard
 from .reporting import report_dir, runs_suites
 
@@ -164,6 +165,29 @@ def final_exit_status(session: pytest.Session) -> None:
         session.exitstatus = RunExit.COULD_NOT_TEST
     elif record is not None and not record.ok:
         session.exitstatus = RunExit.NOT_RESTORED
+    _write_outcome(session, state)
+
+
+OUTCOME_FILE = "run-outcome.json"
+
+
+def _write_outcome(session: pytest.Session, state: RunState) -> None:
+    """The run's verdict for machines: exit code and its meaning, why it stopped, whether the device is restored."""
+    folder = report_dir(session.config)
+    if folder is None:
+        return
+    code = int(session.exitstatus)
+    record = state.record
+    outcome = {
+        "exit_code": code,
+        "meaning": next((text for known, text in DESCRIPTIONS.items() if known == code), "interrupted"),
+        "stopped": state.stopped,
+        "interrupted": state.guard.reason if state.guard.signum is not None else None,
+        "tests_collected": state.collected,
+        "tests_reported": len(state.reported),
+        "device_restored": None if record is None else record.ok,
+    }
+    (folder / OUTCOME_FILE).write_text(json.dumps(outcome, indent=1), encoding="utf-8")
 
 
 def ended_early(config: pytest.Config) -> bool:

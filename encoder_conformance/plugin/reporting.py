@@ -185,7 +185,7 @@ def terminal_summary(terminalreporter, config: pytest.Config,  # noqa: ANN001 - 
 def fail_all_skipped(session: pytest.Session) -> None:
     """A run where every test was skipped is not green (labgrid #610)."""
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")
-    if reporter is None or REPORT_DIR not in session.config.stash:
+    if reporter is None or REPORT_DIR not in session.config.stash or session.config.option.collectonly:
         return
     stats = reporter.stats
     ran = len(stats.get("passed", [])) + len(stats.get("failed", [])) + len(stats.get("error", []))

@@ -87,6 +87,15 @@ def apply_capability_marks(config: pytest.Config, items: list[pytest.Item]) -> N
             ))
 
 
+def destructive_last(items: list[pytest.Item]) -> None:
+    """Tests that change what the device remembers run after all others (stable order otherwise).
+
+    A run stopped half-way has then changed as little as possible, and the factory-default checks
+    of a device in delivery state see it before any test stored something.
+    """
+    items.sort(key=lambda item: item.get_closest_marker("destructive") is not None)
+
+
 def check_gates(item: pytest.Item) -> None:
     """Destructive tests need --allow-destructive on hardware."""
     settings = settings_of(item.config)
