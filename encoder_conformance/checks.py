@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import allure
 import pytest
 
 from .dut.device import DeviceUnderTest
 from .dut.frames import format_frames
 from .dut.sdo_frames import SdoResponse, abort_name
 from .plugin.evidence import Evidence
+from .profile.model import HeartbeatTolerance
+from .timing import interval_stats, schedule_fit
 
 #: CiA 301 abort code per situation (strict mode).
 CIA_ABORTS: dict[str, int] = {
@@ -42,6 +45,37 @@ def assert_abort(dut: DeviceUnderTest, response: SdoResponse, expected: set[int]
         )
     if response.abort_code not in expected:
         raise AssertionError(f"{what}: expected abort {wanted}, observed abort {abort_name(response.abort_code or 0)}")
+
+
+def check_periodic(timestamps: list[float], period_ms: float, tolerance: HeartbeatTolerance, what: str,
+                   evidence: Evidence) -> None:
+    """Periodic frames: the mean interval within the tolerance, and the frames on their schedule.
+
+    At most ``tolerance.late_frames`` of the frames may be further than the tolerance from the
+    fitted schedule (a frame delayed by bus arbitration or a busy tester), none by more than half a
+    period. Evidence: both measurements and the intervals as CSV.
+    """
+    allowed = tolerance.allowed_ms(period_ms)
+    stats = interval_stats(timestamps, period_ms)
+    fit = schedule_fit(timestamps, period_ms)
+    late = fit.off_schedule(allowed)
+    may_be_late = int(tolerance.late_frames * len(timestamps))
+    evidence.measure(f"{what} mean interval", round(stats.mean_ms, 3), "ms", period_ms - allowed, period_ms + allowed)
+    evidence.measure(f"{what} frames off schedule by > {allowed:.1f} ms", len(late), "frames", 0, may_be_late)
+    allure.attach(stats.csv(), name=f"{what} intervals.csv", attachment_type=allure.attachment_type.CSV)
+    if late and len(late) <= may_be_late:
+        evidence.note(f"{len(late)} frame(s) off the schedule within the allowed share (timing.heartbeat_tolerance."
+                      f"late_frames = {tolerance.late_frames:g}): " + ", ".join(f"#{n}: {o:+.1f} ms" for n, o in late))
+    assert abs(stats.mean_ms - period_ms) <= allowed, (
+        f"{what}: mean interval {stats.mean_ms:.2f} ms, expected {period_ms} ms within {allowed:.1f} ms"
+    )
+    if any(abs(o) > period_ms / 2 for _, o in late):
+        may_be_late = 0  # a frame half a period off is a missing or extra one, not a late one
+    assert len(late) <= may_be_late, (
+        f"{what}: {len(late)} of {len(timestamps)} frames further than {allowed:.1f} ms from the {period_ms} ms "
+        f"schedule (at most {may_be_late} may be): " + ", ".join(f"#{n}: {o:+.1f} ms" for n, o in late[:8])
+        + "; intervals: " + ", ".join(f"#{n}: {i:.1f} ms" for n, i in stats.outside(allowed)[:8])
+    )
 
 
 def describe_value(value: object) -> str:

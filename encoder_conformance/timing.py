@@ -36,6 +36,37 @@ class IntervalStats:
         return "n,interval_ms\n" + "\n".join(f"{n},{i:.3f}" for n, i in enumerate(self.intervals_ms))
 
 
+@dataclass(frozen=True)
+class ScheduleFit:
+    """Frame times against the best straight-line schedule t = t0 + n * period (least squares).
+
+    A frame delayed once (bus arbitration, a busy tester) moves two intervals (+d, -d) but only
+    itself off the schedule: counting frames off the schedule tells one late frame from a device
+    whose timer drifts or jitters on every cycle.
+    """
+
+    period_ms: float
+    fitted_period_ms: float
+    offsets_ms: tuple[float, ...]  # each frame's distance from the fitted schedule
+
+    def off_schedule(self, tolerance_ms: float) -> list[tuple[int, float]]:
+        """(frame number, offset) of the frames further than ``tolerance_ms`` from the schedule."""
+        return [(n, o) for n, o in enumerate(self.offsets_ms) if abs(o) > tolerance_ms]
+
+
+def schedule_fit(timestamps: list[float], period_ms: float) -> ScheduleFit:
+    """Fit t = t0 + n * p to the timestamps (seconds) by least squares; offsets in milliseconds."""
+    count = len(timestamps)
+    ns = range(count)
+    mean_n = (count - 1) / 2
+    mean_t = statistics.fmean(timestamps)
+    spread = sum((n - mean_n) ** 2 for n in ns) or 1.0
+    slope = sum((n - mean_n) * (t - mean_t) for n, t in zip(ns, timestamps, strict=True)) / spread
+    start = mean_t - slope * mean_n
+    offsets = tuple((t - (start + slope * n)) * 1000 for n, t in zip(ns, timestamps, strict=True))
+    return ScheduleFit(period_ms, slope * 1000, offsets)
+
+
 def interval_stats(timestamps: list[float], period_ms: float) -> IntervalStats:
     """Intervals between consecutive timestamps (seconds in, milliseconds out)."""
     intervals = tuple((b - a) * 1000 for a, b in itertools.pairwise(timestamps))

@@ -6,13 +6,11 @@ starts the device and counts or times that TPDO's frames.
 
 from __future__ import annotations
 
-import allure
 import pytest
 
-from encoder_conformance.checks import documented_quirk
+from encoder_conformance.checks import check_periodic, documented_quirk
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.stimulus import pdo_stimulus
-from encoder_conformance.timing import interval_stats
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos")]
 
@@ -97,15 +95,7 @@ def test_event_timer_period_within_tolerance(dut, settings_journal, back_to_preo
         lambda m: m.is_rx and m.arbitration_id == cob_id, count, count * period * 1.5 / 1000 + 0.5, mark
     )
     assert len(frames) == count, f"only {len(frames)} of {count} TPDOs on {cob_id:03X}h with event timer {period} ms"
-    stats = interval_stats([m.timestamp for m in frames], period)
-    tolerance = timing.heartbeat_tolerance.allowed_ms(period)
-    evidence.measure("event timer mean interval", round(stats.mean_ms, 3), "ms", period - tolerance, period + tolerance)
-    allure.attach(stats.csv(), name="TPDO intervals.csv", attachment_type=allure.attachment_type.CSV)
-    bad = stats.outside(tolerance)
-    assert not bad, (
-        f"{len(bad)} of {stats.count} intervals off by more than {tolerance:.1f} ms from {period} ms: "
-        + ", ".join(f"#{n}: {i:.1f} ms" for n, i in bad[:8])
-    )
+    check_periodic([m.timestamp for m in frames], period, timing.heartbeat_tolerance, "event timer", evidence)
 
 
 def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_to_preoperational, shaft, evidence):

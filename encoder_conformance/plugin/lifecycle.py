@@ -227,6 +227,12 @@ def summary_lines(config: pytest.Config) -> list[tuple[str, bool]]:
                       f"{len(record.stored_changed)} stored value(s); restore wrote {len(record.written)} value(s) "
                       f"and stored with {', '.join(record.store_commands) or 'nothing'} in {record.seconds:.2f} s",
                       False))
+    shown = 12
+    sections = (("left changed in use", record.left_changed), ("stored value changed", record.stored_changed))
+    for title, changes in sections:
+        lines += [(f"  {title}: {change.describe()}", False) for change in changes[:shown]]
+        if len(changes) > shown:
+            lines.append((f"  ... and {len(changes) - shown} more (device-restore.json)", False))
     if record.ok:
         lines.append(("device restored as found: every value checked", False))
     else:

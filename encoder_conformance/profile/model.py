@@ -314,8 +314,15 @@ class Capabilities(StrictModel):
 
 
 class HeartbeatTolerance(StrictModel):
+    """Timing tolerance of periodic frames (heartbeat, event-timer TPDOs). CiA 301 gives none: inferred."""
+
     abs_ms: float = Field(default=2.0, gt=0)
     rel: float = Field(default=0.10, gt=0, lt=1)
+    late_frames: float = Field(
+        default=0.05, ge=0, lt=0.5,
+        description="share of frames that may be further than the tolerance from the fitted schedule (a frame "
+        "delayed by bus arbitration or a busy tester), none by more than half a period",
+    )
 
     def allowed_ms(self, period_ms: float) -> float:
         """Per-interval tolerance: max(abs, rel * period)."""
