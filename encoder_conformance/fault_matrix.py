@@ -86,8 +86,10 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     completed = subprocess.run(command, cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=600)
     junit = folder / "junit.xml"
     outcomes = _parse_junit(junit) if junit.exists() else {}
-    outcomes[PREFLIGHT] = _preflight_outcome(folder)
-    if len(outcomes) == 1 and outcomes[PREFLIGHT] == "passed":
+    preflight = _preflight_outcome(folder)
+    if preflight == "failed" or select is None:  # a run limited by -k does not claim the start-up check
+        outcomes[PREFLIGHT] = preflight
+    if not outcomes or outcomes == {PREFLIGHT: "passed"}:
         output = f"{completed.stdout[-3000:]}\n{completed.stderr[-3000:]}"
         raise RuntimeError(f"no results from {' '.join(command)}:\n{output}")
     return RunResult(fault, completed.returncode, outcomes)

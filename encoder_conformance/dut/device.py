@@ -97,17 +97,19 @@ class DeviceUnderTest:
     def read(self, index: int, sub: int = 0) -> bytes:
         """Upload through canopen's client (expedited or segmented). Aborts raise SdoAbortedError."""
         self._check_alive()
+        mark = self.frames.mark()
         try:
             return self.node.sdo.upload(index, sub)
         except SdoCommunicationError as exc:
-            raise self._timeout(f"SDO upload {index:04X}h.{sub:02X}", exc) from None
+            raise self._timeout(f"SDO upload {index:04X}h.{sub:02X}", exc, mark) from None
 
     def write(self, index: int, sub: int, data: bytes) -> None:
         self._check_alive()
+        mark = self.frames.mark()
         try:
             self.node.sdo.download(index, sub, data)
         except SdoCommunicationError as exc:
-            raise self._timeout(f"SDO download {index:04X}h.{sub:02X}", exc) from None
+            raise self._timeout(f"SDO download {index:04X}h.{sub:02X}", exc, mark) from None
 
     def read_uint(self, index: int, sub: int = 0) -> int:
         return int.from_bytes(self.read(index, sub), "little")
@@ -115,10 +117,17 @@ class DeviceUnderTest:
     def write_uint(self, index: int, sub: int, value: int, size: int) -> None:
         self.write(index, sub, value.to_bytes(size, "little"))
 
-    def _timeout(self, what: str, exc: Exception) -> AssertionError:
-        if not any(self.responds() for _ in range(LOST_AFTER_PROBES)):
-            self.mark_lost(f"no answer to {what} nor to {LOST_AFTER_PROBES} probes of 1000h")
+    def _timeout(self, what: str, exc: Exception, since: Mark) -> AssertionError:
+        """A request went unanswered: the device is gone only if it stays silent on every channel
+        (a stopped device answers no SDO but still sends its heartbeat)."""
+        if not any(self.responds() for _ in range(LOST_AFTER_PROBES)) and not self.heard_since(since):
+            self.mark_lost(f"no answer to {what} nor to {LOST_AFTER_PROBES} probes of 1000h, and no frame from it")
         return AssertionError(f"{what}: {exc}\nlast frames:\n{format_frames(self.frames.last(12))}")
+
+    def heard_since(self, mark: Mark) -> bool:
+        """Did the node send any frame (heartbeat, PDO, EMCY, SDO) after ``mark``?"""
+        own = self._own_cob_ids()
+        return bool(self.frames.since(mark, lambda m: m.is_rx and m.arbitration_id in own))
 
     def responds(self) -> bool:
         """One raw read of 1000h: does the node answer SDO at all?"""
