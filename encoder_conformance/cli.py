@@ -60,8 +60,7 @@ def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
 
 
 def _cmd_sim_control(args: argparse.Namespace, extra: list[str]) -> int:
-    from .sim.serve import parse_address
-    from .sim_control import SimulatorControl
+    from .sim_control import SimulatorControl, parse_address  # light: a bench's power command starts it often
 
     try:
         control = SimulatorControl(parse_address(args.control))

@@ -18,6 +18,14 @@ if TYPE_CHECKING:
 AUTHKEY = b"encoder-conformance-sim"
 
 
+def parse_address(text: str) -> tuple[str, int]:
+    """'HOST:PORT' (or ':PORT') -> (host, port); ValueError names the text."""
+    host, _, port = text.rpartition(":")
+    if not port.isdigit():
+        raise ValueError(f"{text!r} is not HOST:PORT")
+    return host or "127.0.0.1", int(port)
+
+
 class SimulatorControl:
     """Client: what the test side may ask of a simulated device."""
 

@@ -10,17 +10,9 @@ import time
 from pathlib import Path
 
 from ..profile.loader import load_profile
-from ..sim_control import serve_control
+from ..sim_control import parse_address, serve_control
 from .faults import FaultSet
 from .host import SimulatorHost
-
-
-def parse_address(text: str) -> tuple[str, int]:
-    """'HOST:PORT' (or ':PORT') -> (host, port); ValueError names the text."""
-    host, _, port = text.rpartition(":")
-    if not port.isdigit():
-        raise ValueError(f"{text!r} is not HOST:PORT")
-    return host or "127.0.0.1", int(port)
 
 
 def serve(
