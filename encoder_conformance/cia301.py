@@ -42,7 +42,8 @@ class NmtCommand(IntEnum):
 class NmtState(IntEnum):
     """States as the heartbeat / guarding reply reports them (CiA 301 §7.2.8.3.2)."""
 
-    BOOT_UP = 0x00
+    INITIALISING = 0x00
+    BOOT_UP = 0x00  # the heartbeat's name for it: the boot-up message carries 00h
     STOPPED = 0x04
     OPERATIONAL = 0x05
     PRE_OPERATIONAL = 0x7F

@@ -1,25 +1,10 @@
-"""NMT states, commands and which services each state allows (CiA 301 §7.3.2)."""
+"""Which services each NMT state allows, and where the state-changing commands lead (CiA 301 §7.3.2)."""
 
 from __future__ import annotations
 
-from enum import IntEnum
+from ..cia301 import NmtCommand, NmtState
 
-
-class NmtState(IntEnum):
-    """Values as the heartbeat reports them."""
-
-    INITIALISING = 0x00
-    STOPPED = 0x04
-    OPERATIONAL = 0x05
-    PRE_OPERATIONAL = 0x7F
-
-
-class NmtCommand(IntEnum):
-    START = 0x01
-    STOP = 0x02
-    ENTER_PRE_OPERATIONAL = 0x80
-    RESET_NODE = 0x81
-    RESET_COMMUNICATION = 0x82
+__all__ = ["TARGET", "NmtCommand", "NmtState", "emcy_allowed", "pdo_allowed", "sdo_allowed", "sync_allowed"]
 
 
 #: Target state of the state-changing commands (resets are handled by the node).
