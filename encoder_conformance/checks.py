@@ -63,6 +63,8 @@ def check_periodic(timestamps: list[float], period_ms: float, tolerance: Heartbe
     evidence.measure(f"{what} mean interval", round(stats.mean_ms, 3), "ms", period_ms - allowed, period_ms + allowed)
     evidence.measure(f"{what} frames off schedule by > {allowed:.1f} ms", len(late), "frames", 0, may_be_late)
     allure.attach(stats.csv(), name=f"{what} intervals.csv", attachment_type=allure.attachment_type.CSV)
+    evidence.note("basis of the tolerance: inferred (CiA 301 sets the period, no tolerance); "
+                  "profile timing.heartbeat_tolerance")
     if late and len(late) <= may_be_late:
         evidence.note(f"{len(late)} frame(s) off the schedule within the allowed share (timing.heartbeat_tolerance."
                       f"late_frames = {tolerance.late_frames:g}): " + ", ".join(f"#{n}: {o:+.1f} ms" for n, o in late))

@@ -75,11 +75,8 @@ def _wrong_device(dut: DeviceUnderTest, snapshot: Snapshot, force: bool) -> str 
     try:
         with dut.custody():
             wake_if_silent(dut)  # a device just switched on may wait for bus traffic
-            if not (dut.responds() or dut.responds()):
-                mark = dut.nmt("reset-node")
-                if dut.wait_bootup(mark) is None and not dut.responds():
-                    return (f"no answer from node {dut.node_id}: check --node-id, the bit rate, termination and "
-                            "power")
+            if not (dut.responds() or dut.responds() or dut.reset_and_reach()):
+                return f"no answer from node {dut.node_id}: check --node-id, the bit rate, termination and power"
             identity = read_identity(dut).as_report()
     except DutLostError as exc:
         return f"the device could not be reached: {exc}"

@@ -11,7 +11,7 @@ import pytest
 
 from encoder_conformance.cia301 import LOAD, SAVE
 from encoder_conformance.dut.persist import StoreCommand, store_commands_for
-from encoder_conformance.dut.power import PowerSwitchError, ShellPowerSwitch, power_cycle
+from encoder_conformance.dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
 from encoder_conformance.dut.snapshot import Snapshot, SnapshotEntry, custody_keys
 from encoder_conformance.dut.store_watch import StoreWatch
 from encoder_conformance.dut.write_plan import plan_writes
@@ -169,7 +169,7 @@ def test_shell_power_switch_runs_both_commands(tmp_path):
     python = sys.executable
     switch = ShellPowerSwitch(f"{python} -c \"open(r'{marker}', 'a').write('off ')\"",
                               f"{python} -c \"open(r'{marker}', 'a').write('on')\"", off_time_s=0)
-    power_cycle(switch)
+    BenchPower(switch).cycle()
     assert marker.read_text() == "off on"
 
 

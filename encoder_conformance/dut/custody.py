@@ -13,6 +13,7 @@ values that were in use when the run began, and checks them. Every step has a de
 
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -22,7 +23,8 @@ from canopen.sdo.exceptions import SdoAbortedError
 from ..cia301 import COMMAND_FOR_STATE, STATE_NAMES, NmtState
 from ..errors import BusLostError, DutLostError
 from .device import DeviceUnderTest, wake_if_silent
-from .identity import DeviceIdentity, identity_mismatch, read_identity
+from .frames import Mark
+from .identity import identity_mismatch, read_identity
 from .persist import CannotPersist, store_commands_for
 from .power import BenchPower
 from .sdo_frames import abort_name
@@ -70,8 +72,6 @@ class RestoreRecord:
         self.failures.append(text)
 
     def save(self, path: Path) -> None:
-        import json
-
         path.write_text(json.dumps(asdict(self), indent=1), encoding="utf-8")
 
 
@@ -85,9 +85,6 @@ class Deadline:
     def expired(self) -> bool:
         return time.monotonic() >= self.end
 
-    def shorten(self, seconds: float) -> None:
-        self.end = min(self.end, time.monotonic() + seconds)
-
 
 class Custody:
     """One device's snapshot and restore for one run."""
@@ -97,9 +94,7 @@ class Custody:
         self.snapshot_path = snapshot_path
         self.watch = watch
         self.snapshot: Snapshot | None = None
-        self.identity: DeviceIdentity | None = None
         self.record: RestoreRecord | None = None
-        self.deadline: Deadline | None = None
         self.power: BenchPower | None = None  # the bench's power switch, once a test used it
 
     # -- take --------------------------------------------------------------------------------------
@@ -130,8 +125,7 @@ class Custody:
                 snapshot.entries = [self._entry(k, found[k], None) for k in keys]
                 snapshot.found_state = self._state_seen(before)
                 self._save()
-            mark = dut.nmt("reset-node")
-            if dut.wait_bootup(mark) is None and not dut.responds():
+            if not dut.reset_and_reach():
                 raise PreflightError(
                     f"no answer from node {dut.node_id}: no SDO answer and no boot-up after NMT reset node. "
                     "Check --node-id, the bit rate, termination, wiring and power"
@@ -151,15 +145,15 @@ class Custody:
                              found_hex if found is None else found.hex(), hex_or_none(stored))
 
     def _check_identity(self, snapshot: Snapshot) -> None:
-        self.identity = read_identity(self.dut)
-        snapshot.identity = self.identity.as_report()
-        problem = identity_mismatch(self.identity, self.dut.profile)
+        identity = read_identity(self.dut)
+        snapshot.identity = identity.as_report()
+        problem = identity_mismatch(identity, self.dut.profile)
         if problem:
             raise PreflightError(problem)
 
-    def _state_seen(self, since: object) -> int | None:
+    def _state_seen(self, since: Mark) -> int | None:
         """The NMT state of the last heartbeat the node sent before the run touched it (None: none seen)."""
-        beats = self.dut.frames.since(since, self.dut._is_heartbeat)  # type: ignore[arg-type]
+        beats = self.dut.frames.since(since, self.dut.is_heartbeat)
         states = [b.data[0] for b in beats if b.data and b.data[0] != NmtState.BOOT_UP]
         return states[-1] if states else None
 
@@ -184,7 +178,7 @@ class Custody:
         if self.record is not None:
             return self.record
         started = time.monotonic()
-        self.deadline = Deadline(seconds)
+        deadline = Deadline(seconds)
         record = RestoreRecord(None if self.snapshot_path is None else str(self.snapshot_path))
         record.run_store_commands = dict(self.watch.counts)
         self.record = record
@@ -194,7 +188,7 @@ class Custody:
         self.watch.restoring = True
         try:
             with self.dut.custody():
-                self._give_back(record, self.deadline, check_stored or self.watch.total > 0)
+                self._give_back(record, deadline, check_stored or self.watch.total > 0)
             record.done = True
         except DutLostError as exc:
             record.fail(f"the device could not be reached: {exc}")
@@ -268,9 +262,10 @@ class Custody:
 
     def _differences(self, values: dict[Key, bytes | None], target, keys: list[Key] | None = None) -> list[Change]:  # noqa: ANN001
         assert self.snapshot is not None
+        wanted = None if keys is None else set(keys)
         changes = []
         for entry in self.snapshot.entries:
-            if keys is not None and entry.key not in keys:
+            if wanted is not None and entry.key not in wanted:
                 continue
             expected = target(entry)
             if expected is not None and values.get(entry.key) != expected:
@@ -299,8 +294,7 @@ class Custody:
     def _reset(self, deadline: Deadline) -> None:
         dut = self.dut
         self._check_time(deadline, "reset node")
-        mark = dut.nmt("reset-node")
-        if dut.wait_bootup(mark) is None and not dut.responds():
+        if not dut.reset_and_reach():
             raise DutLostError(f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after reset node")
 
     def _back_to_found_state(self, record: RestoreRecord) -> None:

@@ -129,6 +129,11 @@ class DeviceUnderTest:
         own = self._own_cob_ids()
         return bool(self.frames.since(mark, lambda m: m.is_rx and m.arbitration_id in own))
 
+    def reset_and_reach(self) -> bool:
+        """NMT reset node; True once a boot-up or an SDO answer shows the node is there."""
+        mark = self.nmt("reset-node")
+        return self.wait_bootup(mark) is not None or self.responds()
+
     def responds(self) -> bool:
         """One raw read of 1000h: does the node answer SDO at all?"""
         return self.sdo_request(sdo_frames.upload_request(0x1000, 0), check_alive=False) is not None
@@ -172,25 +177,25 @@ class DeviceUnderTest:
         self.network.send_message(0x000, bytes([NMT_COMMAND_NAMES[command], target]))
         return mark
 
-    def _is_heartbeat(self, msg: can.Message) -> bool:
+    def is_heartbeat(self, msg: can.Message) -> bool:
         return msg.is_rx and msg.arbitration_id == 0x700 + self.node_id and not msg.is_remote_frame
 
     def wait_bootup(self, after: Mark, timeout: float | None = None) -> can.Message | None:
         limit = timeout if timeout is not None else self.profile.timing.bootup_max_ms / 1000
-        return self.frames.wait_for(lambda m: self._is_heartbeat(m) and bytes(m.data) == b"\x00", limit, after)
+        return self.frames.wait_for(lambda m: self.is_heartbeat(m) and bytes(m.data) == b"\x00", limit, after)
 
     def wait_heartbeat(self, after: Mark, timeout: float, state: int | None = None) -> can.Message | None:
         """Next heartbeat (not boot-up) after ``after``; with ``state``, the next one reporting it."""
 
         def match(msg: can.Message) -> bool:
-            if not self._is_heartbeat(msg) or not msg.data or msg.data[0] == 0:
+            if not self.is_heartbeat(msg) or not msg.data or msg.data[0] == 0:
                 return False
             return state is None or msg.data[0] == state
 
         return self.frames.wait_for(match, timeout, after)
 
     def heartbeats(self, after: Mark, count: int, timeout: float) -> list[HeartbeatSample]:
-        hits = self.frames.wait_count(lambda m: self._is_heartbeat(m) and bool(m.data), count, timeout, after)
+        hits = self.frames.wait_count(lambda m: self.is_heartbeat(m) and bool(m.data), count, timeout, after)
         return [HeartbeatSample(m.timestamp, m.data[0], m.dlc) for m in hits]
 
     def frames_from_node(self, after: Mark, duration: float) -> list[can.Message]:

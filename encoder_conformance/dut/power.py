@@ -116,6 +116,3 @@ class BenchPower:
         self.left_off = False
         return True
 
-
-def power_cycle(switch: PowerSwitch) -> None:
-    BenchPower(switch).cycle()

@@ -48,10 +48,10 @@ class StoreWatch(can.Listener):
         if msg.data[0] >> 5 not in _DOWNLOAD_INITIATE:
             return
         index, sub = msg.data[1] | msg.data[2] << 8, msg.data[3]
-        if index == STORE_PARAMETERS or (index in self._commands and index != RESTORE_DEFAULT_PARAMETERS):
-            kind = f"store {index:04X}h.{sub:02X}"
-        elif index == RESTORE_DEFAULT_PARAMETERS:
+        if index == RESTORE_DEFAULT_PARAMETERS:
             kind = f"restore defaults {index:04X}h.{sub:02X}"
+        elif index in self._commands:
+            kind = f"store {index:04X}h.{sub:02X}"
         elif (index, sub) in self._auto:
             kind = "writes the device stores by itself"
         else:

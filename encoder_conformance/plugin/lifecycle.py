@@ -47,7 +47,7 @@ def start(config: pytest.Config) -> None:
         return
     state = RunState(InterruptGuard(on_stop=lambda reason: _stop_device(config, reason)))
     config.stash[STATE] = state
-    _CONFIG.append(config)
+    _RUN[0] = config
     state.guard.install()
 
 
@@ -97,14 +97,15 @@ def give_back(config: pytest.Config) -> RestoreRecord | None:
     return custody.record
 
 
-_CONFIG: list[pytest.Config] = []  # the run's config, for hooks that get none (pytest_keyboard_interrupt)
+_RUN: list[pytest.Config | None] = [None]  # the running config, for pytest_keyboard_interrupt (gets none)
 
 
 def give_back_now(excinfo: object) -> None:
     """Interrupted or stopped: restore at once, before pytest spends time formatting the traceback."""
-    if _CONFIG:
-        trace(_CONFIG[-1], "keyboard interrupt hook")
-        give_back(_CONFIG[-1])
+    config = _RUN[0]
+    if config is not None:
+        trace(config, "keyboard interrupt hook")
+        give_back(config)
     traceback = getattr(excinfo, "traceback", None)
     if traceback and type(getattr(excinfo, "value", None)) is KeyboardInterrupt:
         # pytest shows only the last entry of a Ctrl-C; a repr of the whole deep stack takes ~0.5 s
@@ -158,6 +159,7 @@ def final_exit_status(session: pytest.Session) -> None:
         return
     state.guard.trace("session finished")
     state.guard.uninstall()
+    _RUN[0] = None
     record = state.record
     if state.guard.exit_code is not None:
         session.exitstatus = state.guard.exit_code
