@@ -5,25 +5,13 @@ from __future__ import annotations
 import allure
 import pytest
 
+from .cia301 import ABORT_FOR_SITUATION
 from .dut.device import DeviceUnderTest
 from .dut.frames import format_frames
 from .dut.sdo_frames import SdoResponse, abort_name
 from .plugin.evidence import Evidence
 from .profile.model import HeartbeatTolerance
 from .timing import interval_stats, schedule_fit
-
-#: CiA 301 abort code per situation (strict mode).
-CIA_ABORTS: dict[str, int] = {
-    "write_ro": 0x06010002,
-    "read_wo": 0x06010001,
-    "no_object": 0x06020000,
-    "no_subindex": 0x06090011,
-    "length_high": 0x06070012,
-    "length_low": 0x06070013,
-    "value_high": 0x06090031,
-    "value_low": 0x06090032,
-    "store_signature": 0x08000020,
-}
 
 
 def expected_aborts(dut: DeviceUnderTest, situation: str, evidence: Evidence) -> set[int]:
@@ -32,7 +20,7 @@ def expected_aborts(dut: DeviceUnderTest, situation: str, evidence: Evidence) ->
         if quirk.effect == "abort_code" and quirk.params.get("situation") == situation:
             evidence.deviation(quirk_id, quirk.title)
             return {int(code) for code in quirk.params.get("codes", [])}
-    return {CIA_ABORTS[situation]}
+    return {ABORT_FOR_SITUATION[situation]}
 
 
 def assert_abort(dut: DeviceUnderTest, response: SdoResponse, expected: set[int], what: str) -> None:

@@ -23,6 +23,8 @@ STORE_SUB_OF_GROUP = {"store_all": 1, "store_comm": 2, "store_app": 3, "store_ma
 COMMUNICATION_AREA = range(0x1000, 0x2000)
 
 COB_ID_INVALID = 0x80000000  # bit 31 of a PDO/SYNC/EMCY COB-ID: the object does not exist / is not valid
+COB_ID_NO_RTR = 0x40000000  # bit 30 of a TPDO COB-ID: no RTR allowed on this PDO (CiA 301 §7.5.2.35)
+COB_ID_MASK_11BIT = 0x7FF
 TPDO_COMMUNICATION = range(0x1800, 0x1A00)
 TPDO_MAPPING = range(0x1A00, 0x1C00)
 RPDO_COMMUNICATION = range(0x1400, 0x1600)
@@ -63,6 +65,66 @@ COMMAND_FOR_STATE = {
     NmtState.OPERATIONAL: "start",
     NmtState.STOPPED: "stop",
     NmtState.PRE_OPERATIONAL: "pre-operational",
+}
+
+
+def cob_id_valid(cob_id: int) -> int:
+    """The COB-ID entry with bit 31 cleared: the PDO (or EMCY, SYNC) becomes valid."""
+    return cob_id & ~COB_ID_INVALID & 0xFFFFFFFF
+
+
+def cob_id_invalid(cob_id: int) -> int:
+    """The COB-ID entry with bit 31 set: the PDO becomes invalid (CiA 301 §7.5.2.35, before remapping)."""
+    return cob_id | COB_ID_INVALID
+
+
+#: TPDO transmission types (CiA 301 §7.5.2.35 table 71)
+SYNC_ACYCLIC = 0
+SYNC_CYCLIC = range(1, 241)
+RTR_SYNCHRONOUS = 252
+RTR_EVENT = 253
+EVENT_MANUFACTURER = 254
+EVENT_PROFILE = 255
+
+
+class SdoAbortCode(IntEnum):
+    """SDO abort codes (CiA 301 §7.2.4.3.17 table 22) that the simulator and the suites name."""
+
+    TOGGLE_BIT = 0x05030000
+    TIMEOUT = 0x05040000
+    COMMAND_SPECIFIER = 0x05040001
+    READ_WO = 0x06010001
+    WRITE_RO = 0x06010002
+    NO_OBJECT = 0x06020000
+    NOT_MAPPABLE = 0x06040041
+    PDO_TOO_LONG = 0x06040042
+    PARAMETER_INCOMPATIBLE = 0x06040043
+    HARDWARE_ERROR = 0x06060000
+    LENGTH_MISMATCH = 0x06070010
+    LENGTH_HIGH = 0x06070012
+    LENGTH_LOW = 0x06070013
+    NO_SUBINDEX = 0x06090011
+    VALUE_INVALID = 0x06090030
+    VALUE_HIGH = 0x06090031
+    VALUE_LOW = 0x06090032
+    GENERAL_ERROR = 0x08000000
+    CANNOT_STORE = 0x08000020
+    LOCAL_CONTROL = 0x08000021
+    WRONG_STATE = 0x08000022
+
+
+#: CiA 301's abort code per situation, as the ``abort_code`` quirk effect names the situations
+ABORT_FOR_SITUATION: dict[str, int] = {
+    "write_ro": SdoAbortCode.WRITE_RO,
+    "read_wo": SdoAbortCode.READ_WO,
+    "no_object": SdoAbortCode.NO_OBJECT,
+    "no_subindex": SdoAbortCode.NO_SUBINDEX,
+    "length_high": SdoAbortCode.LENGTH_HIGH,
+    "length_low": SdoAbortCode.LENGTH_LOW,
+    "value_high": SdoAbortCode.VALUE_HIGH,
+    "value_low": SdoAbortCode.VALUE_LOW,
+    "wrong_state": SdoAbortCode.WRONG_STATE,
+    "store_signature": SdoAbortCode.CANNOT_STORE,
 }
 
 

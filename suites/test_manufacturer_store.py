@@ -11,6 +11,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.checks import documented_quirk
+from encoder_conformance.cia301 import SAVE, SAVE_SIGNATURE
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.parameters import changeable_parameter, other_valid_value, parse_key
 
@@ -18,7 +19,6 @@ pytestmark = [pytest.mark.spec("manufacturer store commands (profile quirks stor
                                 "manufacturer_store_object)"),
               pytest.mark.destructive]
 
-SAVE = (0x65766173).to_bytes(4, "little")
 
 
 @pytest.fixture
@@ -76,7 +76,7 @@ def test_manufacturer_store_object_keeps_value(dut, extra_store, evidence):
     """A parameter saved with the manufacturer store object ('save') holds its new value after reset node."""
     index, sub = parse_key(extra_store["test_object"])
     command = (int(extra_store["index"]), int(extra_store.get("subindex", 0)))
-    signature = int(extra_store.get("signature", 0x65766173)).to_bytes(4, "little")
+    signature = int(extra_store.get("signature", SAVE_SIGNATURE)).to_bytes(4, "little")
     original = dut.read(index, sub)
     changed = other_valid_value(dut.profile, index, sub, int.from_bytes(original, "little"))
     assert changed is not None, f"{index:04X}h.{sub:02X}: no other valid value next to {original.hex()}"

@@ -14,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, note, settings
 from hypothesis import strategies as st
 
+from encoder_conformance.cia301 import SdoAbortCode
 from encoder_conformance.dut import sdo_frames
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocol)")
@@ -80,7 +81,7 @@ def test_uploads_of_any_object_answered(dut, alive_after):
         response = dut.sdo_request(request)
         _check_reply(dut, request, response, {2})
         if response.segmented_size is not None:  # a segmented upload was started: end it politely
-            dut.network.send_message(0x600 + dut.node_id, struct.pack("<BHBI", 0x80, *mux, 0x05040000))
+            dut.network.send_message(0x600 + dut.node_id, struct.pack("<BHBI", 0x80, *mux, SdoAbortCode.TIMEOUT))
 
     check()
 
@@ -118,8 +119,8 @@ def test_unknown_command_specifiers_abort(dut, alive_after):
         response = dut.sdo_request(request)
         note(f"request {request.hex(' ')} -> {response.describe() if response else 'no response'}")
         assert response is not None, f"no response to command specifier {ccs} ({request.hex(' ').upper()})"
-        expected = f"command specifier {ccs}: expected abort {sdo_frames.abort_name(0x05040001)}"
+        expected = f"command specifier {ccs}: expected abort {sdo_frames.abort_name(SdoAbortCode.COMMAND_SPECIFIER)}"
         assert response.is_abort, f"{expected}, got {response.describe()}"
-        assert response.abort_code == 0x05040001, f"{expected}, got {response.describe()}"
+        assert response.abort_code == SdoAbortCode.COMMAND_SPECIFIER, f"{expected}, got {response.describe()}"
 
     check()

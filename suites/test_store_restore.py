@@ -5,14 +5,13 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.checks import assert_abort, documented_quirk, expected_aborts
+from encoder_conformance.cia301 import LOAD, SAVE
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
 from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter, other_valid_value, parse_key
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.13/§7.5.2.14"), pytest.mark.destructive]
 
-SAVE = (0x65766173).to_bytes(4, "little")
-LOAD = (0x64616F6C).to_bytes(4, "little")
 
 
 def _store(dut, index: int, sub: int) -> str:

@@ -14,13 +14,14 @@ import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.checks import assert_abort, describe_value, expected_aborts
+from encoder_conformance.cia301 import SdoAbortCode
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.profile import datatypes
 from encoder_conformance.value_domain import declared_domain, probe_values
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3.17 (abort codes 06090030h..06090032h)")
 
-VALUE_INVALID = 0x06090030  # value range of parameter exceeded
+VALUE_INVALID = SdoAbortCode.VALUE_INVALID  # value range of parameter exceeded
 STORE_RESTORE = {0x1010: "store parameters", 0x1011: "restore default parameters"}
 
 

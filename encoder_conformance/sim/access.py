@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ..cia301 import ABORT_FOR_SITUATION
+from ..cia301 import SdoAbortCode as Abort
 from ..profile import datatypes
 from ..profile.model import DeviceProfile
 from ..profile.value_set import ValueSet
@@ -18,41 +20,9 @@ from .sdo_server import SdoAbort
 if TYPE_CHECKING:
     from .node import SimulatedNode
 
-NO_OBJECT = 0x06020000
-NO_SUBINDEX = 0x06090011
-READ_WO = 0x06010001
-WRITE_RO = 0x06010002
-LENGTH_HIGH = 0x06070012
-LENGTH_LOW = 0x06070013
-LENGTH_MISMATCH = 0x06070010
-VALUE_HIGH = 0x06090031
-VALUE_LOW = 0x06090032
-VALUE_INVALID = 0x06090030
-CANNOT_STORE = 0x08000020
-WRONG_STATE = 0x08000022
-GENERAL_ERROR = 0x08000000
-
-SAVE = 0x65766173  # 'save' little-endian
-LOAD = 0x64616F6C  # 'load' little-endian
-
-#: CiA 301 code per situation of the quirk effect ``abort_code``
-CIA_CODES: dict[str, int] = {
-    "write_ro": WRITE_RO,
-    "read_wo": READ_WO,
-    "no_object": NO_OBJECT,
-    "no_subindex": NO_SUBINDEX,
-    "length_high": LENGTH_HIGH,
-    "length_low": LENGTH_LOW,
-    "value_high": VALUE_HIGH,
-    "value_low": VALUE_LOW,
-    "wrong_state": WRONG_STATE,
-    "store_signature": CANNOT_STORE,
-}
-
-
 def situation_codes(profile: DeviceProfile) -> dict[str, int]:
     """The code the device sends per situation: CiA's, or the first one an ``abort_code`` quirk lists."""
-    codes = dict(CIA_CODES)
+    codes = dict(ABORT_FOR_SITUATION)
     for quirk in profile.quirks.values():
         listed = quirk.params.get("codes") or []
         if quirk.effect == "abort_code" and quirk.params.get("situation") in codes and listed:
@@ -73,9 +43,9 @@ class NodeObjectAccess:
         node, faults = self.node, self.node.faults
         missing_index = not node.store.has_index(index) or index in node.hidden_indices
         if missing_index:
-            raise SdoAbort(NO_SUBINDEX if faults.active("wrong_abort_no_object") else self.codes["no_object"])
+            raise SdoAbort(Abort.NO_SUBINDEX if faults.active("wrong_abort_no_object") else self.codes["no_object"])
         if not node.store.has((index, sub)):
-            raise SdoAbort(NO_OBJECT if faults.active("wrong_abort_no_subindex") else self.codes["no_subindex"])
+            raise SdoAbort(Abort.NO_OBJECT if faults.active("wrong_abort_no_subindex") else self.codes["no_subindex"])
         return index, sub
 
     # -- read ----------------------------------------------------------------------------
@@ -100,7 +70,8 @@ class NodeObjectAccess:
         if entry.access in ("ro", "const"):
             if node.faults.active("write_ro_accepted"):
                 return
-            raise SdoAbort(GENERAL_ERROR if node.faults.active("wrong_abort_write_ro") else self.codes["write_ro"])
+            wrong = node.faults.active("wrong_abort_write_ro")
+            raise SdoAbort(Abort.GENERAL_ERROR if wrong else self.codes["write_ro"])
         size = datatypes.size_bytes(entry.type)
         if size is not None and len(data) != size:
             raise SdoAbort(self.codes["length_high"] if len(data) > size else self.codes["length_low"])
@@ -123,4 +94,4 @@ class NodeObjectAccess:
             raise SdoAbort(self.codes["value_high"])
         if domain.minimum is not None and value < domain.minimum:
             raise SdoAbort(self.codes["value_low"])
-        raise SdoAbort(VALUE_INVALID)  # in a gap of the allowed values (or nothing is allowed)
+        raise SdoAbort(Abort.VALUE_INVALID)  # in a gap of the allowed values (or nothing is allowed)

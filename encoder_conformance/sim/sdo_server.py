@@ -10,10 +10,11 @@ import struct
 from dataclasses import dataclass, field
 from typing import Protocol
 
-# abort codes (CiA 301 table 22)
-TOGGLE_NOT_ALTERNATED = 0x05030000
-COMMAND_INVALID = 0x05040001
-GENERAL_ERROR = 0x08000000
+from ..cia301 import SdoAbortCode
+
+TOGGLE_NOT_ALTERNATED = SdoAbortCode.TOGGLE_BIT
+COMMAND_INVALID = SdoAbortCode.COMMAND_SPECIFIER
+GENERAL_ERROR = SdoAbortCode.GENERAL_ERROR
 
 
 class SdoAbort(Exception):
@@ -115,7 +116,7 @@ class SdoServer:
         if request[0] & 0x01:  # last segment
             self._transfer = None
             if transfer.size is not None and transfer.size != len(transfer.data):
-                raise SdoAbort(0x06070010)
+                raise SdoAbort(SdoAbortCode.LENGTH_MISMATCH)
             self._access.sdo_write(transfer.index, transfer.sub, bytes(transfer.data))
         return response
 

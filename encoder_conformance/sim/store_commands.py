@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from . import access as codes
+from ..cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
 from .nvm import Key
 from .object_store import SUB_TO_GROUP
 from .sdo_server import SdoAbort, SdoNoReply
@@ -72,7 +72,7 @@ class StoreCommands:
     def _parameter_set_command(self, key: Key, value: object, sets: ParameterSets) -> None:
         """Quirk reload_immediate: save a parameter set, or load saved values at once (no reset)."""
         index, sub = key
-        self._check_signature(value, codes.SAVE if index == 0x1010 else codes.LOAD)
+        self._check_signature(value, SAVE_SIGNATURE if index == 0x1010 else LOAD_SIGNATURE)
         node = self.node
         if index == 0x1010:
             sets.save_set(sub, node.store, node.nvm)
@@ -86,7 +86,7 @@ class StoreCommands:
     def _store_or_restore(self, index: int, sub: int, value: object) -> None:
         node = self.node
         storing = index == 0x1010
-        self._check_signature(value, codes.SAVE if storing else codes.LOAD)
+        self._check_signature(value, SAVE_SIGNATURE if storing else LOAD_SIGNATURE)
         group = SUB_TO_GROUP.get(sub, "store_manufacturer")
         if storing:
             if not node.faults.active("store_not_persisted"):
@@ -104,7 +104,7 @@ class StoreCommands:
         """
         node = self.node
         wrong = params.get("wrong_signature_abort")
-        signature = int(params.get("signature_u32", codes.SAVE))
+        signature = int(params.get("signature_u32", SAVE_SIGNATURE))
         self._check_signature(value, signature, None if wrong is None else int(wrong))
         if not node.faults.active("store_not_persisted"):
             node.store.store_all_storable()

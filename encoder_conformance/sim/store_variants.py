@@ -18,6 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from ..cia301 import SAVE_SIGNATURE
 from ..parameters import parse_key
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
@@ -80,7 +81,7 @@ class ManufacturerStoreObject:
         wrong = params.get("wrong_signature_abort")
         return cls(
             key=(int(params["index"]), int(params.get("subindex", 0))),
-            signature=int(params.get("signature", 0x65766173)),
+            signature=int(params.get("signature", SAVE_SIGNATURE)),
             saves=tuple(parse_key(k) for k in params.get("saves", [])),
             wrong_signature_abort=None if wrong is None else int(wrong),
         )
