@@ -129,9 +129,9 @@ def _cmd_profile_to_eds(args: argparse.Namespace, extra: list[str]) -> int:
 def _cmd_fault_matrix(args: argparse.Namespace, extra: list[str]) -> int:
     import tempfile
 
+    from .fault_catalogue import faults_for
     from .fault_matrix import format_matrix, run_matrix
     from .profile.loader import load_profile
-    from .sim.faults import faults_for
 
     faults = args.fault or faults_for(load_profile(args.profile).profile.effects)
     with tempfile.TemporaryDirectory(prefix="fault-matrix-") as workdir:
@@ -149,7 +149,7 @@ def _cmd_fault_matrix(args: argparse.Namespace, extra: list[str]) -> int:
 
 
 def _cmd_faults(args: argparse.Namespace, extra: list[str]) -> int:
-    from .sim.faults import FAULTS
+    from .fault_catalogue import FAULTS
 
     for name, text in sorted(FAULTS.items()):
         print(f"{name:32s} {text}")

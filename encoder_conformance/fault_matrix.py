@@ -16,7 +16,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .sim.faults import TARGET_MODULES
+from .fault_catalogue import TARGET_MODULES
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 _ENTRY_PARAM = re.compile(r"\[0x[0-9A-F]{4}\.[0-9A-F]{2} .*\]$")  # names may hold brackets: "Kv [1/s]"

@@ -58,9 +58,6 @@ class SimulatorControl:
     def set_speed(self, revolutions_per_second: float) -> None:
         self._call("set_speed", revolutions_per_second)
 
-    def set_faults(self, names: list[str]) -> None:
-        self._call("set_faults", names)
-
     def raise_emcy(self, code: int, register_bits: int, info: bytes = b"") -> None:
         self._call("raise_emcy", code, register_bits, info)
 
@@ -89,13 +86,8 @@ def _execute(host: SimulatorHost, command: str, node_id: int | None, args: tuple
         "raise_emcy": node.raise_emcy,
         "describe": node.describe,
     }
-    if command == "set_faults":
-        node.faults.clear()
-        for name in args[0]:
-            node.faults.enable(name)
-        return None
     if command not in actions:
-        raise ValueError(f"unknown command {command!r}; known: {', '.join(sorted(actions))}, set_faults")
+        raise ValueError(f"unknown command {command!r}; known: {', '.join(sorted(actions))}")
     return actions[command](*args)
 
 

@@ -14,8 +14,8 @@ import can
 import pytest
 
 from encoder_conformance.dut.frames import FrameLog
+from encoder_conformance.fault_catalogue import FAULTS
 from encoder_conformance.profile.loader import DEFAULT_PROFILE_DIR
-from encoder_conformance.sim.faults import FAULTS
 from encoder_conformance.sim_control import SimulatorControl
 from encoder_conformance.sim_process import start_simulator
 

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from ..bus_config import BusConfig, resolve_bus_config
+from ..fault_catalogue import FAULTS
 from ..profile.loader import LoadedProfile, load_profile
-from ..sim.faults import FAULTS
 from ..station import Station, StationError, StationPower, load_station
 
 DEFAULT_PROFILE = "wachendorff-wdga-mt"

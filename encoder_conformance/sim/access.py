@@ -1,13 +1,14 @@
-"""What an SDO read or write does on the simulated node: existence, access, size, limits, effects.
+"""The SDO access rules of a simulated node: existence, access, size and value domain (CiA 301).
 
-Each check returns the CiA 301 abort code for its situation; faults and profile quirks change
-the outcome at exactly one place each. A quirk with effect ``abort_code`` replaces the code of
-its situation by the first code it lists.
+Each check answers with the CiA 301 abort code for its situation; a quirk with effect
+``abort_code`` replaces the code of its situation by the first code it lists. A write the rules
+accept goes on through the node's hooks (gates, commands, reactions: ``sim/hooks.py``). Faults that
+break a rule are the small classes at the bottom, each overriding one decision.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Callable
 
 from ..cia301 import ABORT_FOR_SITUATION
 from ..cia301 import SdoAbortCode as Abort
@@ -15,10 +16,12 @@ from ..profile import datatypes
 from ..profile.model import DeviceProfile
 from ..profile.value_set import ValueSet
 from ..value_domain import declared_domain
+from .faults import breaks
+from .hooks import NodeHooks, Value
+from .nvm import Key
+from .object_store import ObjectStore
 from .sdo_server import SdoAbort
 
-if TYPE_CHECKING:
-    from .node import SimulatedNode
 
 def situation_codes(profile: DeviceProfile) -> dict[str, int]:
     """The code the device sends per situation: CiA's, or the first one an ``abort_code`` quirk lists."""
@@ -30,63 +33,83 @@ def situation_codes(profile: DeviceProfile) -> dict[str, int]:
     return codes
 
 
-class NodeObjectAccess:
-    """The ObjectAccess of one simulated node (see sdo_server.ObjectAccess)."""
+class ObjectAccess:
+    """The sdo_server.ObjectAccess of one simulated node."""
 
-    def __init__(self, node: SimulatedNode) -> None:
-        self.node = node
-        self.codes = situation_codes(node.profile)
-        self._domains: dict[tuple[int, int], ValueSet | None] = {}
+    def __init__(self, profile: DeviceProfile, store: ObjectStore, hooks: NodeHooks,
+                 encode: Callable[[Key], bytes], codes: dict[str, int]) -> None:
+        self._profile = profile
+        self._store = store
+        self._hooks = hooks
+        self._encode = encode
+        self.codes = codes
+        self._domains: dict[Key, ValueSet | None] = {}
 
     # -- shared checks -------------------------------------------------------------------
-    def _locate(self, index: int, sub: int) -> tuple[int, int]:
-        node, faults = self.node, self.node.faults
-        missing_index = not node.store.has_index(index) or index in node.hidden_indices
-        if missing_index:
-            raise SdoAbort(Abort.NO_SUBINDEX if faults.active("wrong_abort_no_object") else self.codes["no_object"])
-        if not node.store.has((index, sub)):
-            raise SdoAbort(Abort.NO_OBJECT if faults.active("wrong_abort_no_subindex") else self.codes["no_subindex"])
+    def exists(self, index: int) -> bool:
+        return self._store.has_index(index)
+
+    def no_object_code(self) -> int:
+        return self.codes["no_object"]
+
+    def no_subindex_code(self) -> int:
+        return self.codes["no_subindex"]
+
+    def _locate(self, index: int, sub: int) -> Key:
+        if not self.exists(index):
+            raise SdoAbort(self.no_object_code())
+        if not self._store.has((index, sub)):
+            raise SdoAbort(self.no_subindex_code())
         return index, sub
 
     # -- read ----------------------------------------------------------------------------
+    def read_write_only(self, entry_type: str) -> bytes:
+        raise SdoAbort(self.codes["read_wo"])
+
+    def encoded(self, key: Key) -> bytes:
+        return self._encode(key)
+
     def sdo_read(self, index: int, sub: int) -> bytes:
         key = self._locate(index, sub)
-        node = self.node
-        entry = node.store.entries[key]
+        entry = self._store.entries[key]
         if entry.access == "wo":
-            if node.faults.active("read_wo_allowed"):
-                return bytes(datatypes.size_bytes(entry.type) or 1)
-            raise SdoAbort(self.codes["read_wo"])
-        data = node.encode_current(key)
-        if node.faults.active("wrong_size") and len(data) == 4 and entry.type not in datatypes.STRING_TYPES:
-            data = data[:2]
-        return data
+            return self.read_write_only(entry.type)
+        return self.encoded(key)
 
     # -- write ---------------------------------------------------------------------------
+    def write_read_only(self) -> None:
+        raise SdoAbort(self.codes["write_ro"])
+
     def sdo_write(self, index: int, sub: int, data: bytes) -> None:
         key = self._locate(index, sub)
-        node = self.node
-        entry = node.store.entries[key]
+        entry = self._store.entries[key]
         if entry.access in ("ro", "const"):
-            if node.faults.active("write_ro_accepted"):
-                return
-            wrong = node.faults.active("wrong_abort_write_ro")
-            raise SdoAbort(Abort.GENERAL_ERROR if wrong else self.codes["write_ro"])
+            self.write_read_only()
+            return
         size = datatypes.size_bytes(entry.type)
         if size is not None and len(data) != size:
             raise SdoAbort(self.codes["length_high"] if len(data) > size else self.codes["length_low"])
-        value = node.store.decode(key, data)
-        if isinstance(value, int) and not node.faults.active("value_domain_ignored"):
-            self._check_domain(key, value)
-        node.quirk_write_gate(key, value)
-        if node.faults.active("write_rw_ignored"):
-            return
-        node.apply_write(key, value)
+        value = self._store.decode(key, data)
+        if isinstance(value, int):
+            self.check_domain(key, value)
+        for gate in self._hooks.gates:
+            gate(key, value)
+        self.accept(key, value)
 
-    def _check_domain(self, key: tuple[int, int], value: int) -> None:
+    def accept(self, key: Key, value: Value) -> None:
+        """The write passed every check: a command consumes it, or it is stored and reacted to."""
+        hooks = self._hooks
+        if any(command(key, value) for command in hooks.commands):
+            return
+        for reaction in hooks.before_set:
+            reaction(key, value)
+        self._store.set(key, value)
+        hooks.written(key, value)
+
+    def check_domain(self, key: Key, value: int) -> None:
         """Refuse a value outside the declared domain (type range, min/max, allowed, TPDO types)."""
         if key not in self._domains:
-            self._domains[key] = declared_domain(self.node.profile, *key)
+            self._domains[key] = declared_domain(self._profile, *key)
         domain = self._domains[key]
         if domain is None or value in domain:
             return
@@ -95,3 +118,64 @@ class NodeObjectAccess:
         if domain.minimum is not None and value < domain.minimum:
             raise SdoAbort(self.codes["value_low"])
         raise SdoAbort(Abort.VALUE_INVALID)  # in a gap of the allowed values (or nothing is allowed)
+
+
+@breaks(ObjectAccess, "missing_object")
+class LastObjectMissing(ObjectAccess):
+    """The last declared object of the profile does not exist."""
+
+    def exists(self, index: int) -> bool:
+        return index != max(self._profile.objects) and super().exists(index)
+
+
+@breaks(ObjectAccess, "wrong_abort_no_object")
+class WrongAbortNoObject(ObjectAccess):
+    def no_object_code(self) -> int:
+        return Abort.NO_SUBINDEX
+
+
+@breaks(ObjectAccess, "wrong_abort_no_subindex")
+class WrongAbortNoSubindex(ObjectAccess):
+    def no_subindex_code(self) -> int:
+        return Abort.NO_OBJECT
+
+
+@breaks(ObjectAccess, "read_wo_allowed")
+class WriteOnlyReadable(ObjectAccess):
+    def read_write_only(self, entry_type: str) -> bytes:
+        return bytes(datatypes.size_bytes(entry_type) or 1)
+
+
+@breaks(ObjectAccess, "wrong_size")
+class ShortUploads(ObjectAccess):
+    """Expedited uploads of 32-bit objects carry 2 bytes."""
+
+    def encoded(self, key: Key) -> bytes:
+        data = super().encoded(key)
+        if len(data) == 4 and self._store.entries[key].type not in datatypes.STRING_TYPES:
+            return data[:2]
+        return data
+
+
+@breaks(ObjectAccess, "write_ro_accepted")
+class ReadOnlyWritable(ObjectAccess):
+    def write_read_only(self) -> None:
+        return  # confirmed, and ignored
+
+
+@breaks(ObjectAccess, "wrong_abort_write_ro")
+class WrongAbortWriteReadOnly(ObjectAccess):
+    def write_read_only(self) -> None:
+        raise SdoAbort(Abort.GENERAL_ERROR)
+
+
+@breaks(ObjectAccess, "value_domain_ignored")
+class ValueDomainIgnored(ObjectAccess):
+    def check_domain(self, key: Key, value: int) -> None:
+        return
+
+
+@breaks(ObjectAccess, "write_rw_ignored")
+class WritesIgnored(ObjectAccess):
+    def accept(self, key: Key, value: Value) -> None:
+        return  # confirmed, value unchanged

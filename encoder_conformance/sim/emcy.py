@@ -1,4 +1,8 @@
-"""EMCY producer with the error register (1001h) and the pre-defined error field (1003h)."""
+"""EMCY producer with the error register (1001h) and the pre-defined error field (1003h).
+
+A behaviour: writing 0 to 1003h sub 0 clears the history (any other value is refused), power-on
+starts with no history. The fault that breaks it is the small class at the bottom.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +10,12 @@ import struct
 import time
 from collections.abc import Callable
 
+from ..cia301 import SdoAbortCode
+from .faults import breaks
+from .hooks import NodeHooks, ReloadEvent
+from .nvm import Key
 from .object_store import ObjectStore
+from .sdo_server import SdoAbort
 
 GENERIC_ERROR_BIT = 0x01
 
@@ -21,23 +30,38 @@ class EmcyProducer:
         allowed: Callable[[], bool],
         node_id: Callable[[], int],
         without_generic_bit: bool = False,
-        cob_offset: int = 0,
     ) -> None:
         self._store = store
         self._send = send
         self._allowed = allowed
         self._node_id = node_id
         self._without_generic_bit = without_generic_bit
-        self._cob_offset = cob_offset
         self._last_sent = -1e9
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.commands.append(self._clear_history_command)
+        hooks.reload.append(self._on_reload)
+
+    def _clear_history_command(self, key: Key, value: object) -> bool:
+        """1003h sub 0 = 0 clears the error history; other values are refused (CiA 301 §7.5.2.5)."""
+        if key != (0x1003, 0):
+            return False
+        if value != 0:
+            raise SdoAbort(SdoAbortCode.VALUE_INVALID)
+        self.clear_history()
+        return True
+
+    def _on_reload(self, event: ReloadEvent) -> None:
+        if event.name == "power_on":
+            self.clear_history()
 
     def _cob_id(self) -> int | None:
         if self._store.has((0x1014, 0)):
             value = int(self._store.get((0x1014, 0)))
             if value & 0x80000000:
                 return None
-            return (value & 0x1FFFFFFF if value & 0x20000000 else value & 0x7FF) + self._cob_offset
-        return 0x80 + self._node_id() + self._cob_offset
+            return value & 0x1FFFFFFF if value & 0x20000000 else value & 0x7FF
+        return 0x80 + self._node_id()
 
     def raise_error(self, code: int, register_bits: int, info: bytes = b"") -> None:
         """Record an error and send its EMCY (if the state and 1014h/1015h allow)."""
@@ -81,3 +105,10 @@ class EmcyProducer:
             return
         self._last_sent = now
         self._send(cob_id, struct.pack("<HB", code, register) + info[:5].ljust(5, b"\x00"))
+
+
+@breaks(EmcyProducer, "emcy_wrong_cob_id")
+class EmcyOnWrongCobId(EmcyProducer):
+    def _cob_id(self) -> int | None:
+        cob_id = super()._cob_id()
+        return None if cob_id is None else cob_id + 1

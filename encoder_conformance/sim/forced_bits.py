@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from .faults import breaks
+from .hooks import NodeHooks, ReloadEvent
 from .object_store import ObjectStore
 
 #: the initialisation events a quirk can name in ``at``
@@ -23,3 +25,23 @@ def force_bits(params: dict[str, Any] | None, store: ObjectStore, event: str) ->
     value = store.get(key) if store.has(key) else None
     if isinstance(value, int):
         store.set(key, value | int(params["forced_bits"]))
+
+
+class ForcedBits:
+    """A behaviour: applies the quirk at every initialisation event."""
+
+    def __init__(self, params: dict[str, Any], store: ObjectStore) -> None:
+        self._params = params
+        self._store = store
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.reload.append(self.on_reload)
+
+    def on_reload(self, event: ReloadEvent) -> None:
+        force_bits(self._params, self._store, event.name)
+
+
+@breaks(ForcedBits, "forced_bits_not_applied")
+class ForcedBitsNotApplied(ForcedBits):
+    def on_reload(self, event: ReloadEvent) -> None:
+        return  # the value keeps its stored bits

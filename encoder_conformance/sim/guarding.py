@@ -7,39 +7,55 @@ guard time written while the producer runs is refused. CiA 301 keeps the objects
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
-from .faults import FaultSet
+from .faults import breaks
+from .hooks import NodeHooks
 from .nvm import Key
 from .sdo_server import SdoAbort
 
 
-@dataclass(frozen=True)
 class GuardingHeartbeatExclusion:
-    producer: Key
-    guard_time: Key
-    abort_code: int
-    faults: FaultSet
+    """A behaviour: gates guard-time writes and switches guarding off when the producer starts."""
+
+    def __init__(self, producer: Key, guard_time: Key, abort_code: int, read: Callable[[int, int], int | None],
+                 write: Callable[[Key, int], None]) -> None:
+        self.producer = producer
+        self.guard_time = guard_time
+        self.abort_code = abort_code
+        self._read = read
+        self._write = write
 
     @classmethod
-    def from_params(cls, params: dict[str, Any], faults: FaultSet) -> GuardingHeartbeatExclusion:
+    def from_params(cls, params: dict[str, Any], read: Callable[[int, int], int | None],
+                    write: Callable[[Key, int], None]) -> GuardingHeartbeatExclusion:
         return cls(
             producer=(int(params.get("producer_object", 0x1017)), 0),
             guard_time=(int(params.get("guard_time_object", 0x100C)), 0),
             abort_code=int(params.get("guard_time_write_while_producer_abort", 0x08000020)),
-            faults=faults,
+            read=read,
+            write=write,
         )
 
-    def _active(self) -> bool:
-        return not self.faults.active("guarding_heartbeat_coexist")
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.gates.append(self.gate)
+        hooks.on_written(self.after_write, [self.producer[0]])
 
-    def gate(self, key: Key, value: object, read: Callable[[int, int], int | None]) -> None:
+    def excludes(self) -> bool:
+        return True
+
+    def gate(self, key: Key, value: object) -> None:
         """Refuse a non-zero guard time while the heartbeat producer runs (writing 0 stays allowed)."""
-        if self._active() and key == self.guard_time and value != 0 and (read(*self.producer) or 0) > 0:
+        if self.excludes() and key == self.guard_time and value != 0 and (self._read(*self.producer) or 0) > 0:
             raise SdoAbort(self.abort_code)
 
-    def after_write(self, key: Key, value: object, write: Callable[[Key, int], None]) -> None:
+    def after_write(self, key: Key, value: object) -> None:
         """A producer time > 0 switches node guarding off (guard time 0)."""
-        if self._active() and key == self.producer and isinstance(value, int) and value > 0:
-            write(self.guard_time, 0)
+        if self.excludes() and key == self.producer and isinstance(value, int) and value > 0:
+            self._write(self.guard_time, 0)
+
+
+@breaks(GuardingHeartbeatExclusion, "guarding_heartbeat_coexist")
+class GuardingCoexists(GuardingHeartbeatExclusion):
+    def excludes(self) -> bool:
+        return False

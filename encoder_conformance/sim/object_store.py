@@ -10,6 +10,7 @@ from canopen.objectdictionary import ODVariable
 from ..profile import datatypes
 from ..profile.model import DeviceProfile, EntrySpec, resolve_node_id_expression
 from ..profile.od_builder import build_object_dictionary, initial_value
+from .faults import breaks
 from .nvm import Key, NonVolatileMemory
 
 #: persisted_by labels a 1010h sub stores; the profile's label decides (devices differ in the
@@ -128,3 +129,17 @@ class ObjectStore:
         """Entries with persisted_by: auto go to NVM on every write."""
         if self.entries[key].persisted_by == "auto" and not isinstance(self.values[key], bytes):
             self.nvm.put_many({key: self.values[key]})
+
+
+@breaks(ObjectStore, "wrong_default")
+class WrongDefaults(ObjectStore):
+    """Every reload leaves writable UNSIGNED values one above their factory default."""
+
+    def reload(self, in_scope: Callable[[int], bool], node_id: int) -> None:
+        super().reload(in_scope, node_id)
+        for key, entry in self.entries.items():
+            value = self.values[key]
+            default = resolve_node_id_expression(self.default_of(key, node_id), node_id)
+            if (entry.writable and isinstance(value, int) and value == default and entry.type.startswith("UNSIGNED")
+                    and key[0] not in (0x1010, 0x1011)):
+                self.values[key] = value + 1

@@ -15,10 +15,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:
-    from .tpdo import TpdoConfig
+from .tpdo_config import TpdoConfig
 
 Read = Callable[[int, int], int | None]
 

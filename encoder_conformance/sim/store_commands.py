@@ -1,20 +1,38 @@
 """What writes to store objects do on a simulated node: 1010h 'save', 1011h 'load' and the quirks
 that replace or add to them (``store_reboots_without_reply``, ``store_automatic``,
-``node_id_object`` with a store object of its own).
+``manufacturer_store_object``, ``reload_immediate``).
+
+A behaviour: it registers the store objects as commands and persists what the device stores by
+itself after each write. Faults that break it are the small classes at the bottom.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
 from ..cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
-from .nvm import Key
-from .object_store import SUB_TO_GROUP
+from ..profile.model import DeviceProfile
+from .faults import breaks
+from .hooks import NodeHooks
+from .nvm import Key, NonVolatileMemory
+from .object_store import SUB_TO_GROUP, ObjectStore
 from .sdo_server import SdoAbort, SdoNoReply
 from .store_variants import ManufacturerStoreObject, ParameterSets
 
-if TYPE_CHECKING:
-    from .node import SimulatedNode
+
+@dataclass(frozen=True)
+class EncoderMemory:
+    """What the encoder function keeps in NVM besides objects (the internal preset offset)."""
+
+    persist: Callable[[NonVolatileMemory], None]
+    forget: Callable[[NonVolatileMemory], None]
+
+
+def _params(profile: DeviceProfile, effect: str) -> dict[str, Any] | None:
+    found = profile.quirk_with_effect(effect)
+    return None if found is None else found[1].params
 
 
 def _key(params: dict[str, Any], index: str, sub: str, default: Key) -> Key:
@@ -24,14 +42,25 @@ def _key(params: dict[str, Any], index: str, sub: str, default: Key) -> Key:
 class StoreCommands:
     """The store and restore behaviour of one node, as its profile declares it."""
 
-    def __init__(self, node: SimulatedNode) -> None:
-        self.node = node
-        self.reboot = node.quirk_params("store_reboots_without_reply")
-        self.automatic = node.quirk_params("store_automatic") is not None
-        extra = node.quirk_params("manufacturer_store_object")
+    def __init__(self, profile: DeviceProfile, store: ObjectStore, encoder: EncoderMemory,
+                 reboot: Callable[[float], None], default_value: Callable[[Key], Any], codes: dict[str, int]) -> None:
+        self._profile = profile
+        self._store = store
+        self._nvm = store.nvm
+        self._encoder = encoder
+        self._reboot = reboot
+        self._default_value = default_value
+        self._codes = codes
+        self.reboot = _params(profile, "store_reboots_without_reply")
+        self.automatic = _params(profile, "store_automatic") is not None
+        extra = _params(profile, "manufacturer_store_object")
         self.extra_store = None if extra is None else ManufacturerStoreObject.from_params(extra)
-        sets = node.quirk_params("reload_immediate")
+        sets = _params(profile, "reload_immediate")
         self.sets = None if sets is None else ParameterSets.from_params(sets)
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.commands.append(self.on_write)
+        hooks.on_written(self.after_write)
 
     def on_write(self, key: Key, value: object) -> bool:
         """Carry out a store/restore command; True when ``key`` was one (the value is not kept)."""
@@ -48,53 +77,64 @@ class StoreCommands:
             return True
         return False
 
+    def persists(self) -> bool:
+        """Whether storing keeps anything (a fault makes it confirm and keep nothing)."""
+        return True
+
     def after_write(self, key: Key, value: object) -> None:
         """A value was written: persist it if the device does that by itself."""
-        store = self.node.store
-        if self.node.faults.active("store_not_persisted"):
+        if not self.persists():
             return
-        store.persist_auto(key)
+        self._store.persist_auto(key)
         if self.automatic:
-            store.persist(key)
+            self._store.persist(key)
+
+    def signature_accepted(self, value: object, signature: int) -> bool:
+        return value == signature
 
     def _check_signature(self, value: object, signature: int, abort_code: int | None = None) -> None:
-        node = self.node
-        if value != signature and not node.faults.active("store_wrong_signature_accepted"):
-            raise SdoAbort(node.access.codes["store_signature"] if abort_code is None else abort_code)
+        if not self.signature_accepted(value, signature):
+            raise SdoAbort(self._codes["store_signature"] if abort_code is None else abort_code)
 
     def _manufacturer_store(self, value: object, command: ManufacturerStoreObject) -> None:
         """Quirk manufacturer_store_object: its own 'save' persists its objects (effective after reset)."""
         self._check_signature(value, command.signature, command.wrong_signature_abort)
-        node = self.node
-        if not node.faults.active("manufacturer_store_not_persisted"):
-            node.store.nvm.put_many({k: node.store.get(k) for k in command.saves if node.store.has(k)})  # type: ignore[misc]
+        self.save_manufacturer(command)
+
+    def save_manufacturer(self, command: ManufacturerStoreObject) -> None:
+        store = self._store
+        self._nvm.put_many({k: store.get(k) for k in command.saves if store.has(k)})  # type: ignore[misc]
 
     def _parameter_set_command(self, key: Key, value: object, sets: ParameterSets) -> None:
         """Quirk reload_immediate: save a parameter set, or load saved values at once (no reset)."""
         index, sub = key
         self._check_signature(value, SAVE_SIGNATURE if index == 0x1010 else LOAD_SIGNATURE)
-        node = self.node
         if index == 0x1010:
-            sets.save_set(sub, node.store, node.nvm)
-        elif not node.faults.active("reload_not_immediate"):
-            sets.reload(sub, node.store, node.nvm, node.default_value, self._keys_stored_by)
+            sets.save_set(sub, self._store, self._nvm)
+        else:
+            self.load_set(sub, sets)
+
+    def load_set(self, sub: int, sets: ParameterSets) -> None:
+        sets.reload(sub, self._store, self._nvm, self._default_value, self._keys_stored_by)
 
     def _keys_stored_by(self, store_sub: int) -> list[Key]:
         """The entries 1010h ``store_sub`` writes to NVM."""
-        return self.node.store.storable_keys(SUB_TO_GROUP.get(store_sub, "store_manufacturer"))
+        return self._store.storable_keys(SUB_TO_GROUP.get(store_sub, "store_manufacturer"))
 
     def _store_or_restore(self, index: int, sub: int, value: object) -> None:
-        node = self.node
         storing = index == 0x1010
         self._check_signature(value, SAVE_SIGNATURE if storing else LOAD_SIGNATURE)
         group = SUB_TO_GROUP.get(sub, "store_manufacturer")
         if storing:
-            if not node.faults.active("store_not_persisted"):
-                node.store.store(group)
-                node.encoder.persist(node.nvm)
-        elif not node.faults.active("restore_ineffective"):
-            node.store.restore_defaults(group)
-            node.encoder.forget(node.nvm)
+            if self.persists():
+                self._store.store(group)
+                self._encoder.persist(self._nvm)
+        else:
+            self.restore_defaults(group)
+
+    def restore_defaults(self, group: str) -> None:
+        self._store.restore_defaults(group)
+        self._encoder.forget(self._nvm)
 
     def _store_and_reboot(self, value: object, params: dict[str, Any]) -> None:
         """Quirk store_reboots_without_reply: store everything, no SDO reply, reboot, boot-up later.
@@ -102,12 +142,41 @@ class StoreCommands:
         Any other value than the signature is refused (params.wrong_signature_abort, default the
         CiA 'cannot store' code) and changes nothing: the manual leaves this case open.
         """
-        node = self.node
         wrong = params.get("wrong_signature_abort")
         signature = int(params.get("signature_u32", SAVE_SIGNATURE))
         self._check_signature(value, signature, None if wrong is None else int(wrong))
-        if not node.faults.active("store_not_persisted"):
-            node.store.store_all_storable()
-            node.encoder.persist(node.nvm)
-        node.reboot(float(params.get("reboot_ms", node.profile.simulator.bootup_delay_ms)) / 1000)
+        if self.persists():
+            self._store.store_all_storable()
+            self._encoder.persist(self._nvm)
+        self._reboot(float(params.get("reboot_ms", self._profile.simulator.bootup_delay_ms)) / 1000)
         raise SdoNoReply
+
+
+@breaks(StoreCommands, "store_not_persisted")
+class StoreNotPersisted(StoreCommands):
+    def persists(self) -> bool:
+        return False
+
+
+@breaks(StoreCommands, "store_wrong_signature_accepted")
+class AnySignature(StoreCommands):
+    def signature_accepted(self, value: object, signature: int) -> bool:
+        return True
+
+
+@breaks(StoreCommands, "restore_ineffective")
+class RestoreIneffective(StoreCommands):
+    def restore_defaults(self, group: str) -> None:
+        return  # confirmed; the stored values survive the next reset
+
+
+@breaks(StoreCommands, "reload_not_immediate")
+class ReloadNotImmediate(StoreCommands):
+    def load_set(self, sub: int, sets: ParameterSets) -> None:
+        return  # the values become current only after a reset
+
+
+@breaks(StoreCommands, "manufacturer_store_not_persisted")
+class ManufacturerStoreNotPersisted(StoreCommands):
+    def save_manufacturer(self, command: ManufacturerStoreObject) -> None:
+        return

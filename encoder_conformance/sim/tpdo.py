@@ -4,42 +4,25 @@ Reads its configuration from 1800h+n (communication) and 1A00h+n (mapping) whene
 enters operational or a PDO parameter is written. A FixedTpdoLayout (quirk ``fixed_tpdo_mapping``)
 replaces mapping objects and transmission types the device does not have, and adds RTR answers.
 SendRepeatCounters (quirk ``pdo_send_repeat_counters``) add sends per change and a SYNC send limit.
+A behaviour: it registers for NMT state changes, SYNC, remote frames and writes to PDO parameters;
+faults that break it are the small classes at the bottom.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
-from .faults import FaultSet
+from .faults import breaks
+from .hooks import NodeHooks, Value
+from .nmt import NmtState, pdo_allowed
+from .nvm import Key
 from .pdo_layout import FixedTpdoLayout
 from .scheduler import DeadlineScheduler, JobHandle
 from .send_repeat import SendRepeatCounters, within_sync_limit
+from .tpdo_config import TpdoConfig
 
 CHANGE_POLL_S = 0.005
-
-
-@dataclass
-class TpdoConfig:
-    number: int  # 1-based
-    cob_id: int
-    valid: bool
-    transmission_type: int
-    inhibit_100us: int
-    event_timer_ms: float  # effective timer period (0: no timer)
-    mapping: list[tuple[int, int, int]]  # (index, sub, bits)
-    sync_every: int = 0  # sent on every n-th SYNC (0: not SYNC-counted)
-    on_change: bool = False  # sent when the payload changes
-    acyclic_sync: bool = False  # type 0: sent on a SYNC after the payload changed
-    rtr: bool = False  # answers a remote frame on its COB-ID
-    sync_count: int = 0
-    sends_per_change: int = 1  # frames per detected change (send-repeat counter)
-    repeats_left: int = 0  # frames of the last change still to send, one per change poll
-    sync_limit: int = 0  # SYNC-driven frames in all until the payload changes (0: no limit)
-    sync_sent: int = 0
-    last_payload: bytes | None = None
-    last_sent: float = field(default=-1e9)
 
 
 class TpdoEngine:
@@ -54,7 +37,6 @@ class TpdoEngine:
         count: int,
         timer_zero_disables_255: bool = False,
         layout: FixedTpdoLayout | None = None,
-        faults: FaultSet | None = None,
         repeat: SendRepeatCounters | None = None,
     ) -> None:
         self._scheduler = scheduler
@@ -65,10 +47,28 @@ class TpdoEngine:
         self._count = count
         self._timer_zero_disables_255 = timer_zero_disables_255
         self._layout = layout
-        self._faults = faults or FaultSet()
         self._configs: list[TpdoConfig] = []
         self._jobs: list[JobHandle] = []
         self.running = False
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.state.append(self.on_state)
+        hooks.halted.append(self.stop)
+        hooks.on_written(self.on_parameter_written, [*range(0x1800, 0x1C00), *self.reload_indices])
+        hooks.sync.append(self.on_sync)
+        hooks.remote_frame.append(self.on_rtr)
+
+    def sends_in(self, state: NmtState) -> bool:
+        return pdo_allowed(state)
+
+    def on_state(self, state: NmtState) -> None:
+        if self.sends_in(state):
+            self.start()
+        else:
+            self.stop()
+
+    def on_parameter_written(self, key: Key, value: Value) -> None:
+        self.reload()
 
     @property
     def reload_indices(self) -> frozenset[int]:
@@ -96,12 +96,24 @@ class TpdoEngine:
             self._cia_semantics(config)
             if self._layout is not None:
                 self._layout_semantics(comm, config, self._layout)
-            if config.sync_every and self._faults.active("sync_tpdo_every_sync"):
-                config.sync_every = 1
-            if self._repeat is not None and not self._faults.active("send_repeat_counter_ignored"):
-                self._repeat.configure(comm, config, self._read)
+            config.sync_every = self.sync_divisor(config.sync_every)
+            if self._repeat is not None:
+                self.apply_send_repeat(comm, config, self._repeat)
             configs.append(config)
         return configs
+
+    def sync_divisor(self, every: int) -> int:
+        """Sent on every n-th SYNC: n as configured (0: not SYNC-counted)."""
+        return every
+
+    def apply_send_repeat(self, comm: int, config: TpdoConfig, repeat: SendRepeatCounters) -> None:
+        repeat.configure(comm, config, self._read)
+
+    def timer_zero_disables_255(self) -> bool:
+        return self._timer_zero_disables_255
+
+    def timer_period_s(self, config: TpdoConfig) -> float:
+        return config.event_timer_ms / 1000
 
     def _mapping(self, comm: int) -> list[tuple[int, int, int]]:
         if self._layout is not None and comm in self._layout.mapping:
@@ -119,8 +131,7 @@ class TpdoEngine:
         config.sync_every = kind if 1 <= kind <= 240 else 0
         config.acyclic_sync = kind == 0
         event_driven = kind in (254, 255)
-        disables = self._timer_zero_disables_255 and not self._faults.active("type_255_timer_0_sends")
-        if kind == 255 and config.event_timer_ms == 0 and disables:
+        if kind == 255 and config.event_timer_ms == 0 and self.timer_zero_disables_255():
             event_driven = False
         config.on_change = event_driven
         if not event_driven:
@@ -144,9 +155,7 @@ class TpdoEngine:
         self.running = True
         for config in self._configs:
             if config.event_timer_ms > 0:
-                period = config.event_timer_ms / 1000
-                if self._faults.active("event_timer_slow_20pct"):
-                    period *= 1.2
+                period = self.timer_period_s(config)
                 self._jobs.append(
                     self._scheduler.call_later(period, lambda c=config: self._transmit(c), period)
                 )
@@ -209,3 +218,33 @@ class TpdoEngine:
         config.last_payload = payload
         config.last_sent = now
         self._send(config.cob_id, payload)
+
+
+@breaks(TpdoEngine, "sync_tpdo_every_sync")
+class SendsOnEverySync(TpdoEngine):
+    def sync_divisor(self, every: int) -> int:
+        return 1 if every else 0
+
+
+@breaks(TpdoEngine, "send_repeat_counter_ignored")
+class SendRepeatIgnored(TpdoEngine):
+    def apply_send_repeat(self, comm: int, config: TpdoConfig, repeat: SendRepeatCounters) -> None:
+        return
+
+
+@breaks(TpdoEngine, "type_255_timer_0_sends")
+class Type255Timer0Sends(TpdoEngine):
+    def timer_zero_disables_255(self) -> bool:
+        return False
+
+
+@breaks(TpdoEngine, "event_timer_slow_20pct")
+class SlowEventTimer(TpdoEngine):
+    def timer_period_s(self, config: TpdoConfig) -> float:
+        return super().timer_period_s(config) * 1.2
+
+
+@breaks(TpdoEngine, "pdo_outside_operational")
+class SendsOutsideOperational(TpdoEngine):
+    def sends_in(self, state: NmtState) -> bool:
+        return True

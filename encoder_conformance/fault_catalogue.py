@@ -1,0 +1,134 @@
+"""The catalogue of the simulator's named faults: what each breaks and which suites it is made for.
+
+Each fault is one deliberate deviation from CiA 301 (or from the profile), committed by the
+simulator to prove that each conformance test can fail. This module is data only, so that the
+plugin and the command line can list and check faults without importing the simulator; the
+faults themselves are small classes next to the simulator behaviour they break (``sim.faults``
+wires them). tests/test_fault_matrix.py runs the suites against every fault and shows which tests
+catch it; each fault names the suite modules it is made for, so that the matrix can run a fault
+against those alone.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+#: (the suite modules a group of faults is made for, the group). The CI fault matrix runs each
+#: fault against its own modules only; ``encoder-conformance fault-matrix`` can run the full product.
+FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
+    (  # identity
+        ("test_identity",),
+        {
+            "wrong_vendor_id": "1018h sub 1 reads a vendor-id one higher than the profile's",
+            "wrong_device_type": "1000h reads the profile's value with the profile number changed",
+            "wrong_device_name": "1008h reads a different manufacturer device name",
+            "wrong_product_code": "1018h sub 2 reads a product code one higher than the profile's",
+            "wrong_revision": "1018h sub 3 reads 0xFFFFFFFF (a revision no manual covers)",
+            "wrong_identity_size": "1018h sub 0 reads one more than the highest sub-index",
+            "serial_mismatch": "1018h sub 4 differs from the serial number in 650Bh",
+        },
+    ),
+    (  # object dictionary / SDO
+        ("test_object_dictionary", "test_sdo_fuzz", "test_value_domain"),
+        {
+            "missing_object": "the last declared object of the profile does not exist (aborts 06020000h)",
+            "wrong_default": "every writable UNSIGNED value starts one higher than its factory default",
+            "wrong_size": "expedited uploads of 32-bit objects carry 2 bytes",
+            "write_ro_accepted": "writes to ro/const objects are confirmed (and ignored)",
+            "wrong_abort_write_ro": "writes to ro/const objects abort with 08000000h instead of 06010002h",
+            "read_wo_allowed": "reads of wo objects return 0 instead of aborting 06010001h",
+            "wrong_abort_no_object": "access to a missing object aborts 06090011h instead of 06020000h",
+            "wrong_abort_no_subindex": "access to a missing sub-index aborts 06020000h instead of 06090011h",
+            "write_rw_ignored": "writes to rw objects are confirmed but the value does not change",
+            "no_sdo_response": "SDO requests are never answered (the device looks dead)",
+            "ignore_unknown_command": "SDO requests with a reserved or block command specifier get no answer",
+            "abort_without_multiplexer": "SDO abort frames carry index 0000h sub 00 instead of the request's",
+            "value_domain_ignored": "writes outside an entry's declared min/max/allowed values are accepted",
+        },
+    ),
+    (  # NMT
+        ("test_nmt",),
+        {
+            "no_bootup_after_reset": "no boot-up message after reset node / reset communication",
+            "ignore_start": "NMT start remote node is ignored",
+            "ignore_stop": "NMT stop remote node is ignored",
+            "ignore_enter_preop": "NMT enter pre-operational is ignored",
+            "ignore_broadcast": "NMT commands to node 0 (all nodes) are ignored",
+            "reset_comm_keeps_state": "NMT reset communication is ignored",
+            "reset_node_keeps_values": "NMT reset node does not reload the application parameters",
+            "sdo_in_stopped": "SDO requests are answered in stopped",
+            "pdo_outside_operational": "TPDOs are also sent in pre-operational and stopped",
+            "wrong_heartbeat_state": "the heartbeat reports operational (05h) while pre-operational",
+            "respond_to_other_node": "NMT commands addressed to another node-id are obeyed",
+            "autostart_ignored": "the device stays pre-operational although its autostart object says start",
+        },
+    ),
+    (  # PDO
+        ("test_pdo", "test_pdo_repeat"),
+        {
+            "sync_tpdo_every_sync": "a TPDO with transmission type n (1..240) is sent on every SYNC, not every n-th",
+            "type_255_timer_0_sends": "type 255 with event timer 0 sends on change (quirk says it disables the TPDO)",
+            "event_timer_slow_20pct": "TPDO event timers run 20 % slower than 18xxh sub 5 says",
+            "send_repeat_counter_ignored": (
+                "quirk pdo_send_repeat_counters ignored: the change-driven TPDO goes out once per change whatever "
+                "its counter (e.g. SIKO 2800h), the SYNC-driven one on every n-th SYNC without the limit (2801h)"
+            ),
+            "forced_bits_not_applied": (
+                "quirk bits_forced_at_init ignored: the value (e.g. SIKO 1801h sub 1) keeps its stored bits at init"
+            ),
+        },
+    ),
+    (  # heartbeat
+        ("test_heartbeat", "test_error_control"),
+        {
+            "guarding_heartbeat_coexist": (
+                "a heartbeat producer leaves the guard time alone, and guard times are accepted meanwhile"
+            ),
+            "heartbeat_slow_20pct": "the heartbeat period is 20 % longer than 1017h says",
+            "heartbeat_jitter": "every 4th heartbeat comes 30 % of the period late",
+            "heartbeat_ignores_zero": "writing 0 to 1017h does not stop the heartbeat",
+            "heartbeat_wrong_dlc": "heartbeat frames carry 2 data bytes",
+        },
+    ),
+    (  # store / restore
+        ("test_store_restore", "test_manufacturer_store"),
+        {
+            "store_not_persisted": "1010h 'save' is confirmed, automatic storing claimed, but nothing is kept",
+            "store_wrong_signature_accepted": "1010h/1011h accept any signature",
+            "restore_ineffective": "1011h 'load' is confirmed but stored values survive the next reset",
+            "reload_not_immediate": "1011h reload sub-indices (quirk reload_immediate) act only after a reset",
+            "manufacturer_store_not_persisted": (
+                "the manufacturer store object (quirk manufacturer_store_object) saves nothing"
+            ),
+        },
+    ),
+    (  # emcy
+        ("test_emcy",),
+        {
+            "emcy_wrong_cob_id": "EMCY frames are sent on 080h + node-id + 1",
+        },
+    ),
+]
+FAULTS: dict[str, str] = {name: text for _, group in FAULT_GROUPS for name, text in group.items()}
+#: fault -> the suite modules (file stems under suites/) it is made for
+TARGET_MODULES: dict[str, tuple[str, ...]] = {
+    name: modules for modules, group in FAULT_GROUPS for name in group
+}
+
+
+#: faults that break a documented quirk's behaviour: they can only show on a profile with that effect
+QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
+    "guarding_heartbeat_coexist": "guarding_heartbeat_exclusive",
+    "reload_not_immediate": "reload_immediate",
+    "manufacturer_store_not_persisted": "manufacturer_store_object",
+    "type_255_timer_0_sends": "transmission_type_255_timer_0_disables",
+    "send_repeat_counter_ignored": "pdo_send_repeat_counters",
+    "forced_bits_not_applied": "bits_forced_at_init",
+    "autostart_ignored": "nmt_autostart_object",
+}
+
+
+def faults_for(effects: Iterable[str]) -> list[str]:
+    """The faults that can show on a device whose profile quirks have ``effects`` (sorted)."""
+    present = set(effects)
+    return sorted(f for f in FAULTS if QUIRK_EFFECT_OF_FAULT.get(f) in (None, *present))

@@ -1,0 +1,39 @@
+"""Quirk ``nmt_autostart_object``: after boot-up the device enters operational by itself when an
+object holds a given value (instead of CiA 302-2 1F80h bit semantics)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from .faults import breaks
+from .hooks import NodeHooks
+from .nmt import NmtState
+
+
+class Autostart:
+    """A behaviour: after the boot-up message, enter operational if the object says so."""
+
+    def __init__(self, params: dict[str, Any], read: Callable[[int, int], int | None],
+                 enter: Callable[[NmtState], None]) -> None:
+        self._params = params
+        self._read = read
+        self._enter = enter
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.booted.append(self.on_booted)
+
+    def starts_itself(self) -> bool:
+        params = self._params
+        value = self._read(int(params["index"]), int(params.get("subindex", 0)))
+        return value == int(params["operational_value"])
+
+    def on_booted(self) -> None:
+        if self.starts_itself():
+            self._enter(NmtState.OPERATIONAL)
+
+
+@breaks(Autostart, "autostart_ignored")
+class AutostartIgnored(Autostart):
+    def starts_itself(self) -> bool:
+        return False

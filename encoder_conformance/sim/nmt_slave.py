@@ -1,0 +1,204 @@
+"""NMT slave (CiA 301 §7.3.2): power, boot-up, resets and the state-changing commands.
+
+It owns the node's NMT state and node-id and tells the other behaviours through the node's hooks:
+``halted`` when services stop (reset, reboot, power off), ``reload`` with what a (re)start reloads,
+``booted`` after the boot-up message, ``state`` on every state change. Faults that break it are the
+small classes at the bottom.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+
+from ..cia301 import COMMUNICATION_AREA
+from .faults import breaks
+from .hooks import NodeHooks, ReloadEvent
+from .nmt import TARGET, NmtCommand, NmtState
+from .object_store import ObjectStore
+from .scheduler import DeadlineScheduler, JobHandle
+
+
+def _communication_area(index: int) -> bool:
+    """What NMT reset communication reloads."""
+    return index in COMMUNICATION_AREA
+
+
+def _everything(index: int) -> bool:
+    return True
+
+
+class NmtSlave:
+    """The NMT state machine of one node, with power and boot."""
+
+    def __init__(
+        self,
+        hooks: NodeHooks,
+        store: ObjectStore,
+        scheduler: DeadlineScheduler,
+        send: Callable[[int, bytes], None],
+        node_id_at_power_on: Callable[[], int],
+        boot_delay_s: float,
+        silent_until_bus_traffic: bool,
+        lock: threading.RLock,
+    ) -> None:
+        self._hooks = hooks
+        self._lock = lock
+        self._store = store
+        self._scheduler = scheduler
+        self._send = send
+        self._node_id_at_power_on = node_id_at_power_on
+        self._boot_delay_s = boot_delay_s
+        self._silent_until_traffic = silent_until_bus_traffic
+        self.node_id = node_id_at_power_on()
+        self.state: NmtState | None = None  # None = powered off
+        self.awaiting_traffic = False
+        self._boot_job: JobHandle | None = None
+
+    # -- power ---------------------------------------------------------------------------
+    def power_on(self) -> None:
+        """Apply power: reload everything from NVM, then boot (or wait for bus traffic)."""
+        self._reload(ReloadEvent("power_on", everything=True))
+        self.state = NmtState.INITIALISING
+        self.awaiting_traffic = self._silent_until_traffic
+        if not self.awaiting_traffic:
+            self._schedule_boot(power_on=True)
+
+    def power_off(self) -> None:
+        self._halt()
+        for listener in self._hooks.powered_off:
+            listener()
+        self.state = None
+
+    def reboot(self, delay_s: float) -> None:
+        """The device restarts by itself: silent while it initialises, boot-up after ``delay_s``."""
+        self._halt()
+        self.state = NmtState.INITIALISING
+        self._reload(ReloadEvent("power_on", everything=True))
+        self._boot_job = self._scheduler.call_later(delay_s, lambda: self._finish_boot(power_on=True))
+
+    def bus_traffic_seen(self) -> bool:
+        """A frame arrived: True if it only served to detect the bit rate (automatic bit-rate quirk)."""
+        if not self.awaiting_traffic:
+            return False
+        self.awaiting_traffic = False
+        self._schedule_boot(power_on=True)
+        return True
+
+    # -- NMT commands --------------------------------------------------------------------
+    def addressed(self, target: int) -> bool:
+        return target in (0, self.node_id)
+
+    def obeys(self, command: NmtCommand) -> bool:
+        return True
+
+    def on_command(self, data: bytes) -> None:
+        if len(data) != 2:
+            return
+        command, target = data
+        if not self.addressed(target):
+            return
+        try:
+            cmd = NmtCommand(command)
+        except ValueError:
+            return
+        if not self.obeys(cmd):
+            return
+        if cmd is NmtCommand.RESET_NODE:
+            self.reset(node=True)
+        elif cmd is NmtCommand.RESET_COMMUNICATION:
+            self.reset(node=False)
+        else:
+            self.enter(TARGET[cmd])
+
+    def reset_reloads_everything(self, node: bool) -> bool:
+        return node
+
+    def reset(self, node: bool) -> None:
+        """NMT reset node (everything) or reset communication (1000h-1FFFh) and boot again."""
+        self._halt()
+        self.state = NmtState.INITIALISING
+        self._reload(ReloadEvent("nmt_81h" if node else "nmt_82h", self.reset_reloads_everything(node)))
+        self._schedule_boot(power_on=False)
+
+    def enter(self, state: NmtState) -> None:
+        previous, self.state = self.state, state
+        if state is not previous:
+            self._hooks.emit_state(state)
+
+    # -- boot ----------------------------------------------------------------------------
+    def sends_bootup(self, power_on: bool) -> bool:
+        return True
+
+    def _reload(self, event: ReloadEvent) -> None:
+        self.node_id = self._node_id_at_power_on()
+        self._store.reload(_everything if event.everything else _communication_area, self.node_id)
+        self._hooks.emit_reload(event)
+
+    def _halt(self) -> None:
+        if self._boot_job is not None:
+            self._boot_job.cancel()
+            self._boot_job = None
+        for listener in self._hooks.halted:
+            listener()
+
+    def _schedule_boot(self, power_on: bool) -> None:
+        self._boot_job = self._scheduler.call_later(self._boot_delay_s, lambda: self._finish_boot(power_on))
+
+    def _finish_boot(self, power_on: bool) -> None:
+        with self._lock:
+            if self.state is not NmtState.INITIALISING:
+                return
+            if self.sends_bootup(power_on):
+                self._send(0x700 + self.node_id, b"\x00")
+            self.enter(NmtState.PRE_OPERATIONAL)
+            for listener in self._hooks.booted:
+                listener()
+
+
+@breaks(NmtSlave, "no_bootup_after_reset")
+class SilentAfterReset(NmtSlave):
+    def sends_bootup(self, power_on: bool) -> bool:
+        return power_on
+
+
+@breaks(NmtSlave, "ignore_start")
+class IgnoresStart(NmtSlave):
+    def obeys(self, command: NmtCommand) -> bool:
+        return command is not NmtCommand.START and super().obeys(command)
+
+
+@breaks(NmtSlave, "ignore_stop")
+class IgnoresStop(NmtSlave):
+    def obeys(self, command: NmtCommand) -> bool:
+        return command is not NmtCommand.STOP and super().obeys(command)
+
+
+@breaks(NmtSlave, "ignore_enter_preop")
+class IgnoresEnterPreOperational(NmtSlave):
+    def obeys(self, command: NmtCommand) -> bool:
+        return command is not NmtCommand.ENTER_PRE_OPERATIONAL and super().obeys(command)
+
+
+@breaks(NmtSlave, "reset_comm_keeps_state")
+class IgnoresResetCommunication(NmtSlave):
+    def obeys(self, command: NmtCommand) -> bool:
+        return command is not NmtCommand.RESET_COMMUNICATION and super().obeys(command)
+
+
+@breaks(NmtSlave, "ignore_broadcast")
+class IgnoresBroadcast(NmtSlave):
+    def addressed(self, target: int) -> bool:
+        return target != 0 and super().addressed(target)
+
+
+@breaks(NmtSlave, "respond_to_other_node")
+class ObeysAnyNode(NmtSlave):
+    def addressed(self, target: int) -> bool:
+        return True
+
+
+@breaks(NmtSlave, "reset_node_keeps_values")
+class ResetNodeKeepsValues(NmtSlave):
+    def reset_reloads_everything(self, node: bool) -> bool:
+        return False

@@ -1,0 +1,78 @@
+"""The SDO channel of a node: which requests reach the SDO server, and what goes back on the bus.
+
+CiA 301 §7.3.2.2: SDO is served in pre-operational and operational only; a transfer in progress
+ends when the node enters stopped. Faults that break the channel are the small classes below.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from .faults import breaks
+from .hooks import NodeHooks
+from .nmt import NmtState, sdo_allowed
+from .sdo_server import SdoServer
+
+
+class SdoChannel:
+    """Receives SDO requests on 600h + node-id and answers on 580h + node-id."""
+
+    def __init__(self, server: SdoServer, send: Callable[[int, bytes], None], state: Callable[[], NmtState | None],
+                 node_id: Callable[[], int]) -> None:
+        self._server = server
+        self._send = send
+        self._state = state
+        self._node_id = node_id
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.halted.append(self._server.reset)
+        hooks.state.append(self._on_state)
+
+    def _on_state(self, state: NmtState) -> None:
+        if state is NmtState.STOPPED:
+            self._server.reset()  # a transfer in progress cannot continue in stopped
+
+    def serves(self, request: bytes) -> bool:
+        state = self._state()
+        return state is not None and sdo_allowed(state)
+
+    def answer(self, response: bytes) -> bytes | None:
+        return response
+
+    def on_request(self, request: bytes) -> None:
+        if not self.serves(request):
+            return
+        response = self._server.handle(request)
+        if response is not None:
+            response = self.answer(response)
+        if response is not None:
+            self._send(0x580 + self._node_id(), response)
+
+
+@breaks(SdoChannel, "no_sdo_response")
+class DeafSdoChannel(SdoChannel):
+    def serves(self, request: bytes) -> bool:
+        return False
+
+
+@breaks(SdoChannel, "sdo_in_stopped")
+class SdoInStopped(SdoChannel):
+    def serves(self, request: bytes) -> bool:
+        return self._state() is not None or super().serves(request)
+
+
+@breaks(SdoChannel, "ignore_unknown_command")
+class IgnoresUnknownCommands(SdoChannel):
+    def serves(self, request: bytes) -> bool:
+        reserved_or_block = bool(request) and request[0] >> 5 in (5, 6, 7)
+        return not reserved_or_block and super().serves(request)
+
+
+@breaks(SdoChannel, "abort_without_multiplexer")
+class AbortWithoutMultiplexer(SdoChannel):
+    """Abort frames carry index 0000h sub 00, as canopen's own client sends them (issue #377)."""
+
+    def answer(self, response: bytes) -> bytes | None:
+        if response[0] == 0x80:
+            response = response[:1] + bytes(3) + response[4:]
+        return super().answer(response)

@@ -1,0 +1,39 @@
+"""Quirks that refuse a write in the current situation: ``writes_preop_only`` (outside
+pre-operational) and ``writes_need_scaling_bit`` (unless 6000h bit 2 is set)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from .hooks import NodeHooks
+from .nmt import NmtState
+from .nvm import Key
+from .sdo_server import SdoAbort
+
+SCALING_BIT = 0x04  # 6000h bit 2 (CiA 406)
+
+
+class ObjectWriteGate:
+    """A behaviour: writes to the listed objects are refused while ``allowed()`` is false."""
+
+    def __init__(self, params: dict[str, Any], allowed: Callable[[], bool], default_abort: int) -> None:
+        self._objects = frozenset(int(i) for i in params.get("objects", []))
+        self._abort = int(params.get("abort_code", default_abort))
+        self._allowed = allowed
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.gates.append(self.gate)
+
+    def gate(self, key: Key, value: object) -> None:
+        if key[0] in self._objects and not self._allowed():
+            raise SdoAbort(self._abort)
+
+
+def preop_only(params: dict[str, Any], state: Callable[[], NmtState | None], default_abort: int) -> ObjectWriteGate:
+    return ObjectWriteGate(params, lambda: state() is NmtState.PRE_OPERATIONAL, default_abort)
+
+
+def scaling_bit_needed(params: dict[str, Any], read: Callable[[int, int], int | None],
+                       default_abort: int) -> ObjectWriteGate:
+    return ObjectWriteGate(params, lambda: bool((read(0x6000, 0) or 0) & SCALING_BIT), default_abort)
