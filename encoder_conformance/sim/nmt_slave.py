@@ -162,28 +162,23 @@ class SilentAfterReset(NmtSlave):
         return power_on
 
 
-@breaks(NmtSlave, "ignore_start")
-class IgnoresStart(NmtSlave):
-    def obeys(self, command: NmtCommand) -> bool:
-        return command is not NmtCommand.START and super().obeys(command)
+def _ignores(name: str, command: NmtCommand) -> type[NmtSlave]:
+    """A fault that ignores one NMT command."""
+
+    class IgnoresCommand(NmtSlave):
+        def obeys(self, received: NmtCommand) -> bool:
+            return received is not command and super().obeys(received)
+
+    IgnoresCommand.__name__ = IgnoresCommand.__qualname__ = f"Ignores{command.name.title().replace('_', '')}"
+    return breaks(NmtSlave, name)(IgnoresCommand)
 
 
-@breaks(NmtSlave, "ignore_stop")
-class IgnoresStop(NmtSlave):
-    def obeys(self, command: NmtCommand) -> bool:
-        return command is not NmtCommand.STOP and super().obeys(command)
-
-
-@breaks(NmtSlave, "ignore_enter_preop")
-class IgnoresEnterPreOperational(NmtSlave):
-    def obeys(self, command: NmtCommand) -> bool:
-        return command is not NmtCommand.ENTER_PRE_OPERATIONAL and super().obeys(command)
-
-
-@breaks(NmtSlave, "reset_comm_keeps_state")
-class IgnoresResetCommunication(NmtSlave):
-    def obeys(self, command: NmtCommand) -> bool:
-        return command is not NmtCommand.RESET_COMMUNICATION and super().obeys(command)
+IGNORED_COMMAND_FAULTS = [
+    _ignores("ignore_start", NmtCommand.START),
+    _ignores("ignore_stop", NmtCommand.STOP),
+    _ignores("ignore_enter_preop", NmtCommand.ENTER_PRE_OPERATIONAL),
+    _ignores("reset_comm_keeps_state", NmtCommand.RESET_COMMUNICATION),
+]
 
 
 @breaks(NmtSlave, "ignore_broadcast")
