@@ -11,15 +11,16 @@ from .dut.frames import format_frames
 from .dut.sdo_frames import SdoResponse, abort_name
 from .plugin.evidence import Evidence
 from .profile.model import HeartbeatTolerance
+from .profile.quirk_effects import AbortCode, P
 from .timing import interval_stats, schedule_fit
 
 
 def expected_aborts(dut: DeviceUnderTest, situation: str, evidence: Evidence) -> set[int]:
     """CiA's code for the situation, or the codes a documented quirk of the profile names."""
     for quirk_id, quirk in dut.profile.quirks.items():
-        if quirk.effect == "abort_code" and quirk.params.get("situation") == situation:
+        if isinstance(quirk.params, AbortCode) and quirk.params.situation == situation:
             evidence.deviation(quirk_id, quirk.title)
-            return {int(code) for code in quirk.params.get("codes", [])}
+            return set(quirk.params.codes)
     return {ABORT_FOR_SITUATION[situation]}
 
 
@@ -74,19 +75,19 @@ def describe_value(value: object) -> str:
     return repr(value)
 
 
-def documented_quirk(dut: DeviceUnderTest, effect: str, evidence: Evidence, otherwise: str,
-                     needs: tuple[str, ...] = ()) -> dict:
-    """The params of the profile's quirk with ``effect``, cited in the evidence; skips if there is none.
+def documented_quirk(dut: DeviceUnderTest, effect: type[P], evidence: Evidence, otherwise: str,
+                     needs: tuple[str, ...] = ()) -> P:
+    """The typed params of the profile's quirk with ``effect``, cited in the evidence; skips if there is none.
 
     ``otherwise`` says what the device does without the quirk (the skip reason); ``needs`` lists
     params the test cannot do without (e.g. the test_object it may change).
     """
-    found = dut.profile.quirk_with_effect(effect)
+    found = dut.profile.quirk_with_effect(effect.effect)
     if found is None:
-        pytest.skip(f"not applicable: {otherwise} (no quirk {effect})")
+        pytest.skip(f"not applicable: {otherwise} (no quirk {effect.effect})")
     quirk_id, quirk = found
-    missing = [name for name in needs if name not in quirk.params]
+    missing = [name for name in needs if getattr(quirk.params, name, None) is None]
     if missing:
         pytest.skip(f"not applicable: quirk {quirk_id} names no {', '.join(missing)} the suite may use")
     evidence.deviation(quirk_id, quirk.title)
-    return quirk.params
+    return quirk.params  # type: ignore[no-any-return]

@@ -91,6 +91,13 @@ def _cmd_profile_validate(args: argparse.Namespace, extra: list[str]) -> int:
     return status
 
 
+def _cmd_profile_effects(args: argparse.Namespace, extra: list[str]) -> int:
+    from .profile.quirks import effect_table
+
+    print(effect_table(), end="")
+    return 0
+
+
 def _cmd_profile_list(args: argparse.Namespace, extra: list[str]) -> int:
     from .profile.loader import iter_profile_ids, load_profile
 
@@ -226,6 +233,8 @@ def build_parser() -> argparse.ArgumentParser:
     validate.set_defaults(func=_cmd_profile_validate)
     listing = psub.add_parser("list", help="the profiles in device_profiles/")
     listing.set_defaults(func=_cmd_profile_list)
+    effects = psub.add_parser("effects", help="the quirk effects and their parameters (a markdown table)")
+    effects.set_defaults(func=_cmd_profile_effects)
     from_eds = psub.add_parser("from-eds", help="write a profile draft from a vendor EDS")
     from_eds.add_argument("eds")
     from_eds.add_argument("--id", help="profile id (default from the EDS product name)")

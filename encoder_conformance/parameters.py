@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 from .profile import datatypes
 from .profile.model import DeviceProfile, EntrySpec
+from .profile.quirk_effects import BitrateObject, NodeIdObject
 from .value_domain import declared_domain
 
 STORE_GROUPS = ("store_all", "store_comm", "store_app", "store_manufacturer")
@@ -54,21 +55,13 @@ def changeable_parameter(
             continue
         if not wanted(index, entry):
             continue
-        if any(q.effect in ("node_id_object", "bitrate_object") and q.params.get("index") == index
+        if any(isinstance(q.params, (NodeIdObject, BitrateObject)) and q.params.index == index
                for q in profile.quirks.values()):
             continue  # never move the device to another node-id or bit rate
         value = _other_value(profile, index, sub, entry)
         if value is not None:
             return Changeable(index, sub, entry, value)
     return None
-
-
-def parse_key(text: str | int) -> tuple[int, int]:
-    """'0x2348.1' (or an index alone) from a quirk's params -> (index, sub)."""
-    if isinstance(text, int):
-        return text, 0
-    index, _, sub = str(text).partition(".")
-    return int(index, 16), int(sub or "0", 0)
 
 
 def other_valid_value(profile: DeviceProfile, index: int, sub: int, current: int) -> int | None:

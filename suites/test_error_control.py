@@ -11,6 +11,7 @@ import pytest
 
 from encoder_conformance.checks import assert_abort, documented_quirk
 from encoder_conformance.dut import sdo_frames
+from encoder_conformance.profile import quirk_effects as fx
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.8.3.1 (error control); profile quirk guarding_heartbeat_exclusive"),
               pytest.mark.requires("node_guarding"), pytest.mark.requires("heartbeat_producer")]
@@ -21,9 +22,8 @@ GUARD_TIME_MS = 100
 @pytest.fixture
 def exclusion(dut, evidence):
     """The (producer, guard time, abort code) of the profile's exclusivity quirk."""
-    params = documented_quirk(dut, "guarding_heartbeat_exclusive", evidence, "guarding and heartbeat are independent")
-    return (int(params.get("producer_object", 0x1017)), int(params.get("guard_time_object", 0x100C)),
-            int(params.get("guard_time_write_while_producer_abort", 0x08000020)))
+    params = documented_quirk(dut, fx.GuardingHeartbeatExclusive, evidence, "guarding and heartbeat are independent")
+    return params.producer_object, params.guard_time_object, params.guard_time_write_while_producer_abort
 
 
 def _u16(value: int) -> bytes:

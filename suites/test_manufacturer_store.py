@@ -11,9 +11,9 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.checks import documented_quirk
-from encoder_conformance.cia301 import SAVE, SAVE_SIGNATURE
 from encoder_conformance.dut import sdo_frames
-from encoder_conformance.parameters import changeable_parameter, other_valid_value, parse_key
+from encoder_conformance.parameters import changeable_parameter, other_valid_value
+from encoder_conformance.profile import quirk_effects as fx
 
 pytestmark = [pytest.mark.spec("manufacturer store commands (profile quirks store_reboots_without_reply, "
                                 "manufacturer_store_object)"),
@@ -24,16 +24,15 @@ pytestmark = [pytest.mark.spec("manufacturer store commands (profile quirks stor
 @pytest.fixture
 def reboot_store(dut):
     """The (id, params) of a device that stores through a manufacturer object and reboots instead of replying."""
-    found = dut.profile.quirk_with_effect("store_reboots_without_reply")
+    found = dut.profile.quirk_of(fx.StoreRebootsWithoutReply)
     if found is None:
         pytest.skip("not applicable: the device has no store-by-reboot command (quirk store_reboots_without_reply)")
     return found
 
 
-def _store_by_reboot(dut, params: dict) -> None:
+def _store_by_reboot(dut, params: fx.StoreRebootsWithoutReply) -> None:
     """Send the store command; no SDO reply may come, and a boot-up must follow within store_max_ms."""
-    signature = bytes(params["signature"]) if "signature" in params else SAVE
-    request = sdo_frames.expedited_download_request(int(params["index"]), int(params.get("subindex", 0)), signature)
+    request = sdo_frames.expedited_download_request(params.index, params.subindex, params.signature_bytes)
     request = bytes([0x22]) + request[1:]  # the manual's frame: download, size not indicated
     mark = dut.frames.mark()
     reply = dut.sdo_request(request)
@@ -47,36 +46,36 @@ def _store_by_reboot(dut, params: dict) -> None:
 @pytest.mark.requires("preset")
 def test_store_by_reboot_keeps_value(dut, reboot_store, evidence):
     """The manufacturer store command (no reply, reboot, boot-up) keeps a changed parameter over a reset."""
-    quirk_id, quirk = reboot_store
-    evidence.deviation(quirk_id, quirk.title)
+    quirk_id, params = reboot_store
+    evidence.deviation(quirk_id, dut.profile.quirks[quirk_id].title)
     found = changeable_parameter(dut.profile, lambda i, e: e.persisted_by == "manufacturer_store")
     if found is None:
         pytest.skip("not applicable: no parameter is declared persisted_by: manufacturer_store")
     original = dut.read(found.index, found.sub)
     dut.write(found.index, found.sub, found.new_value.to_bytes(len(original), "little"))
     try:
-        _store_by_reboot(dut, quirk.params)
+        _store_by_reboot(dut, params)
         dut.reset_node_and_wait()
         observed = dut.read_uint(found.index, found.sub)
         assert observed == found.new_value, f"{found.label}: stored {found.new_value}, {observed} after reset node"
     finally:
         if dut.usable:  # put the device back as it was, and store that
             dut.write(found.index, found.sub, original)
-            _store_by_reboot(dut, quirk.params)
+            _store_by_reboot(dut, params)
 
 
 @pytest.fixture
 def extra_store(dut, evidence):
     """The params of a second 'save' object for manufacturer parameters (quirk manufacturer_store_object)."""
-    return documented_quirk(dut, "manufacturer_store_object", evidence, "1010h is the only store object",
+    return documented_quirk(dut, fx.ManufacturerStoreObject, evidence, "1010h is the only store object",
                             needs=("test_object",))
 
 
 def test_manufacturer_store_object_keeps_value(dut, extra_store, evidence):
     """A parameter saved with the manufacturer store object ('save') holds its new value after reset node."""
-    index, sub = parse_key(extra_store["test_object"])
-    command = (int(extra_store["index"]), int(extra_store.get("subindex", 0)))
-    signature = int(extra_store.get("signature", SAVE_SIGNATURE)).to_bytes(4, "little")
+    index, sub = extra_store.test_object
+    command = extra_store.key
+    signature = extra_store.signature_bytes
     original = dut.read(index, sub)
     changed = other_valid_value(dut.profile, index, sub, int.from_bytes(original, "little"))
     assert changed is not None, f"{index:04X}h.{sub:02X}: no other valid value next to {original.hex()}"

@@ -12,6 +12,7 @@ from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver,
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
+from encoder_conformance.profile import quirk_effects as fx
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2 (NMT state machine)")
 
@@ -216,11 +217,11 @@ def test_autostart_object_starts_device_after_reset(dut, settings_journal, evide
 
     Put back afterwards (value, store, reset node), and the device must then boot into pre-operational again.
     """
-    params = documented_quirk(dut, "nmt_autostart_object", evidence,
+    params = documented_quirk(dut, fx.NmtAutostartObject, evidence,
                               "the device boots into pre-operational and waits for NMT start (CiA 301)")
-    index, sub = int(params["index"]), int(params.get("subindex", 0))
+    index, sub = params.key
     original = dut.read(index, sub)
-    operational = int(params["operational_value"]).to_bytes(len(original), "little")
+    operational = params.operational_value.to_bytes(len(original), "little")
     dut.write(index, sub, operational)
     try:
         try:
@@ -230,7 +231,7 @@ def test_autostart_object_starts_device_after_reset(dut, settings_journal, evide
         evidence.note(f"{index:04X}h.{sub:02X} = {operational.hex(' ').upper()}, stored with {how}")
         state = _boots_into(dut, settings_journal, evidence)
         assert state == 0x05, (
-            f"documented: {index:04X}h = {int(params['operational_value'])} starts the device after boot-up; "
+            f"documented: {index:04X}h = {params.operational_value} starts the device after boot-up; "
             f"the heartbeat reports {state:02X}h ({STATE_NAMES.get(state, '?')}) instead of 05h (operational)"
         )
     finally:

@@ -11,6 +11,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 from encoder_conformance.checks import assert_abort, describe_value, expected_aborts
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.profile import datatypes
+from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.model import resolve_node_id_expression
 
 pytestmark = pytest.mark.spec("CiA 301 §7.4, §7.2.4.3.17")
@@ -100,7 +101,7 @@ def _decode(entry, data: bytes):
 def test_factory_default(dut, default_entry, factory_state):
     """Right after restore-defaults and reset, each entry shows the factory default the manual gives."""
     index, sub, _, entry = default_entry
-    excluded = dut.profile.quirk_objects("restore_excludes")
+    excluded = dut.profile.quirk_objects(fx.RestoreExcludes)
     if excluded is not None and index in excluded[1]:
         pytest.skip(f"not applicable: restore-defaults leaves {index:04X}h as it was (quirk {excluded[0]})")
     expected = resolve_node_id_expression(entry.default, dut.node_id)

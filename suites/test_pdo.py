@@ -11,19 +11,21 @@ import pytest
 from encoder_conformance.checks import check_periodic, documented_quirk
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.stimulus import pdo_stimulus
+from encoder_conformance.profile import quirk_effects as fx
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos")]
 
 
 def _fixed_behaviour(dut, evidence) -> set[int]:
     """TPDOs whose behaviour a fixed-layout quirk decides (e.g. POSITAL 1800h: cyclic by 2200h, sub 2 ignored)."""
-    found = dut.profile.quirk_with_effect("fixed_tpdo_mapping")
+    found = dut.profile.quirk_of(fx.FixedTpdoMapping)
     if found is None:
         return set()
-    quirk_id, quirk = found
-    fixed = {int(quirk.params[k]["tpdo"]) for k in ("cyclic", "polled") if k in quirk.params}
+    quirk_id, params = found
+    fixed = {spec.tpdo for spec in (*params.cyclic_tpdos, *params.polled_tpdos)}
     if fixed:
-        evidence.deviation(quirk_id, f"{quirk.title}: {', '.join(f'{c:04X}h' for c in sorted(fixed))} not used here")
+        title = dut.profile.quirks[quirk_id].title
+        evidence.deviation(quirk_id, f"{title}: {', '.join(f'{c:04X}h' for c in sorted(fixed))} not used here")
     return fixed
 
 
@@ -100,7 +102,7 @@ def test_event_timer_period_within_tolerance(dut, settings_journal, back_to_preo
 
 def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_to_preoperational, shaft, evidence):
     """Documented quirk: transmission type 255 with event timer 0 switches the TPDO off (no SYNC, no change)."""
-    documented_quirk(dut, "transmission_type_255_timer_0_disables", evidence,
+    documented_quirk(dut, fx.TransmissionType255Timer0Disables, evidence,
                      "CiA 301 type 255 without timer is event-driven")
     comm, _ = _configurable_tpdo(dut, 5, evidence, settings_journal, [255])
     cob_id = dut.read_uint(comm, 1) & 0x7FF

@@ -11,21 +11,21 @@ import pytest
 
 from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut.frames import Mark, format_frames
+from encoder_conformance.profile import quirk_effects as fx
 
 SYNC = 0x80
 RESET_EVENTS = {"reset-node": "nmt_81h", "reset-communication": "nmt_82h"}
 
 
-def _quirk_params(dut, effect: str, evidence) -> dict:
+def _quirk_params(dut, effect: type[fx.P], evidence) -> fx.P:
     return documented_quirk(dut, effect, evidence, "the profile documents no such behaviour")
 
 
-def _counter_spec(params: dict, key: str, default_comm: int) -> tuple[int, int]:
+def _counter_spec(counters: dict[int, int], key: str) -> tuple[int, int]:
     """(comm index, counter object) of the quirk's ``tpdo1``/``tpdo2`` entry."""
-    spec = params.get(key)
-    if not spec:
+    if not counters:
         pytest.skip(f"not applicable: the quirk names no {key} counter")
-    return int(spec.get("comm", default_comm)), int(spec["counter"])
+    return next(iter(counters.items()))
 
 
 def _valid_cob_id(dut, comm: int, settings_journal) -> int:
@@ -62,11 +62,11 @@ def test_send_repeat_counter_sends_each_change_n_times(
     dut, settings_journal, back_to_preoperational, shaft, request, evidence
 ):
     """Counter 3, event timer 0: one position change gives exactly 3 frames, a still shaft none."""
-    params = _quirk_params(dut, "pdo_send_repeat_counters", evidence)
-    comm, counter = _counter_spec(params, "tpdo1", 0x1800)
+    params = _quirk_params(dut, fx.PdoSendRepeatCounters, evidence)
+    comm, counter = _counter_spec(params.per_change, "tpdo1")
     if shaft is None:
         pytest.skip("needs a turning shaft: the simulator's shaft control (no bench drive configured)")
-    repeats = min(3, int(params.get("counter_max", 3)))
+    repeats = min(3, params.counter_max)
     cob_id = _valid_cob_id(dut, comm, settings_journal)
     settings_journal.write(comm, 5, (0).to_bytes(2, "little"))
     settings_journal.write(counter, 0, bytes([repeats]))
@@ -101,9 +101,9 @@ def test_send_repeat_counter_limits_sync_tpdo(
     dut, settings_journal, back_to_preoperational, shaft, request, evidence
 ):
     """Type 1, counter 2: 6 SYNCs with a still shaft give 2 frames; after a position change 2 more."""
-    params = _quirk_params(dut, "pdo_send_repeat_counters", evidence)
-    comm, counter = _counter_spec(params, "tpdo2", 0x1801)
-    limit = min(2, int(params.get("counter_max", 2)))
+    params = _quirk_params(dut, fx.PdoSendRepeatCounters, evidence)
+    comm, counter = _counter_spec(params.sync_limit, "tpdo2")
+    limit = min(2, params.counter_max)
     cob_id = _valid_cob_id(dut, comm, settings_journal)
     settings_journal.write(comm, 2, b"\x01")
     settings_journal.write(counter, 0, bytes([limit]))
@@ -126,10 +126,10 @@ def test_send_repeat_counter_limits_sync_tpdo(
 @pytest.mark.parametrize("reset", sorted(RESET_EVENTS))
 def test_bits_forced_again_at_init(dut, settings_journal, back_to_preoperational, reset, evidence):
     """The forced bits (SIKO: 1801h sub 1 bit 31, PDO2 disabled) are set again after NMT reset."""
-    params = _quirk_params(dut, "bits_forced_at_init", evidence)
-    if RESET_EVENTS[reset] not in params.get("at", list(RESET_EVENTS.values())):
+    params = _quirk_params(dut, fx.BitsForcedAtInit, evidence)
+    if RESET_EVENTS[reset] not in params.at:
         pytest.skip(f"not applicable: the quirk does not force the bits at {reset}")
-    index, sub, bits = int(params["index"]), int(params.get("subindex", 0)), int(params["forced_bits"])
+    index, sub, bits = params.index, params.subindex, params.forced_bits
     label = f"{index:04X}h.{sub:02X}"
     size = len(dut.read(index, sub))
     settings_journal.write(index, sub, (dut.read_uint(index, sub) & ~bits).to_bytes(size, "little"))

@@ -8,7 +8,8 @@ from encoder_conformance.checks import assert_abort, documented_quirk, expected_
 from encoder_conformance.cia301 import LOAD, SAVE
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
-from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter, other_valid_value, parse_key
+from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
+from encoder_conformance.profile import quirk_effects as fx
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.13/§7.5.2.14"), pytest.mark.destructive]
 
@@ -63,7 +64,7 @@ def test_stored_value_survives_power_cycle(dut, stored_change, power_cycle):
 def test_restore_defaults_effective_after_reset(dut, stored_change):
     """After 1011h sub 1 'load' and reset node, the stored value is replaced by the factory default."""
     index, sub, entry, _ = stored_change
-    excluded = dut.profile.quirk_objects("restore_excludes")
+    excluded = dut.profile.quirk_objects(fx.RestoreExcludes)
     if excluded is not None and index in excluded[1]:
         pytest.skip(f"not applicable: restore leaves {index:04X}h unchanged (quirk {excluded[0]})")
     dut.write(0x1011, 1, LOAD)
@@ -92,15 +93,15 @@ def test_wrong_signature_refused(dut, index, name, evidence):
 @pytest.fixture
 def reload_quirk(dut, evidence):
     """The params of a device whose 1011h sub-indices load saved values at once (quirk reload_immediate)."""
-    return documented_quirk(dut, "reload_immediate", evidence, "every restore acts after a reset",
+    return documented_quirk(dut, fx.ReloadImmediate, evidence, "every restore acts after a reset",
                             needs=("test_object",))
 
 
 def test_reload_takes_effect_without_reset(dut, reload_quirk, settings_journal, evidence):
     """Each documented reload sub: save, change, 1011h 'load' -> the saved value is back at once, no reset."""
-    index, sub = parse_key(reload_quirk["test_object"])
+    index, sub = reload_quirk.test_object
     failures = []
-    for reload_sub, save_sub in sorted((int(r), int(s)) for r, s in reload_quirk["reload_immediate"].items()):
+    for reload_sub, save_sub in sorted(reload_quirk.reload_immediate.items()):
         saved = dut.read_uint(index, sub)
         changed = other_valid_value(dut.profile, index, sub, saved)
         assert changed is not None, f"{index:04X}h.{sub:02X}: no other valid value next to {saved}"

@@ -17,6 +17,7 @@ from encoder_conformance.checks import assert_abort, describe_value, expected_ab
 from encoder_conformance.cia301 import SdoAbortCode
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.profile import datatypes
+from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.value_domain import declared_domain, probe_values
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3.17 (abort codes 06090030h..06090032h)")
@@ -33,12 +34,12 @@ def _skip_reason(profile, index: int, entry) -> str | None:
     size = datatypes.size_bytes(entry.type)
     if size is None or size > 4:
         return f"not covered: {entry.type} does not fit an expedited download"
-    found = profile.quirk_objects("writes_need_scaling_bit")
+    found = profile.quirk_objects(fx.WritesNeedScalingBit)
     if found and index in found[1]:
         return (f"not applicable: writes to {index:04X}h are refused unless 6000h bit 2 (scaling) is set "
                 f"(quirk {found[0]}); this test does not switch scaling on")
-    found = profile.quirk_with_effect("store_reboots_without_reply")
-    if found and index == found[1].params.get("index"):
+    found = profile.quirk_of(fx.StoreRebootsWithoutReply)
+    if found and index == found[1].index:
         return f"not applicable: a write to {index:04X}h makes the device store and reboot (quirk {found[0]})"
     return None
 
@@ -47,9 +48,9 @@ def _gap_codes(dut, evidence) -> set[int]:
     """06090030h, plus what a documented quirk sends for a value too high or too low."""
     codes = {VALUE_INVALID}
     for quirk_id, quirk in dut.profile.quirks.items():
-        if quirk.effect == "abort_code" and quirk.params.get("situation") in ("value_high", "value_low"):
+        if isinstance(quirk.params, fx.AbortCode) and quirk.params.situation in ("value_high", "value_low"):
             evidence.deviation(quirk_id, quirk.title)
-            codes |= {int(code) for code in quirk.params.get("codes", [])}
+            codes |= set(quirk.params.codes)
     return codes
 
 

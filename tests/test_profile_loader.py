@@ -417,3 +417,37 @@ def test_duplicate_keys_are_refused(tmp_path):
     dup = GOOD + "  0x1017: {name: Again, type: U8, access: ro, manual: m}\n"
     _, text = problems_of(write(tmp_path, "probe.yaml", dup))
     assert "0x1017" in text or "duplicate" in text
+
+
+def test_misspelled_quirk_parameter(tmp_path):
+    """A misspelled parameter of a quirk effect names file, line, the key path and the likely key."""
+    quirk = ("quirks:\n  q1:\n    title: t\n    manual: m\n    description: d\n    effect: writes_preop_only\n"
+             "    params:\n      objects: [0x2100]\n      abort_cod: 0x08000022\n")
+    _, text = problems_of(write(tmp_path, "probe.yaml", GOOD + quirk))
+    assert "probe.yaml:25: quirks.q1.params.abort_cod: unknown key; did you mean 'abort_code'?" in text
+
+
+def test_ill_typed_quirk_parameter(tmp_path):
+    """A parameter of the wrong type names file, line and key path."""
+    quirk = ("quirks:\n  q1:\n    title: t\n    manual: m\n    description: d\n    effect: abort_code\n"
+             "    params: {situation: value_high, codes: [high]}\n")
+    _, text = problems_of(write(tmp_path, "probe.yaml", GOOD + quirk))
+    assert "probe.yaml:23: quirks.q1.params.codes.0:" in text
+
+
+def test_quirk_without_effect_keeps_free_params(tmp_path):
+    """A documentation-only quirk may carry any params (values for a proposed effect)."""
+    quirk = "quirks:\n  q1: {title: t, manual: m, description: d, params: {anything: [1, 2]}}\n"
+    profile = load_profile(write(tmp_path, "probe.yaml", GOOD + quirk)).profile
+    assert profile.quirks["q1"].params == {"anything": [1, 2]}
+
+
+def test_effect_table_in_profile_readme_is_current():
+    """device_profiles/README.md shows the effect table generated from the parameter models."""
+    from encoder_conformance.profile.quirks import effect_table
+
+    readme = (REPO / "device_profiles" / "README.md").read_text(encoding="utf-8")
+    assert effect_table() in readme, (
+        "device_profiles/README.md's effect table is out of date: replace it with the output of "
+        "`encoder-conformance profile effects`"
+    )

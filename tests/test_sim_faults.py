@@ -5,7 +5,7 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import encoder_conformance.sim.node  # noqa: F401  (imports every behaviour module: their faults register)
+import encoder_conformance.sim.node
 from encoder_conformance.fault_catalogue import FAULTS
 from encoder_conformance.sim.faults import FaultSet, assemble, implemented_faults
 from encoder_conformance.sim.heartbeat import HeartbeatProducer

@@ -189,7 +189,7 @@ def test_writes_preop_only_quirk(rig, wdga_profile):
     rig.nmt(0x01, node.node_id)
     u32(client, 0x1000)
     assert node.state is NmtState.OPERATIONAL
-    assert abort_code(client, 0x2101, 0, bytes([node.node_id])) == params.params["abort_code"]
+    assert abort_code(client, 0x2101, 0, bytes([node.node_id])) == params.params.abort_code
 
 
 def test_node_id_object_quirk_takes_effect_at_reset(rig, wdga_profile):

@@ -19,7 +19,8 @@ import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile, Quirk
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.quirks import QuirkBase, parse_quirk
 from encoder_conformance.sim.faults import FaultSet
 from encoder_conformance.sim.nmt import NmtState
 from encoder_conformance.sim.nvm import NonVolatileMemory
@@ -35,18 +36,21 @@ REBOOT_MS = 150
 
 
 def fast(profile: DeviceProfile, quirk_params: dict[str, dict[str, Any]] | None = None,
-         extra: dict[str, Quirk] | None = None) -> DeviceProfile:
+         extra: dict[str, QuirkBase] | None = None) -> DeviceProfile:
     """The profile with a 5 ms boot-up delay, some quirk params replaced and ``extra`` quirks added."""
     quirks = dict(profile.quirks)
     for quirk_id, params in (quirk_params or {}).items():
-        quirks[quirk_id] = quirks[quirk_id].model_copy(update={"params": {**quirks[quirk_id].params, **params}})
+        old = quirks[quirk_id].params
+        new = type(old).model_validate({**old.model_dump(exclude_unset=True), **params})
+        quirks[quirk_id] = quirks[quirk_id].model_copy(update={"params": new})
     quirks.update(extra or {})
     simulator = profile.simulator.model_copy(update={"bootup_delay_ms": 5})
     return profile.model_copy(update={"simulator": simulator, "quirks": quirks})
 
 
-def quirk(effect: str, **params: Any) -> Quirk:
-    return Quirk(title=f"test {effect}", manual="self-test", description="self-test", effect=effect, params=params)
+def quirk(effect: str, **params: Any) -> QuirkBase:
+    return parse_quirk({"title": f"test {effect}", "manual": "self-test", "description": "self-test", "effect": effect,
+                        "params": params})
 
 
 

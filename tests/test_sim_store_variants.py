@@ -12,6 +12,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.quirk_effects import ReloadImmediate
 from encoder_conformance.sim.store_variants import ParameterSets, set_slot
 from tests import sim_rig
 
@@ -41,8 +42,8 @@ def faulhaber() -> DeviceProfile:
 
 
 def test_parameter_sets_from_params():
-    sets = ParameterSets.from_params({"reload_immediate": {4: 3, 5: 4}, "app_sets": {
-        "saved_by": {4: 1}, "objects": ["0x2348.1", "0x2344"]}})
+    sets = ParameterSets.from_params(ReloadImmediate.model_validate({"reload_immediate": {4: 3, 5: 4}, "app_sets": {
+        "saved_by": {4: 1}, "objects": ["0x2348.1", "0x2344"]}}))
     assert sets.reloads == {4: 3, 5: 4}
     assert sets.saves_set == {4: 1}
     assert sets.set_objects == ((0x2348, 1), (0x2344, 0))

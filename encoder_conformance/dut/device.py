@@ -20,6 +20,7 @@ from canopen.sdo.exceptions import SdoCommunicationError
 from ..cia301 import NMT_COMMAND_NAMES
 from ..errors import BusLostError, DutLostError, RunInterrupted
 from ..profile.model import DeviceProfile
+from ..profile.quirk_effects import SilentUntilBusTraffic
 from . import sdo_frames
 from .frames import FrameLog, Mark, format_frames
 
@@ -226,7 +227,7 @@ class DeviceUnderTest:
 def wake_if_silent(dut: DeviceUnderTest) -> str | None:
     """Devices with automatic bit-rate detection stay silent after power-on until they see a
     frame; send one SYNC as the manual prescribes. Returns the quirk id relied on, if any."""
-    found = dut.profile.quirk_with_effect("silent_until_bus_traffic")
+    found = dut.profile.quirk_of(SilentUntilBusTraffic)
     if found is None:
         return None
     dut.send(0x80, b"")

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..cia301 import SAVE, SAVE_SIGNATURE, STORE_PARAMETERS, STORE_SUB_OF_GROUP
-from ..parameters import parse_key
+from ..cia301 import SAVE, STORE_PARAMETERS, STORE_SUB_OF_GROUP
+from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
 from . import sdo_frames
 from .device import DeviceUnderTest
@@ -57,28 +57,21 @@ class StoreCommand:
 
 
 def _reboot_store(profile: DeviceProfile) -> StoreCommand | None:
-    found = profile.quirk_with_effect("store_reboots_without_reply")
+    found = profile.quirk_of(fx.StoreRebootsWithoutReply)
     if found is None:
         return None
-    quirk_id, quirk = found
-    params = quirk.params
-    if "signature" in params:
-        signature = bytes(params["signature"])
-    else:
-        signature = int(params.get("signature_u32", SAVE_SIGNATURE)).to_bytes(4, "little")
-    return StoreCommand(int(params["index"]), int(params.get("subindex", 0)), signature, True, quirk_id)
+    quirk_id, params = found
+    return StoreCommand(params.index, params.subindex, params.signature_bytes, True, quirk_id)
 
 
 def _manufacturer_store(profile: DeviceProfile, index: int, sub: int) -> StoreCommand | None:
-    found = profile.quirk_with_effect("manufacturer_store_object")
+    found = profile.quirk_of(fx.ManufacturerStoreObject)
     if found is None:
         return None
-    quirk_id, quirk = found
-    params = quirk.params
-    if (index, sub) not in {parse_key(k) for k in params.get("saves", [])}:
+    quirk_id, params = found
+    if (index, sub) not in params.saves:
         return None
-    signature = int(params.get("signature", SAVE_SIGNATURE)).to_bytes(4, "little")
-    return StoreCommand(int(params["index"]), int(params.get("subindex", 0)), signature, quirk=quirk_id)
+    return StoreCommand(params.index, params.subindex, params.signature_bytes, quirk=quirk_id)
 
 
 def _store_command(profile: DeviceProfile, index: int, sub: int) -> StoreCommand | None:

@@ -15,6 +15,7 @@ import can
 
 from ..cia301 import RESTORE_DEFAULT_PARAMETERS, STORE_PARAMETERS
 from ..profile.model import DeviceProfile
+from ..profile.quirk_effects import ManufacturerStoreObject, StoreRebootsWithoutReply
 
 #: SDO client command specifiers that start a download (CiA 301 §7.2.4.3): initiate, block initiate
 _DOWNLOAD_INITIATE = {1, 6}
@@ -23,10 +24,10 @@ _DOWNLOAD_INITIATE = {1, 6}
 def store_command_objects(profile: DeviceProfile) -> frozenset[int]:
     """Indices whose writes are commands that store or restore (1010h, 1011h, manufacturer ones)."""
     indices = {STORE_PARAMETERS, RESTORE_DEFAULT_PARAMETERS}
-    for effect in ("manufacturer_store_object", "store_reboots_without_reply"):
-        found = profile.quirk_with_effect(effect)
-        if found is not None and "index" in found[1].params:
-            indices.add(int(found[1].params["index"]))
+    for effect in (ManufacturerStoreObject, StoreRebootsWithoutReply):
+        params = profile.params_of(effect)
+        if params is not None:
+            indices.add(params.index)
     return frozenset(indices)
 
 

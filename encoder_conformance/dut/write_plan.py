@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 from ..cia301 import COB_ID_INVALID, RPDO_COMMUNICATION, TPDO_COMMUNICATION, pdo_mapping_of
 from ..profile.model import DeviceProfile
+from ..profile.quirk_effects import WritesNeedScalingBit
 
 Key = tuple[int, int]
 SCALING_GATE = (0x6000, 0)  # CiA 406 operating parameters; bit 2 = scaling function control
@@ -84,10 +85,10 @@ def _pdo_communication_indices(keys: list[Key]) -> list[int]:
 def _gated_steps(profile: DeviceProfile, remaining: dict[Key, bytes], current: dict[Key, bytes | None]
                  ) -> list[Step]:
     """Writes a device refuses unless 6000h bit 2 is set: set it, write them, then 6000h's own value."""
-    found = profile.quirk_with_effect("writes_need_scaling_bit")
+    found = profile.quirk_objects(WritesNeedScalingBit)
     if found is None:
         return []
-    gated_indices = {int(i) for i in found[1].params.get("objects", [])}
+    gated_indices = found[1]
     gated = sorted(k for k in remaining if k[0] in gated_indices)
     gate_now = current.get(SCALING_GATE)
     if not gated or gate_now is None:

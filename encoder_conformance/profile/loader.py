@@ -18,6 +18,10 @@ from pydantic import BaseModel, ValidationError
 
 from ..errors import ProfileError
 from . import model
+from .quirk_effects import EFFECT_MODELS
+from .quirks import DOCUMENTATION_ONLY
+
+QUIRK_TAGS = frozenset(EFFECT_MODELS) | {DOCUMENTATION_ONLY}
 
 PROFILE_SUFFIXES = (".yaml", ".yml")
 DEFAULT_PROFILE_DIR = Path(__file__).resolve().parents[2] / "device_profiles"
@@ -38,6 +42,8 @@ def _all_field_names() -> set[str]:
     for obj in vars(model).values():
         if isinstance(obj, type) and issubclass(obj, BaseModel):
             names.update(obj.model_fields)
+    for effect in EFFECT_MODELS.values():
+        names.update(effect.model_fields)
     return names
 
 
@@ -129,12 +135,20 @@ def _hint(error: dict[str, Any]) -> str:
         return f"unknown key{'; did you mean ' + repr(close[0]) + '?' if close else '; remove it'}"
     if kind == "missing":
         return "required key is missing; add it"
+    if kind == "unknown_effect":
+        given = error["input"].get("effect") if isinstance(error["input"], dict) else None
+        close = difflib.get_close_matches(str(given), EFFECT_MODELS, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        return f"unknown quirk effect {given!r}; {hint}known effects: {', '.join(sorted(EFFECT_MODELS))}"
     return error["msg"]
 
 
 def _clean_loc(loc: tuple[Any, ...]) -> tuple[Any, ...]:
-    """Drop pydantic's union/function markers from a location."""
-    return tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p.startswith("function-"))))
+    """Drop pydantic's union/function markers (and a quirk's effect tag) from a location."""
+    loc = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p.startswith("function-"))))
+    if loc[:1] == ("quirks",) and len(loc) > 2 and loc[2] in QUIRK_TAGS:
+        loc = loc[:2] + loc[3:]
+    return loc
 
 
 def _read_yaml(path: Path) -> tuple[dict[str, Any], str]:
@@ -307,6 +321,8 @@ def _describe(exc: ValidationError, chain: tuple[Path, ...]) -> list[str]:
     problems: list[str] = []
     for error in exc.errors():
         loc = _clean_loc(tuple(error["loc"]))
+        if error["type"] == "unknown_effect":
+            loc = (*loc, "effect")
         where = ""
         for depth in range(len(loc), 0, -1):
             hit = next(((p, lines[loc[:depth]]) for p, lines in maps if loc[:depth] in lines), None)

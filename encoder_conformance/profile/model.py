@@ -13,7 +13,8 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from . import datatypes
-from .quirks import EFFECTS
+from .quirk_effects import EffectParams, ObjectList, P
+from .quirks import Quirk, QuirkBase
 from .value_set import ValueSet
 
 SCHEMA_VERSION = 1
@@ -340,25 +341,6 @@ class Timing(StrictModel):
     manual: str | None = None
 
 
-class Quirk(StrictModel):
-    """A documented deviation of this device from the CiA texts (or an ambiguity we resolved)."""
-
-    title: str
-    manual: str = Field(description="manual section that documents the behaviour")
-    deviates_from: str | None = Field(default=None, description="the CiA clause the device departs from")
-    description: str
-    effect: str | None = Field(default=None, description="behaviour the simulator and suites act on")
-    params: dict[str, Any] = Field(default_factory=dict)
-
-    @field_validator("effect")
-    @classmethod
-    def _known_effect(cls, value: str | None) -> str | None:
-        if value is not None and value not in EFFECTS:
-            known = ", ".join(sorted(EFFECTS))
-            raise ValueError(f"unknown quirk effect {value!r}; known effects: {known}")
-        return value
-
-
 class SimulatorSpec(StrictModel):
     """Values the simulated twin uses where the manual leaves them per unit."""
 
@@ -398,19 +380,30 @@ class DeviceProfile(StrictModel):
         obj = self.objects.get(index)
         return None if obj is None else obj.entries().get(sub)
 
-    def quirk_with_effect(self, effect: str) -> tuple[str, Quirk] | None:
+    def quirk_with_effect(self, effect: str) -> tuple[str, QuirkBase] | None:
         """The (id, quirk) that declares ``effect``, if any."""
         for quirk_id, quirk in self.quirks.items():
             if quirk.effect == effect:
                 return quirk_id, quirk
         return None
 
-    def quirk_objects(self, effect: str) -> tuple[str, frozenset[int]] | None:
-        """(quirk id, the indices its ``objects`` param lists) of the quirk with ``effect``, if any."""
-        found = self.quirk_with_effect(effect)
-        if found is None:
-            return None
-        return found[0], frozenset(int(index) for index in found[1].params.get("objects", []))
+    def quirk_of(self, params: type[P]) -> tuple[str, P] | None:
+        """(quirk id, its typed params) of the quirk with the effect of the ``params`` model, if any."""
+        found = self.quirk_with_effect(params.effect)
+        return None if found is None else (found[0], found[1].params)
+
+    def params_of(self, params: type[P]) -> P | None:
+        """The typed params of the quirk with the effect of the ``params`` model, if any."""
+        found = self.quirk_of(params)
+        return None if found is None else found[1]
+
+    def has_effect(self, params: type[EffectParams]) -> bool:
+        return params.effect in self.effects
+
+    def quirk_objects(self, params: type[ObjectList]) -> tuple[str, frozenset[int]] | None:
+        """(quirk id, the indices its ``objects`` param lists) of the quirk with that effect, if any."""
+        found = self.quirk_of(params)
+        return None if found is None else (found[0], found[1].indices)
 
     @property
     def effects(self) -> frozenset[str]:

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from ..cia301 import ABORT_FOR_SITUATION
 from ..cia301 import SdoAbortCode as Abort
 from ..profile import datatypes
+from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
 from ..profile.value_set import ValueSet
 from ..value_domain import declared_domain
@@ -27,9 +28,8 @@ def situation_codes(profile: DeviceProfile) -> dict[str, int]:
     """The code the device sends per situation: CiA's, or the first one an ``abort_code`` quirk lists."""
     codes = dict(ABORT_FOR_SITUATION)
     for quirk in profile.quirks.values():
-        listed = quirk.params.get("codes") or []
-        if quirk.effect == "abort_code" and quirk.params.get("situation") in codes and listed:
-            codes[quirk.params["situation"]] = int(listed[0])
+        if isinstance(quirk.params, fx.AbortCode):
+            codes[quirk.params.situation] = quirk.params.codes[0]
     return codes
 
 

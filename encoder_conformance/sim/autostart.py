@@ -4,8 +4,8 @@ object holds a given value (instead of CiA 302-2 1F80h bit semantics)."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
+from ..profile.quirk_effects import NmtAutostartObject
 from .faults import breaks
 from .hooks import NodeHooks
 from .nmt import NmtState
@@ -14,7 +14,7 @@ from .nmt import NmtState
 class Autostart:
     """A behaviour: after the boot-up message, enter operational if the object says so."""
 
-    def __init__(self, params: dict[str, Any], read: Callable[[int, int], int | None],
+    def __init__(self, params: NmtAutostartObject, read: Callable[[int, int], int | None],
                  enter: Callable[[NmtState], None]) -> None:
         self._params = params
         self._read = read
@@ -25,8 +25,7 @@ class Autostart:
 
     def starts_itself(self) -> bool:
         params = self._params
-        value = self._read(int(params["index"]), int(params.get("subindex", 0)))
-        return value == int(params["operational_value"])
+        return self._read(params.index, params.subindex) == params.operational_value
 
     def on_booted(self) -> None:
         if self.starts_itself():

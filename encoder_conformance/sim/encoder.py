@@ -8,8 +8,8 @@ applied here: ``manufacturer_encoder_objects`` (the same function in manufacture
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
+from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
 from .limit_switch import LimitSwitchFlags
 from .nvm import Key, NonVolatileMemory
@@ -42,19 +42,17 @@ class EncoderObjects:
 
     @classmethod
     def of(cls, profile: DeviceProfile) -> EncoderObjects:
-        found = profile.quirk_with_effect("manufacturer_encoder_objects")
-        if found is None:
+        params = profile.params_of(fx.ManufacturerEncoderObjects)
+        if params is None:
             return cls()
-        params = found[1].params
-        role = {int(cia): int(own) for own, cia in params.get("equivalents", {}).items()}
-        bit = params.get("scaling_bit", 2)
+        role = {cia: own for own, cia in params.equivalents.items()}
         return cls(
             operating=role.get(0x6000, 0x6000),
             units_per_rev=role.get(0x6001, 0x6001),
             total_range=role.get(0x6002, 0x6002),
             preset=role.get(0x6003, 0x6003),
             position=role.get(0x6004, 0x6004),
-            scaling_bit=None if bit is None else int(bit),
+            scaling_bit=params.scaling_bit,
         )
 
 
@@ -67,10 +65,9 @@ class FreezeRule:
     durations_ms: dict[str, float]
 
     @classmethod
-    def from_params(cls, params: dict[str, Any]) -> FreezeRule:
-        durations = {str(k).lower(): float(v) for k, v in (params.get("durations_ms") or {}).items()}
-        return cls(frozenset(int(i) for i in params.get("objects", [])), float(params.get("duration_ms", 0)),
-                   durations)
+    def from_params(cls, params: fx.PositionFrozenDuringExecution) -> FreezeRule:
+        durations = {k.lower(): v for k, v in params.durations_ms.items()}
+        return cls(params.indices, params.duration_ms, durations)
 
     def duration_s(self, index: int, value: object) -> float:
         """0 when a write to ``index`` does not freeze the position."""
@@ -91,11 +88,11 @@ class EncoderFunction:
         self.shaft = shaft
         self.scheduler = scheduler
         self.objects = EncoderObjects.of(profile)
-        self.signed = profile.quirk_with_effect("signed_position_range") is not None and profile.capabilities.multiturn
-        flags = profile.quirk_with_effect("limit_switch_flags")
-        self.flags = None if flags is None else LimitSwitchFlags.from_params(flags[1].params)
-        freeze = profile.quirk_with_effect("position_frozen_during_execution")
-        self.freeze_rule = None if freeze is None else FreezeRule.from_params(freeze[1].params)
+        self.signed = profile.has_effect(fx.SignedPositionRange) and profile.capabilities.multiturn
+        flags = profile.params_of(fx.LimitSwitchFlags)
+        self.flags = None if flags is None else LimitSwitchFlags.from_params(flags)
+        freeze = profile.params_of(fx.PositionFrozenDuringExecution)
+        self.freeze_rule = None if freeze is None else FreezeRule.from_params(freeze)
         self._offset = 0  # preset offset when the profile has no 6509h
         self._frozen: int | None = None
         self._thaw_job: JobHandle | None = None

@@ -7,30 +7,26 @@ value changes; the stored one stays as written.
 
 from __future__ import annotations
 
-from typing import Any
-
+from ..profile.quirk_effects import BitsForcedAtInit
 from .faults import breaks
 from .hooks import NodeHooks, ReloadEvent
 from .object_store import ObjectStore
 
-#: the initialisation events a quirk can name in ``at``
-EVENTS = ("power_on", "nmt_81h", "nmt_82h")
 
-
-def force_bits(params: dict[str, Any] | None, store: ObjectStore, event: str) -> None:
+def force_bits(params: BitsForcedAtInit | None, store: ObjectStore, event: str) -> None:
     """Set ``forced_bits`` in the current value of index/subindex if ``event`` is listed in ``at``."""
-    if params is None or event not in params.get("at", EVENTS):
+    if params is None or event not in params.at:
         return
-    key = (int(params["index"]), int(params.get("subindex", 0)))
+    key = params.key
     value = store.get(key) if store.has(key) else None
     if isinstance(value, int):
-        store.set(key, value | int(params["forced_bits"]))
+        store.set(key, value | params.forced_bits)
 
 
 class ForcedBits:
     """A behaviour: applies the quirk at every initialisation event."""
 
-    def __init__(self, params: dict[str, Any], store: ObjectStore) -> None:
+    def __init__(self, params: BitsForcedAtInit, store: ObjectStore) -> None:
         self._params = params
         self._store = store
 

@@ -7,8 +7,8 @@ guard time written while the producer runs is refused. CiA 301 keeps the objects
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
+from ..profile.quirk_effects import GuardingHeartbeatExclusive
 from .faults import breaks
 from .hooks import NodeHooks
 from .nvm import Key
@@ -27,12 +27,12 @@ class GuardingHeartbeatExclusion:
         self._write = write
 
     @classmethod
-    def from_params(cls, params: dict[str, Any], read: Callable[[int, int], int | None],
+    def from_params(cls, params: GuardingHeartbeatExclusive, read: Callable[[int, int], int | None],
                     write: Callable[[Key, int], None]) -> GuardingHeartbeatExclusion:
         return cls(
-            producer=(int(params.get("producer_object", 0x1017)), 0),
-            guard_time=(int(params.get("guard_time_object", 0x100C)), 0),
-            abort_code=int(params.get("guard_time_write_while_producer_abort", 0x08000020)),
+            producer=(params.producer_object, 0),
+            guard_time=(params.guard_time_object, 0),
+            abort_code=params.guard_time_write_while_producer_abort,
             read=read,
             write=write,
         )

@@ -16,6 +16,7 @@ import can
 
 from ..profile.loader import load_profile
 from ..profile.model import DeviceProfile
+from ..profile.quirk_effects import SecondNode
 from .faults import FaultSet
 from .node import SimulatedNode
 from .scheduler import DeadlineScheduler
@@ -131,14 +132,13 @@ class SimulatorHost:
 
 def sibling_spec(node: SimulatedNode) -> tuple[DeviceProfile, int] | None:
     """(profile, node-id) of the sibling a ``second_node`` quirk asks for, or None."""
-    found = node.profile.quirk_with_effect("second_node")
-    if found is None:
+    params = node.profile.params_of(SecondNode)
+    if params is None:
         return None
-    params = found[1].params
-    node_id = node.configured_node_id + int(params.get("node_id_offset", 1))
+    node_id = node.configured_node_id + params.node_id_offset
     if not 1 <= node_id <= 127:
         log.warning("second_node: sibling node-id %d of node %d is outside 1..127", node_id, node.configured_node_id)
         return None
-    name = params.get("profile")
+    name = params.profile
     profile = node.profile if not name or name == node.profile.id else load_profile(str(name)).profile
     return profile, node_id

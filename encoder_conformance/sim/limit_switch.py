@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+
+from ..profile.quirk_effects import LimitSwitchFlags as LimitSwitchParams
 
 
 @dataclass(frozen=True)
@@ -31,18 +32,18 @@ class LimitSwitchFlags:
     channels: frozenset[str]  # "tpdo", "sdo"
 
     @classmethod
-    def from_params(cls, params: dict[str, Any]) -> LimitSwitchFlags:
+    def from_params(cls, params: LimitSwitchParams) -> LimitSwitchFlags:
         switches = tuple(
-            LimitSwitch(int(spec["object"]), int(spec["enable_bit"]), int(spec["flag_bit"]), below=name == "min")
-            for name in ("min", "max")
-            if (spec := params.get(name))
+            LimitSwitch(spec.object, spec.enable_bit, spec.flag_bit, below=spec is params.min)
+            for spec in (params.min, params.max)
+            if spec is not None
         )
         return cls(
-            value_object=int(params["value_object"]),
-            enable_object=int(params["enable_object"]),
-            position_mask=int(params.get("position_mask", 0xFFFFFFFF)),
+            value_object=params.value_object,
+            enable_object=params.enable_object,
+            position_mask=params.position_mask,
             switches=switches,
-            channels=frozenset(str(c) for c in params.get("applies_to", ["tpdo", "sdo"])),
+            channels=frozenset(params.applies_to),
         )
 
     def apply(self, position: int, read: Callable[[int, int], int | None]) -> int:

@@ -14,10 +14,11 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Protocol, TypeVar
 
 import can
 
+from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
 from ..profile.od_builder import initial_value
 from .access import ObjectAccess, situation_codes
@@ -45,6 +46,8 @@ from .values import ObjectValues
 from .write_gates import preop_only, scaling_bit_needed
 
 Send = Callable[[int, bytes, bool], None]
+P = TypeVar("P", bound=fx.EffectParams)
+T = TypeVar("T")
 
 
 class Behaviour(Protocol):
@@ -76,7 +79,7 @@ class SimulatedNode:
         self.nmt = assemble(NmtSlave, faults)(
             hooks, self.store, scheduler, self._send, self._node_id_at_power_on,
             boot_delay_s=profile.simulator.bootup_delay_ms / 1000,
-            silent_until_bus_traffic=self._quirk("silent_until_bus_traffic") is not None,
+            silent_until_bus_traffic=profile.has_effect(fx.SilentUntilBusTraffic),
             lock=self.lock,
         )
         self.shaft = Shaft()
@@ -94,7 +97,7 @@ class SimulatedNode:
             self.store, self._send,
             allowed=lambda: self.state in (NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL),
             node_id=lambda: self.node_id,
-            without_generic_bit=self._quirk("error_register_without_generic_bit") is not None,
+            without_generic_bit=profile.has_effect(fx.ErrorRegisterWithoutGenericBit),
         )
         self.tpdo = assemble(TpdoEngine, faults)(
             scheduler,
@@ -102,9 +105,9 @@ class SimulatedNode:
             mapped_bytes=self.values.mapped_bytes,
             send=self._send,
             count=profile.capabilities.tpdos,
-            timer_zero_disables_255=self._quirk("transmission_type_255_timer_0_disables") is not None,
-            layout=self._built("fixed_tpdo_mapping", FixedTpdoLayout.from_params),
-            repeat=self._built("pdo_send_repeat_counters", SendRepeatCounters.from_params),
+            timer_zero_disables_255=profile.has_effect(fx.TransmissionType255Timer0Disables),
+            layout=self._built(fx.FixedTpdoMapping, FixedTpdoLayout.from_params),
+            repeat=self._built(fx.PdoSendRepeatCounters, SendRepeatCounters.from_params),
         )
         for behaviour in self._behaviours(codes):
             behaviour.register(hooks)
@@ -117,31 +120,27 @@ class SimulatedNode:
             self.reboot, self.default_value, codes,
         )
         optional: list[Behaviour | None] = [
-            self._built("guarding_heartbeat_exclusive", lambda p: assemble(GuardingHeartbeatExclusion, faults)
+            self._built(fx.GuardingHeartbeatExclusive, lambda p: assemble(GuardingHeartbeatExclusion, faults)
                         .from_params(p, self.read_int, self.store.set)),
-            self._built("writes_preop_only", lambda p: preop_only(p, lambda: self.state, wrong_state)),
-            self._built("writes_need_scaling_bit", lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
+            self._built(fx.WritesPreopOnly, lambda p: preop_only(p, lambda: self.state, wrong_state)),
+            self._built(fx.WritesNeedScalingBit, lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
             store_commands,
             self.emcy,
             _EncoderBehaviour(self.encoder, self.nvm),
-            self._built("bits_forced_at_init", lambda p: assemble(ForcedBits, faults)(p, self.store)),
+            self._built(fx.BitsForcedAtInit, lambda p: assemble(ForcedBits, faults)(p, self.store)),
             self.heartbeat,
-            self._built("nmt_autostart_object", lambda p: assemble(Autostart, faults)(p, self.read_int,
+            self._built(fx.NmtAutostartObject, lambda p: assemble(Autostart, faults)(p, self.read_int,
                                                                                         self.nmt.enter)),
             self.tpdo,
-            self._built("store_object_reads_back", _ReadsBack),
+            self._built(fx.StoreObjectReadsBack, _ReadsBack),
             self.sdo_channel,
         ]
         return [b for b in optional if b is not None]
 
     # -- helpers -------------------------------------------------------------------------
-    def _quirk(self, effect: str) -> dict[str, Any] | None:
-        """The params of the profile's quirk with ``effect``, or None if it has none."""
-        found = self.profile.quirk_with_effect(effect)
-        return None if found is None else found[1].params
-
-    def _built(self, effect: str, build: Callable[[dict[str, Any]], Any]) -> Any:
-        params = self._quirk(effect)
+    def _built(self, effect: type[P], build: Callable[[P], T]) -> T | None:
+        """``build(params)`` of the profile's quirk with that effect, or None if it has none."""
+        params = self.profile.params_of(effect)
         return None if params is None else build(params)
 
     def read_int(self, index: int, sub: int) -> int | None:
@@ -161,16 +160,14 @@ class SimulatedNode:
 
     def _preconfigure_node_id(self) -> None:
         """A twin started with --node-id behaves as if configured before delivery."""
-        quirk = self._quirk("node_id_object")
-        if quirk and self.configured_node_id != self.profile.bus.node_id:
-            key = (int(quirk["index"]), int(quirk.get("subindex", 0)))
-            if key not in self.nvm:
-                self.nvm.put_many({key: self.configured_node_id})
+        quirk = self.profile.params_of(fx.NodeIdObject)
+        if quirk and self.configured_node_id != self.profile.bus.node_id and quirk.key not in self.nvm:
+            self.nvm.put_many({quirk.key: self.configured_node_id})
 
     def _node_id_at_power_on(self) -> int:
-        quirk = self._quirk("node_id_object")
+        quirk = self.profile.params_of(fx.NodeIdObject)
         if quirk:
-            stored = self.nvm.get((int(quirk["index"]), int(quirk.get("subindex", 0))))
+            stored = self.nvm.get(quirk.key)
             if isinstance(stored, int) and 1 <= stored <= 127:
                 return stored
         return self.configured_node_id
@@ -271,8 +268,8 @@ class _EncoderBehaviour:
 class _ReadsBack:
     """Quirk ``store_object_reads_back``: 1010h/1011h subs read back a value other than CiA's word."""
 
-    def __init__(self, params: dict[str, Any]) -> None:
-        self._value = int(params.get("value", 0))
+    def __init__(self, params: fx.StoreObjectReadsBack) -> None:
+        self._value = params.value
 
     def register(self, hooks: NodeHooks) -> None:
         hooks.sources.append(self.value)

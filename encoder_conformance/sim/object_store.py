@@ -10,6 +10,7 @@ from canopen.objectdictionary import ODVariable
 from ..profile import datatypes
 from ..profile.model import DeviceProfile, EntrySpec, resolve_node_id_expression
 from ..profile.od_builder import build_object_dictionary, initial_value
+from ..profile.quirk_effects import RestoreExcludes
 from .faults import breaks
 from .nvm import Key, NonVolatileMemory
 
@@ -31,7 +32,7 @@ class ObjectStore:
             (index, sub): entry for index, sub, _, entry in profile.iter_entries()
         }
         self.values: dict[Key, int | str | bytes] = {}
-        excluded = profile.quirk_objects("restore_excludes")
+        excluded = profile.quirk_objects(RestoreExcludes)
         self.restore_excluded = excluded[1] if excluded else frozenset()
         self.reload(lambda index: True, node_id)
 

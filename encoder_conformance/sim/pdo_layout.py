@@ -8,16 +8,10 @@ n = 1802h sub 2 (1..255).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+
+from ..profile.quirk_effects import FixedTpdoMapping
 
 Mapping = list[tuple[int, int, int]]  # (index, sub, bits)
-
-
-def _specs(value: Any) -> list[dict[str, Any]]:
-    """A params entry given as one mapping or a list of them."""
-    if not value:
-        return []
-    return [value] if isinstance(value, dict) else list(value)
 
 
 @dataclass(frozen=True)
@@ -28,15 +22,11 @@ class FixedTpdoLayout:
     polled: frozenset[int]  # comm indices answering an RTR
 
     @classmethod
-    def from_params(cls, params: dict[str, Any]) -> FixedTpdoLayout:
-        mapping = {
-            int(comm): [(int(index), int(sub), int(bits)) for index, sub, bits in entries]
-            for comm, entries in (params.get("mapping") or {}).items()
-        }
-        cyclic = {int(s["tpdo"]): (int(s["period_object"]), float(s.get("period_unit_ms", 1)))
-                  for s in _specs(params.get("cyclic"))}
-        sync = {int(s["tpdo"]): int(s.get("counter_subindex", 2)) for s in _specs(params.get("sync"))}
-        polled = frozenset(int(s["tpdo"]) for s in _specs(params.get("polled")))
+    def from_params(cls, params: FixedTpdoMapping) -> FixedTpdoLayout:
+        mapping = {comm: list(entries) for comm, entries in params.mapping.items()}
+        cyclic = {s.tpdo: (s.period_object, s.period_unit_ms) for s in params.cyclic_tpdos}
+        sync = {s.tpdo: s.counter_subindex for s in params.sync_tpdos}
+        polled = frozenset(s.tpdo for s in params.polled_tpdos)
         return cls(mapping, cyclic, sync, polled)
 
     @property

@@ -15,18 +15,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
+from ..profile.quirk_effects import PdoSendRepeatCounters
 from .tpdo_config import TpdoConfig
 
 Read = Callable[[int, int], int | None]
-
-
-def _counters(value: Any, default_comm: int) -> dict[int, int]:
-    """comm index -> counter object of one params entry ({counter: index, comm: index (optional)})."""
-    if not value:
-        return {}
-    return {int(value.get("comm", default_comm)): int(value["counter"])}
 
 
 @dataclass(frozen=True)
@@ -36,12 +29,8 @@ class SendRepeatCounters:
     counter_max: int
 
     @classmethod
-    def from_params(cls, params: dict[str, Any]) -> SendRepeatCounters:
-        return cls(
-            _counters(params.get("tpdo1"), 0x1800),
-            _counters(params.get("tpdo2"), 0x1801),
-            int(params.get("counter_max", 255)),
-        )
+    def from_params(cls, params: PdoSendRepeatCounters) -> SendRepeatCounters:
+        return cls(params.per_change, params.sync_limit, params.counter_max)
 
     @property
     def counter_objects(self) -> frozenset[int]:

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
+from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
 from .faults import breaks
 from .hooks import NodeHooks
@@ -30,15 +31,6 @@ class EncoderMemory:
     forget: Callable[[NonVolatileMemory], None]
 
 
-def _params(profile: DeviceProfile, effect: str) -> dict[str, Any] | None:
-    found = profile.quirk_with_effect(effect)
-    return None if found is None else found[1].params
-
-
-def _key(params: dict[str, Any], index: str, sub: str, default: Key) -> Key:
-    return int(params.get(index, default[0])), int(params.get(sub, default[1]))
-
-
 class StoreCommands:
     """The store and restore behaviour of one node, as its profile declares it."""
 
@@ -51,11 +43,11 @@ class StoreCommands:
         self._reboot = reboot
         self._default_value = default_value
         self._codes = codes
-        self.reboot = _params(profile, "store_reboots_without_reply")
-        self.automatic = _params(profile, "store_automatic") is not None
-        extra = _params(profile, "manufacturer_store_object")
+        self.reboot = profile.params_of(fx.StoreRebootsWithoutReply)
+        self.automatic = profile.has_effect(fx.StoreAutomatic)
+        extra = profile.params_of(fx.ManufacturerStoreObject)
         self.extra_store = None if extra is None else ManufacturerStoreObject.from_params(extra)
-        sets = _params(profile, "reload_immediate")
+        sets = profile.params_of(fx.ReloadImmediate)
         self.sets = None if sets is None else ParameterSets.from_params(sets)
 
     def register(self, hooks: NodeHooks) -> None:
@@ -64,7 +56,7 @@ class StoreCommands:
 
     def on_write(self, key: Key, value: object) -> bool:
         """Carry out a store/restore command; True when ``key`` was one (the value is not kept)."""
-        if self.reboot is not None and key == _key(self.reboot, "index", "subindex", (0x1010, 1)):
+        if self.reboot is not None and key == self.reboot.key:
             self._store_and_reboot(value, self.reboot)
         if self.extra_store is not None and key == self.extra_store.key:
             self._manufacturer_store(value, self.extra_store)
@@ -136,19 +128,18 @@ class StoreCommands:
         self._store.restore_defaults(group)
         self._encoder.forget(self._nvm)
 
-    def _store_and_reboot(self, value: object, params: dict[str, Any]) -> None:
+    def _store_and_reboot(self, value: object, params: fx.StoreRebootsWithoutReply) -> None:
         """Quirk store_reboots_without_reply: store everything, no SDO reply, reboot, boot-up later.
 
         Any other value than the signature is refused (params.wrong_signature_abort, default the
         CiA 'cannot store' code) and changes nothing: the manual leaves this case open.
         """
-        wrong = params.get("wrong_signature_abort")
-        signature = int(params.get("signature_u32", SAVE_SIGNATURE))
-        self._check_signature(value, signature, None if wrong is None else int(wrong))
+        self._check_signature(value, params.signature_u32, params.wrong_signature_abort)
         if self.persists():
             self._store.store_all_storable()
             self._encoder.persist(self._nvm)
-        self._reboot(float(params.get("reboot_ms", self._profile.simulator.bootup_delay_ms)) / 1000)
+        reboot_ms = self._profile.simulator.bootup_delay_ms if params.reboot_ms is None else params.reboot_ms
+        self._reboot(reboot_ms / 1000)
         raise SdoNoReply
 
 

@@ -18,8 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..cia301 import SAVE_SIGNATURE
-from ..parameters import parse_key
+from ..profile import quirk_effects as fx
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
 
@@ -36,12 +35,11 @@ class ParameterSets:
     set_objects: tuple[Key, ...]
 
     @classmethod
-    def from_params(cls, params: dict[str, Any]) -> ParameterSets:
-        sets = params.get("app_sets", {})
+    def from_params(cls, params: fx.ReloadImmediate) -> ParameterSets:
         return cls(
-            saves_set={int(sub): int(number) for sub, number in sets.get("saved_by", {}).items()},
-            reloads={int(sub): int(source) for sub, source in params.get("reload_immediate", {}).items()},
-            set_objects=tuple(parse_key(k) for k in sets.get("objects", [])),
+            saves_set=dict(params.app_sets.saved_by),
+            reloads=dict(params.reload_immediate),
+            set_objects=tuple(params.app_sets.objects),
         )
 
     def handles(self, key: Key) -> bool:
@@ -77,11 +75,10 @@ class ManufacturerStoreObject:
     wrong_signature_abort: int | None
 
     @classmethod
-    def from_params(cls, params: dict[str, Any]) -> ManufacturerStoreObject:
-        wrong = params.get("wrong_signature_abort")
+    def from_params(cls, params: fx.ManufacturerStoreObject) -> ManufacturerStoreObject:
         return cls(
-            key=(int(params["index"]), int(params.get("subindex", 0))),
-            signature=int(params.get("signature", SAVE_SIGNATURE)),
-            saves=tuple(parse_key(k) for k in params.get("saves", [])),
-            wrong_signature_abort=None if wrong is None else int(wrong),
+            key=params.key,
+            signature=params.signature,
+            saves=tuple(params.saves),
+            wrong_signature_abort=params.wrong_signature_abort,
         )

@@ -4,8 +4,8 @@ pre-operational) and ``writes_need_scaling_bit`` (unless 6000h bit 2 is set)."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
+from ..profile.quirk_effects import WritesNeedScalingBit, WritesPreopOnly
 from .hooks import NodeHooks
 from .nmt import NmtState
 from .nvm import Key
@@ -17,9 +17,10 @@ SCALING_BIT = 0x04  # 6000h bit 2 (CiA 406)
 class ObjectWriteGate:
     """A behaviour: writes to the listed objects are refused while ``allowed()`` is false."""
 
-    def __init__(self, params: dict[str, Any], allowed: Callable[[], bool], default_abort: int) -> None:
-        self._objects = frozenset(int(i) for i in params.get("objects", []))
-        self._abort = int(params.get("abort_code", default_abort))
+    def __init__(self, params: WritesPreopOnly | WritesNeedScalingBit, allowed: Callable[[], bool],
+                 default_abort: int) -> None:
+        self._objects = params.indices
+        self._abort = default_abort if params.abort_code is None else params.abort_code
         self._allowed = allowed
 
     def register(self, hooks: NodeHooks) -> None:
@@ -30,10 +31,10 @@ class ObjectWriteGate:
             raise SdoAbort(self._abort)
 
 
-def preop_only(params: dict[str, Any], state: Callable[[], NmtState | None], default_abort: int) -> ObjectWriteGate:
+def preop_only(params: WritesPreopOnly, state: Callable[[], NmtState | None], default_abort: int) -> ObjectWriteGate:
     return ObjectWriteGate(params, lambda: state() is NmtState.PRE_OPERATIONAL, default_abort)
 
 
-def scaling_bit_needed(params: dict[str, Any], read: Callable[[int, int], int | None],
+def scaling_bit_needed(params: WritesNeedScalingBit, read: Callable[[int, int], int | None],
                        default_abort: int) -> ObjectWriteGate:
     return ObjectWriteGate(params, lambda: bool((read(0x6000, 0) or 0) & SCALING_BIT), default_abort)
