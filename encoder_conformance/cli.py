@@ -12,15 +12,13 @@ from pathlib import Path
 
 from .errors import BusSetupError, ProfileError
 from .exit_codes import RunExit
-
-REPO_ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_PROFILE = "wachendorff-wdga-mt"
+from .paths import DEFAULT_PROFILE, SUITES_DIR
 
 
 def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
     import pytest
 
-    argv = [str(REPO_ROOT / "suites"), "--device-profile", args.profile, "-p", "no:cacheprovider"]
+    argv = [str(SUITES_DIR), "--device-profile", args.profile, "-p", "no:cacheprovider"]
     for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir", "station",
                    "power_off_cmd", "power_on_cmd", "power_off_time"):
         value = getattr(args, option)
@@ -60,7 +58,7 @@ def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
 
 
 def _cmd_sim_control(args: argparse.Namespace, extra: list[str]) -> int:
-    from .sim_control import SimulatorControl, parse_address  # light: a bench's power command starts it often
+    from .sim_process import SimulatorControl, parse_address  # light: a bench's power command starts it often
 
     try:
         control = SimulatorControl(parse_address(args.control))

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .fault_catalogue import TARGET_MODULES
+from .paths import REPO_ROOT, SUITES_DIR
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
 _ENTRY_PARAM = re.compile(r"\[0x[0-9A-F]{4}\.[0-9A-F]{2} .*\]$")  # names may hold brackets: "Kv [1/s]"
 
 
@@ -68,8 +68,8 @@ def _preflight_outcome(folder: Path) -> str:
 def _suite_paths(fault: str | None, targeted: bool) -> list[str]:
     """suites/ as a whole, or only the modules ``fault`` is made for."""
     if targeted and fault is not None:
-        return [str(REPO_ROOT / "suites" / f"{module}.py") for module in TARGET_MODULES[fault]]
-    return [str(REPO_ROOT / "suites")]
+        return [str(SUITES_DIR / f"{module}.py") for module in TARGET_MODULES[fault]]
+    return [str(SUITES_DIR)]
 
 
 def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None = None,

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from .profile import datatypes
 from .profile.model import DeviceProfile, EntrySpec
 from .profile.quirk_effects import BitrateObject, NodeIdObject
-from .value_domain import declared_domain
+from .profile.value_domain import declared_domain
 
 STORE_GROUPS = ("store_all", "store_comm", "store_app", "store_manufacturer")
 

@@ -1,4 +1,6 @@
-"""Start a simulator in its own process and connect to it (the default for conformance runs).
+"""Start a simulator in its own process and talk to it: the launcher and the control client.
+
+The default for conformance runs. Imports nothing of the simulator but its control protocol.
 
 The child prints one line ``READY {json}`` with the python-can-remote URL and the control
 address once its bus is served; we wait for that line (with a timeout), not for a fixed time.
@@ -6,13 +8,20 @@ address once its bus is served; we wait for that line (with a timeout), not for 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
 import sys
 import threading
 from dataclasses import dataclass
+from multiprocessing.connection import Client, Connection
 from pathlib import Path
+from typing import Any
+
+from .sim.control import AUTHKEY, ControlApi, parse_address
+
+__all__ = ["SimulatorControl", "SimulatorProcess", "parse_address", "start_simulator"]
 
 READY_TIMEOUT_S = 30.0
 STOP_TIMEOUT_S = 1.0
@@ -84,3 +93,25 @@ def _read_ready_line(process: subprocess.Popen[str]) -> str | None:
     thread.start()
     thread.join(READY_TIMEOUT_S)
     return result[0] if result else None
+
+
+class SimulatorControl(ControlApi):
+    """Client: what the test side may ask of a simulated device."""
+
+    def __init__(self, address: tuple[str, int], node_id: int | None = None) -> None:
+        self._address = address
+        self._node_id = node_id
+        self._lock = threading.Lock()
+        self._conn: Connection = Client(address, authkey=AUTHKEY)
+
+    def _call(self, command: str, *args: Any) -> Any:
+        with self._lock:
+            self._conn.send((command, self._node_id, args))
+            ok, result = self._conn.recv()
+        if not ok:
+            raise RuntimeError(f"simulator refused {command}{args}: {result}")
+        return result
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):
+            self._conn.close()

@@ -18,7 +18,7 @@ from encoder_conformance.cia301 import SdoAbortCode
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.value_domain import declared_domain, probe_values
+from encoder_conformance.profile.value_domain import declared_domain, probe_values
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3.17 (abort codes 06090030h..06090032h)")
 

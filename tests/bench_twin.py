@@ -28,8 +28,7 @@ from encoder_conformance.dut import connection
 from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim_control import SimulatorControl
-from encoder_conformance.sim_process import SimulatorProcess, start_simulator
+from encoder_conformance.sim_process import SimulatorControl, SimulatorProcess, start_simulator
 
 REPO = Path(__file__).resolve().parents[1]
 PROFILE = "wachendorff-wdga-mt"

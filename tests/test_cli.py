@@ -16,8 +16,7 @@ import pytest
 from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.fault_catalogue import FAULTS
 from encoder_conformance.profile.loader import DEFAULT_PROFILE_DIR
-from encoder_conformance.sim_control import SimulatorControl
-from encoder_conformance.sim_process import start_simulator
+from encoder_conformance.sim_process import SimulatorControl, start_simulator
 
 REPO = Path(__file__).resolve().parents[1]
 MINIMAL = REPO / "tests" / "data" / "profiles" / "minimal-encoder.yaml"

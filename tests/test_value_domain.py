@@ -14,8 +14,8 @@ from encoder_conformance.parameters import changeable_parameter, other_valid_val
 from encoder_conformance.profile.eds import export_eds
 from encoder_conformance.profile.loader import deep_merge, load_profile
 from encoder_conformance.profile.model import EntrySpec, ObjectSpec
+from encoder_conformance.profile.value_domain import declared_domain, probe_values
 from encoder_conformance.profile.value_set import ValueSet
-from encoder_conformance.value_domain import declared_domain, probe_values
 from tests import sim_rig
 from tests.sim_rig import MINIMAL
 

@@ -10,10 +10,10 @@ import pytest
 
 from ..bus_config import BusConfig, resolve_bus_config
 from ..fault_catalogue import FAULTS
+from ..paths import DEFAULT_PROFILE
 from ..profile.loader import LoadedProfile, load_profile
 from ..station import Station, StationError, StationPower, load_station
 
-DEFAULT_PROFILE = "wachendorff-wdga-mt"
 PROFILE_ENV = "ENCODER_CONFORMANCE_PROFILE"
 
 
@@ -181,6 +181,3 @@ def _power_settings(config: pytest.Config, station: Station | None, station_path
 def settings_of(config: pytest.Config) -> RunSettings:
     return config.stash[SETTINGS]
 
-
-def repo_root() -> Path:
-    return Path(__file__).resolve().parents[2]

@@ -8,8 +8,9 @@ from pathlib import Path
 
 import pytest
 
+from ..paths import REPO_ROOT, SUITES_DIR
 from .evidence import EVIDENCE
-from .options import repo_root, settings_of
+from .options import settings_of
 
 REPORT_DIR = pytest.StashKey[Path]()
 IDENTITY = pytest.StashKey[dict[str, str]]()
@@ -17,7 +18,7 @@ IDENTITY = pytest.StashKey[dict[str, str]]()
 
 def runs_suites(config: pytest.Config) -> bool:
     """True when this pytest run includes the conformance suites (not only the self-tests)."""
-    suites = repo_root() / "suites"
+    suites = SUITES_DIR
     paths = [Path(a.split("::")[0]).resolve() for a in config.args] or [suites]
     return any(p == suites or suites in p.parents for p in paths)
 
@@ -29,7 +30,7 @@ def configure_outputs(config: pytest.Config) -> None:
     settings = settings_of(config)
     given = config.getoption("--report-dir")
     stamp = time.strftime("%Y%m%d-%H%M%S")
-    folder = Path(given) if given else repo_root() / "reports" / f"{stamp}-{settings.loaded.profile.id}"
+    folder = Path(given) if given else REPO_ROOT / "reports" / f"{stamp}-{settings.loaded.profile.id}"
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "traces").mkdir(exist_ok=True)
     config.stash[REPORT_DIR] = folder

@@ -7,7 +7,7 @@ from collections.abc import Callable
 import pytest
 
 from ..profile.model import Capabilities, DeviceProfile, EntrySpec
-from ..value_domain import probe_values
+from ..profile.value_domain import probe_values
 from .options import settings_of
 
 #: fixture name -> which profile entries it is parametrised with

@@ -17,6 +17,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from ..errors import ProfileError
+from ..paths import PROFILE_DIR
 from . import model
 from .quirk_effects import EFFECT_MODELS
 from .quirks import DOCUMENTATION_ONLY
@@ -24,7 +25,7 @@ from .quirks import DOCUMENTATION_ONLY
 QUIRK_TAGS = frozenset(EFFECT_MODELS) | {DOCUMENTATION_ONLY}
 
 PROFILE_SUFFIXES = (".yaml", ".yml")
-DEFAULT_PROFILE_DIR = Path(__file__).resolve().parents[2] / "device_profiles"
+DEFAULT_PROFILE_DIR = PROFILE_DIR
 
 
 @dataclass(frozen=True)

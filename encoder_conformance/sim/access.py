@@ -15,8 +15,8 @@ from ..cia301 import SdoAbortCode as Abort
 from ..profile import datatypes
 from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
+from ..profile.value_domain import declared_domain
 from ..profile.value_set import ValueSet
-from ..value_domain import declared_domain
 from .faults import breaks
 from .hooks import NodeHooks, Value
 from .nvm import Key

@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 
 from ..profile.loader import load_profile
-from ..sim_control import parse_address, serve_control
+from .control import parse_address, serve_control
 from .faults import FaultSet
 from .host import SimulatorHost
 

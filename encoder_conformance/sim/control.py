@@ -1,19 +1,18 @@
-"""Control channel to a simulator (power-cycle, turn the shaft, faults), server and client.
+"""The simulator's control channel (power, shaft, EMCY stimulus): the API, the server, the in-process form.
 
 Uses the standard library's multiprocessing.connection (authenticated, pickled tuples) rather
-than a hand-written protocol. The client side imports nothing from the simulator, so the
-fixtures can drive a simulator in another process without the suites knowing it exists.
+than a hand-written protocol. This module imports nothing else of the simulator at run time, so
+the client (``encoder_conformance.sim_process``) stays light: a bench's power command starts it often.
 """
 
 from __future__ import annotations
 
-import contextlib
 import threading
-from multiprocessing.connection import Client, Connection, Listener
+from multiprocessing.connection import Connection, Listener
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from .sim.host import SimulatorHost
+    from .host import SimulatorHost
 
 AUTHKEY = b"encoder-conformance-sim"
 
@@ -26,22 +25,11 @@ def parse_address(text: str) -> tuple[str, int]:
     return host or "127.0.0.1", int(port)
 
 
-class SimulatorControl:
-    """Client: what the test side may ask of a simulated device."""
-
-    def __init__(self, address: tuple[str, int], node_id: int | None = None) -> None:
-        self._address = address
-        self._node_id = node_id
-        self._lock = threading.Lock()
-        self._conn: Connection = Client(address, authkey=AUTHKEY)
+class ControlApi:
+    """What the test side may ask of a simulated device; ``_call`` carries it out."""
 
     def _call(self, command: str, *args: Any) -> Any:
-        with self._lock:
-            self._conn.send((command, self._node_id, args))
-            ok, result = self._conn.recv()
-        if not ok:
-            raise RuntimeError(f"simulator refused {command}{args}: {result}")
-        return result
+        raise NotImplementedError
 
     def power_cycle(self) -> None:
         self._call("power_cycle")
@@ -65,8 +53,7 @@ class SimulatorControl:
         return self._call("describe")
 
     def close(self) -> None:
-        with contextlib.suppress(OSError):
-            self._conn.close()
+        """Release the channel."""
 
 
 def _each(nodes: list[Any], method: str) -> None:
@@ -120,7 +107,7 @@ def serve_control(host: SimulatorHost, address: tuple[str, int]) -> tuple[str, i
     return bound[0], bound[1]
 
 
-class LocalControl(SimulatorControl):
+class LocalControl(ControlApi):
     """Same API for a simulator running in this process (--sim-inprocess, self-tests)."""
 
     def __init__(self, host: SimulatorHost, node_id: int | None = None) -> None:

@@ -7,9 +7,9 @@ value outside it; ``probe_values`` are the values just outside each boundary tha
 
 from __future__ import annotations
 
-from .profile import datatypes
-from .profile.model import DeviceProfile
-from .profile.value_set import ValueSet
+from . import datatypes
+from .model import DeviceProfile
+from .value_set import ValueSet
 
 TPDO_COMMUNICATION = range(0x1800, 0x1A00)
 TRANSMISSION_TYPE_SUB = 2
