@@ -22,6 +22,9 @@ STORE_SUB_OF_GROUP = {"store_all": 1, "store_comm": 2, "store_app": 3, "store_ma
 #: the communication profile area: what NMT reset communication reloads (CiA 301 §7.3.2.2.3)
 COMMUNICATION_AREA = range(0x1000, 0x2000)
 
+SYNC_COB_ID = 0x080  # the pre-defined connection set's SYNC (CiA 301 §7.3.5, 1005h default)
+SDO_REQUEST_BASE = 0x600  # + node-id: client -> server (CiA 301 §7.3.5)
+SDO_RESPONSE_BASE = 0x580  # + node-id: server -> client
 COB_ID_INVALID = 0x80000000  # bit 31 of a PDO/SYNC/EMCY COB-ID: the object does not exist / is not valid
 COB_ID_NO_RTR = 0x40000000  # bit 30 of a TPDO COB-ID: no RTR allowed on this PDO (CiA 301 §7.5.2.35)
 COB_ID_MASK_11BIT = 0x7FF

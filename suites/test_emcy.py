@@ -11,18 +11,11 @@ pytestmark = [pytest.mark.spec("CiA 301 §7.2.7 (EMCY)"), pytest.mark.requires("
 ERROR_CODE = 0x5000  # device hardware (CiA 301 table 21)
 
 
-@pytest.fixture
-def provoke_error(simulator):
-    if simulator is None:
-        pytest.skip("needs a way to provoke a device error (the simulator provides one)")
-    return simulator.control
-
-
-def test_emcy_frame_on_error(dut, provoke_error, nmt_reset_after):
+def test_emcy_frame_on_error(dut, error_stimulus, nmt_reset_after):
     """An internal error produces one 8-byte EMCY on the 1014h COB-ID with code and error register."""
     cob_id = dut.read_uint(0x1014) & 0x7FF if dut.profile.entry(0x1014, 0) else 0x80 + dut.node_id
     mark = dut.frames.mark()
-    provoke_error.raise_emcy(ERROR_CODE, 0x01)
+    error_stimulus.raise_emcy(ERROR_CODE, 0x01)
     frame = dut.frames.wait_for(lambda m: m.is_rx and 0x81 <= m.arbitration_id <= 0xFF, 0.5, mark)
     assert frame is not None, f"no EMCY within 500 ms\n{format_frames(dut.frames.since(mark))}"
     assert frame.arbitration_id == cob_id, f"EMCY on {frame.arbitration_id:03X}h, 1014h says {cob_id:03X}h"

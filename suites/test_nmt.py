@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.checks import documented_quirk
-from encoder_conformance.cia301 import STATE_NAMES
+from encoder_conformance.cia301 import COB_ID_INVALID, STATE_NAMES, cob_id_valid
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
@@ -86,12 +86,12 @@ def test_no_sdo_in_stopped(dut, nmt):
 def _made_valid(dut, comm: int, settings_journal, evidence) -> bool:
     """The TPDO is valid (18xxh sub 1 bit 31 clear), if need be by clearing the bit (put back afterwards)."""
     cob_id = dut.read_uint(comm, 1)
-    if not cob_id & 0x80000000:
+    if not cob_id & COB_ID_INVALID:
         return True
     entry = dut.profile.entry(comm, 1)
     if entry is None or not entry.writable:
         return False
-    settings_journal.write(comm, 1, (cob_id & 0x7FFFFFFF).to_bytes(4, "little"))
+    settings_journal.write(comm, 1, cob_id_valid(cob_id).to_bytes(4, "little"))
     evidence.note(f"{comm:04X}h.01 bit 31 cleared (TPDO valid) for the test")
     return True
 
@@ -142,7 +142,7 @@ def test_stopped_sends_only_error_control(dut, nmt, shaft):
     """In stopped the device sends nothing but heartbeats, whatever happens on the bus."""
     nmt.go_to("stopped")
     mark = pdo_stimulus(dut, shaft, 0.3)
-    dut.network.send_message(0x600 + dut.node_id, sdo_frames.upload_request(0x1000, 0))
+    dut.send_sdo(sdo_frames.upload_request(0x1000, 0))
     own = dut.frames_from_node(mark, 0.1)
     others = [m for m in own if m.arbitration_id != 0x700 + dut.node_id]
     assert not others, f"frames other than heartbeat in stopped:\n{format_frames(others[:5])}"

@@ -9,6 +9,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.checks import check_periodic, documented_quirk
+from encoder_conformance.cia301 import COB_ID_INVALID, cob_id_valid
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.profile import quirk_effects as fx
@@ -46,10 +47,10 @@ def _configurable_tpdo(dut, sub: int, evidence, settings_journal, usable_types: 
         candidates = [t for t in usable_types if t in accepted] if kind.writable else [dut.read_uint(comm, 2)]
         chosen = next((t for t in candidates if t in usable_types), None)
         cob_id = dut.read_uint(comm, 1)
-        if chosen is None or (cob_id & 0x80000000 and not cob.writable):
+        if chosen is None or (cob_id & COB_ID_INVALID and not cob.writable):
             continue
-        if cob_id & 0x80000000:
-            settings_journal.write(comm, 1, (cob_id & 0x7FFFFFFF).to_bytes(4, "little"))
+        if cob_id & COB_ID_INVALID:
+            settings_journal.write(comm, 1, cob_id_valid(cob_id).to_bytes(4, "little"))
             evidence.note(f"{comm:04X}h.01 bit 31 cleared (TPDO enabled) for the test")
         if not kind.writable:
             evidence.note(f"{comm:04X}h.02 is read-only: its fixed type {chosen} is used")
@@ -71,7 +72,7 @@ def test_sync_tpdo_sent_on_every_nth_sync(dut, settings_journal, back_to_preoper
     mark = dut.frames.mark()
     syncs = 3 * every
     for _ in range(syncs):
-        dut.network.send_message(0x80, b"")
+        dut.send_sync()
     window = dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
     pdos = dut.frames.wait_count(lambda m: m.is_rx and m.arbitration_id == cob_id, 4, window, mark)
     evidence.measure(f"TPDO {cob_id:03X}h frames for {syncs} SYNCs", len(pdos), "frames", 3, 3)

@@ -10,10 +10,10 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.checks import documented_quirk
+from encoder_conformance.cia301 import COB_ID_INVALID, cob_id_valid
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.profile import quirk_effects as fx
 
-SYNC = 0x80
 RESET_EVENTS = {"reset-node": "nmt_81h", "reset-communication": "nmt_82h"}
 
 
@@ -31,8 +31,8 @@ def _counter_spec(counters: dict[int, int], key: str) -> tuple[int, int]:
 def _valid_cob_id(dut, comm: int, settings_journal) -> int:
     """The TPDO's 11-bit COB-ID, after clearing 18xxh sub 1 bit 31 (valid) if it was set."""
     cob_id = dut.read_uint(comm, 1)
-    if cob_id & 0x80000000:
-        settings_journal.write(comm, 1, (cob_id & 0x7FFFFFFF).to_bytes(4, "little"))
+    if cob_id & COB_ID_INVALID:
+        settings_journal.write(comm, 1, cob_id_valid(cob_id).to_bytes(4, "little"))
     return cob_id & 0x7FF
 
 
@@ -91,7 +91,7 @@ def _sync_burst(dut, cob_id: int, syncs: int, expected: int) -> tuple[list, Mark
     """Send ``syncs`` SYNCs; the TPDOs on ``cob_id`` (waiting for one more than ``expected``) and a mark."""
     mark = dut.frames.mark()
     for _ in range(syncs):
-        dut.network.send_message(SYNC, b"")
+        dut.send_sync()
     return dut.frames.wait_count(_is(cob_id), expected + 1, _window(dut), mark), mark
 
 

@@ -81,7 +81,7 @@ def test_uploads_of_any_object_answered(dut, alive_after):
         response = dut.sdo_request(request)
         _check_reply(dut, request, response, {2})
         if response.segmented_size is not None:  # a segmented upload was started: end it politely
-            dut.network.send_message(0x600 + dut.node_id, struct.pack("<BHBI", 0x80, *mux, SdoAbortCode.TIMEOUT))
+            dut.send_sdo(struct.pack("<BHBI", 0x80, *mux, SdoAbortCode.TIMEOUT))
 
     check()
 

@@ -17,7 +17,7 @@ import can
 import canopen
 from canopen.sdo.exceptions import SdoCommunicationError
 
-from ..cia301 import NMT_COMMAND_NAMES
+from ..cia301 import NMT_COMMAND_NAMES, SDO_REQUEST_BASE, SYNC_COB_ID
 from ..errors import BusLostError, DutLostError, RunInterrupted
 from ..profile.model import DeviceProfile
 from ..profile.quirk_effects import SilentUntilBusTraffic
@@ -161,6 +161,14 @@ class DeviceUnderTest:
                 f"last frames:\n{format_frames(self.frames.last(8))}"
             )
         return response
+
+    def send_sync(self) -> Mark:
+        """One SYNC on the pre-defined COB-ID 080h; a mark before it."""
+        return self.send(SYNC_COB_ID)
+
+    def send_sdo(self, request: bytes) -> Mark:
+        """One raw SDO request frame, not waiting for an answer (the caller inspects the log); a mark before it."""
+        return self.send(SDO_REQUEST_BASE + self.node_id, request)
 
     def send(self, cob_id: int, data: bytes = b"", remote: bool = False) -> Mark:
         """Send one raw frame (SYNC, a request the DUT layer has no helper for); a mark before it."""

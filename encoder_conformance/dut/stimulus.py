@@ -18,7 +18,7 @@ def pdo_stimulus(dut: DeviceUnderTest, device_control: Any | None, duration_s: f
         device_control.set_speed(1.0)
     mark = dut.frames.mark()
     for _ in range(syncs):
-        dut.network.send_message(0x80, b"")
+        dut.send_sync()
         dut.frames.quiet_period(lambda m: False, duration_s / syncs)
     if device_control is not None:
         device_control.set_speed(0.0)
