@@ -42,6 +42,7 @@ def pytest_configure(config: pytest.Config) -> None:
 
 def pytest_sessionstart(session: pytest.Session) -> None:
     reporting.set_metadata(session.config)
+    reporting.start_background_writers(session.config)
     lifecycle.start(session.config)
 
 
@@ -114,4 +115,5 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int):
     if not lifecycle.ended_early(session.config):
         reporting.fail_all_skipped(session)
     lifecycle.final_exit_status(session)
+    reporting.finish_background_writers(session.config)
     return result

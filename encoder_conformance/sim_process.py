@@ -21,7 +21,8 @@ from typing import Any
 
 from .sim.control import AUTHKEY, ControlApi, parse_address
 
-__all__ = ["SimulatorControl", "SimulatorProcess", "parse_address", "start_simulator"]
+__all__ = ["LaunchedSimulator", "SimulatorControl", "SimulatorProcess", "launch_simulator", "parse_address",
+           "start_simulator"]
 
 READY_TIMEOUT_S = 30.0
 STOP_TIMEOUT_S = 1.0
@@ -57,6 +58,44 @@ def start_simulator(
     log_path: Path | None = None,
 ) -> SimulatorProcess:
     """Launch ``encoder-conformance sim`` and wait until it reports READY."""
+    return launch_simulator(profile, node_id, faults, nvm_path, log_path).ready()
+
+
+@dataclass
+class LaunchedSimulator:
+    """A simulator process that is starting: ``ready()`` waits for its READY line (a run launches it
+    before collecting the tests, so that its start-up overlaps the collection)."""
+
+    process: subprocess.Popen[str]
+    command: list[str]
+    log_path: Path | None
+    _lines: list[str]
+    _reader: threading.Thread
+
+    def ready(self) -> SimulatorProcess:
+        self._reader.join(READY_TIMEOUT_S)
+        if not self._lines:
+            self.process.kill()
+            log = self.log_path
+            detail = log.read_text(encoding="utf-8")[-2000:] if log and log.exists() else ""
+            raise RuntimeError(f"simulator did not start within {READY_TIMEOUT_S:.0f} s: {' '.join(self.command)}\n"
+                               f"{detail}")
+        info = json.loads(self._lines[0].split(" ", 1)[1])
+        return SimulatorProcess(self.process, info["can"], tuple(info["control"]), info["node_id"], self.log_path)
+
+    def abandon(self) -> None:
+        """Stop it (it was launched but the run did not need it)."""
+        SimulatorProcess(self.process, "", ("", 0), 0, self.log_path).stop()
+
+
+def launch_simulator(
+    profile: str,
+    node_id: int | None = None,
+    faults: list[str] | None = None,
+    nvm_path: Path | None = None,
+    log_path: Path | None = None,
+) -> LaunchedSimulator:
+    """Start ``encoder-conformance sim`` in a process of its own; returns at once."""
     command = [sys.executable, "-m", "encoder_conformance", "sim", "--profile", profile,
                "--listen", "127.0.0.1:0", "--control", "127.0.0.1:0", "--ready-line"]
     if node_id is not None:
@@ -70,29 +109,18 @@ def start_simulator(
     # a session of its own: the terminal's Ctrl-C reaches only the run, which gives the device back first
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True, env=env,
                                start_new_session=True)
-    line = _read_ready_line(process)
-    if line is None:
-        process.kill()
-        detail = log_path.read_text(encoding="utf-8")[-2000:] if log_path and log_path.exists() else ""
-        raise RuntimeError(f"simulator did not start within {READY_TIMEOUT_S:.0f} s: {' '.join(command)}\n{detail}")
-    info = json.loads(line.split(" ", 1)[1])
-    return SimulatorProcess(process, info["can"], tuple(info["control"]), info["node_id"], log_path)
+    lines: list[str] = []
 
-
-def _read_ready_line(process: subprocess.Popen[str]) -> str | None:
-    result: list[str] = []
-
-    def reader() -> None:
+    def read_ready_line() -> None:
         assert process.stdout is not None
         for line in process.stdout:
             if line.startswith("READY "):
-                result.append(line.strip())
+                lines.append(line.strip())
                 return
 
-    thread = threading.Thread(target=reader, daemon=True)
-    thread.start()
-    thread.join(READY_TIMEOUT_S)
-    return result[0] if result else None
+    reader = threading.Thread(target=read_ready_line, daemon=True)
+    reader.start()
+    return LaunchedSimulator(process, command, log_path, lines, reader)
 
 
 class SimulatorControl(ControlApi):

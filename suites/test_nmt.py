@@ -79,7 +79,7 @@ def test_command_for_other_node_ignored(dut, nmt):
 def test_no_sdo_in_stopped(dut, nmt):
     """In stopped the device does not answer SDO requests (only NMT and error control remain)."""
     nmt.go_to("stopped")
-    response = dut.sdo_request(sdo_frames.upload_request(0x1000, 0))
+    response = dut.sdo_request(sdo_frames.upload_request(0x1000, 0), timeout=dut.sdo_silence_s)
     assert response is None, f"SDO answered in stopped: {response.describe()}"
 
 
@@ -124,7 +124,7 @@ def test_no_pdo_outside_operational(dut, sync_tpdo, nmt, shaft, state):
     """No TPDO is sent in pre-operational or stopped, although SYNCs arrive and the shaft turns."""
     if state != "pre-operational":
         nmt.go_to(state)
-    mark = pdo_stimulus(dut, shaft, 0.3)
+    mark = pdo_stimulus(dut, shaft)
     pdos = dut.frames.since(mark, dut.is_pdo)
     assert not pdos, f"{len(pdos)} TPDO(s) in {state}:\n{format_frames(pdos[:5])}"
 
@@ -133,7 +133,7 @@ def test_no_pdo_outside_operational(dut, sync_tpdo, nmt, shaft, state):
 def test_pdo_in_operational(dut, sync_tpdo, nmt, shaft):
     """In operational the same stimulus makes the device send TPDOs (so the silence above means something)."""
     nmt.go_to("operational")
-    mark = pdo_stimulus(dut, shaft, 0.3)
+    mark = pdo_stimulus(dut, shaft, until=dut.is_pdo)
     pdos = dut.frames.since(mark, dut.is_pdo)
     assert pdos, "no TPDO in operational during 10 SYNCs and a turning shaft: check the default PDO configuration"
 
@@ -141,9 +141,9 @@ def test_pdo_in_operational(dut, sync_tpdo, nmt, shaft):
 def test_stopped_sends_only_error_control(dut, nmt, shaft):
     """In stopped the device sends nothing but heartbeats, whatever happens on the bus."""
     nmt.go_to("stopped")
-    mark = pdo_stimulus(dut, shaft, 0.3)
+    mark = pdo_stimulus(dut, shaft)
     dut.send_sdo(sdo_frames.upload_request(0x1000, 0))
-    own = dut.frames_from_node(mark, 0.1)
+    own = dut.frames_from_node(mark, dut.sdo_silence_s)
     others = [m for m in own if m.arbitration_id != 0x700 + dut.node_id]
     assert not others, f"frames other than heartbeat in stopped:\n{format_frames(others[:5])}"
 

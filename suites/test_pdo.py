@@ -73,8 +73,12 @@ def test_sync_tpdo_sent_on_every_nth_sync(dut, settings_journal, back_to_preoper
     syncs = 3 * every
     for _ in range(syncs):
         dut.send_sync()
-    window = dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
-    pdos = dut.frames.wait_count(lambda m: m.is_rx and m.arbitration_id == cob_id, 4, window, mark)
+    def is_tpdo(m) -> bool:
+        return m.is_rx and m.arbitration_id == cob_id
+
+    dut.frames.wait_count(is_tpdo, 3, dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000, mark)
+    dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)  # a 4th frame would come within this
+    pdos = dut.frames.since(mark, is_tpdo)
     evidence.measure(f"TPDO {cob_id:03X}h frames for {syncs} SYNCs", len(pdos), "frames", 3, 3)
     assert len(pdos) == 3, (
         f"{comm:04X}h.02 = {every}: expected 3 TPDOs on {cob_id:03X}h for {syncs} SYNCs, observed {len(pdos)}\n"
@@ -114,7 +118,7 @@ def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_
     control = shaft
     if control is None:
         evidence.note("hardware: only SYNCs are sent; turn the shaft during the test to cover position changes")
-    mark = pdo_stimulus(dut, control, 0.3)
+    mark = pdo_stimulus(dut, control)
     pdos = dut.frames.since(mark, lambda m: m.is_rx and m.arbitration_id == cob_id)
     evidence.measure(f"TPDO {cob_id:03X}h frames with type 255, timer 0", len(pdos), "frames", 0, 0)
     assert not pdos, (

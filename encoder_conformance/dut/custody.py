@@ -27,6 +27,7 @@ from .frames import Mark
 from .identity import identity_mismatch, read_identity
 from .persist import CannotPersist, store_commands_for
 from .power import BenchPower
+from .restart_watch import RestartWatch
 from .sdo_frames import abort_name
 from .snapshot import Key, Snapshot, SnapshotEntry, custody_keys, hex_or_none, is_stored, read_values
 from .store_watch import StoreWatch
@@ -93,6 +94,8 @@ class Custody:
         self.dut = dut
         self.snapshot_path = snapshot_path
         self.watch = watch
+        self.restarts = RestartWatch(dut.node_id)
+        dut.frames.add_listener(self.restarts)
         self.snapshot: Snapshot | None = None
         self.record: RestoreRecord | None = None
         self.power: BenchPower | None = None  # the bench's power switch, once a test used it
@@ -116,7 +119,9 @@ class Custody:
         keys = custody_keys(dut.profile)
         with dut.custody():
             before = dut.frames.mark()
-            answered = dut.responds() or dut.responds()  # the first request may only wake the device
+            # the first request may only wake the device (automatic bit rate) or be lost while a remote
+            # endpoint sets up (python-can-remote drops frames in its first ~20 ms): a short first try
+            answered = dut.responds(timeout=dut.sdo_silence_s) or dut.responds()
             snapshot = Snapshot(dut.profile.id, profile_sha256, dut.node_id, {}, answered, None)
             self.snapshot = snapshot
             if answered:
@@ -125,7 +130,7 @@ class Custody:
                 snapshot.entries = [self._entry(k, found[k], None) for k in keys]
                 snapshot.found_state = self._state_seen(before)
                 self._save()
-            if not dut.reset_and_reach():
+            if not (self.restarts.shows_stored or dut.reset_and_reach()):  # a fresh boot-up shows what is stored
                 raise PreflightError(
                     f"no answer from node {dut.node_id}: no SDO answer and no boot-up after NMT reset node. "
                     "Check --node-id, the bit rate, termination, wiring and power"
@@ -292,7 +297,10 @@ class Custody:
                 record.fail(f"{step.label} refused: {abort_name(exc.code)}")
 
     def _reset(self, deadline: Deadline) -> None:
+        """Make the device show what it stored: reset node, unless it restarted since the last write to it."""
         dut = self.dut
+        if self.restarts.shows_stored:
+            return
         self._check_time(deadline, "reset node")
         if not dut.reset_and_reach():
             raise DutLostError(f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after reset node")

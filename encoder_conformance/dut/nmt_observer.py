@@ -92,14 +92,17 @@ class ServiceObserver(_Commands):
         return (timing.nmt_settle_ms + 2 * timing.sdo_response_max_ms) / 1000 + self.dut.sdo_timeout
 
     def observe(self) -> int:
-        """The state the device shows now: 04h (no SDO), 05h (TPDO on SYNC) or 7Fh."""
-        if self.dut.sdo_request(upload_request(0x1000, 0)) is None:
+        """The state the device shows now: 04h (no SDO), 05h (TPDO on SYNC) or 7Fh.
+
+        Each absence is watched for what the device owes plus the tester's margin (silence windows).
+        """
+        if self.dut.sdo_request(upload_request(0x1000, 0), timeout=self.dut.sdo_silence_s) is None:
             return 0x04
         mark = self.dut.frames.mark()
         for _ in range(self.syncs_per_pdo):
-            self.dut.network.send_message(0x80, b"")
+            self.dut.send_sync()
         pdo = self.dut.frames.wait_for(
-            lambda m: m.is_rx and m.arbitration_id == self.tpdo_cob_id, self.dut.sdo_timeout, mark
+            lambda m: m.is_rx and m.arbitration_id == self.tpdo_cob_id, self.dut.pdo_silence_s, mark
         )
         return 0x05 if pdo is not None else 0x7F
 

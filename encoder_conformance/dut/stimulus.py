@@ -2,24 +2,41 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
 
+import can
+
+from .actuator import ShaftDrive
 from .device import DeviceUnderTest
 from .frames import Mark
 
+SYNC_SPACING_S = 0.01  # 100 SYNCs per second: a usual bus cycle
 
-def pdo_stimulus(dut: DeviceUnderTest, device_control: Any | None, duration_s: float, syncs: int = 10) -> Mark:
-    """Turn the shaft (simulator only) and send ``syncs`` SYNCs spread over ``duration_s``; returns a mark before.
 
-    The pacing between SYNCs is an observation window on the frame log (the device's answers are
-    what the caller inspects), not a wait for the device.
+def pdo_stimulus(dut: DeviceUnderTest, shaft: ShaftDrive | None, syncs: int = 10,
+                 until: Callable[[can.Message], bool] | None = None) -> Mark:
+    """Turn the shaft (where the bench can) and send ``syncs`` SYNCs, SYNC_SPACING_S apart, then watch the
+    device's PDO silence window after the last one; returns a mark before the first SYNC.
+
+    Each pause is an observation window on the frame log (the device's answers are what the caller
+    inspects), not a wait for the device. With ``until``, the stimulus ends at the first frame it matches
+    (a test that expects TPDOs needs no more).
     """
-    if device_control is not None:
-        device_control.set_speed(1.0)
+    if shaft is not None:
+        shaft.set_speed(1.0)
     mark = dut.frames.mark()
-    for _ in range(syncs):
-        dut.send_sync()
-        dut.frames.quiet_period(lambda m: False, duration_s / syncs)
-    if device_control is not None:
-        device_control.set_speed(0.0)
+    try:
+        for _ in range(syncs):
+            dut.send_sync()
+            if until is not None and dut.frames.wait_for(until, SYNC_SPACING_S, mark) is not None:
+                return mark
+            if until is None:
+                dut.frames.quiet_period(lambda m: False, SYNC_SPACING_S)
+        if until is None:
+            dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
+        else:
+            dut.frames.wait_for(until, dut.pdo_silence_s, mark)
+    finally:
+        if shaft is not None:
+            shaft.set_speed(0.0)
     return mark

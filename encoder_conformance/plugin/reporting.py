@@ -9,10 +9,12 @@ from pathlib import Path
 import pytest
 
 from ..paths import REPO_ROOT, SUITES_DIR
+from .allure_writer import BackgroundWriter, write_in_background
 from .evidence import EVIDENCE
 from .options import settings_of
 
 REPORT_DIR = pytest.StashKey[Path]()
+ALLURE_WRITER = pytest.StashKey[BackgroundWriter]()
 IDENTITY = pytest.StashKey[dict[str, str]]()
 
 
@@ -43,6 +45,21 @@ def configure_outputs(config: pytest.Config) -> None:
     if not getattr(option, "allure_report_dir", None):
         option.allure_report_dir = str(folder / "allure-results")
         option.clean_alluredir = True
+
+
+def start_background_writers(config: pytest.Config) -> None:
+    """Allure's result files are written off the test thread (see allure_writer)."""
+    if report_dir(config) is not None and (writer := write_in_background()) is not None:
+        config.stash[ALLURE_WRITER] = writer
+
+
+def finish_background_writers(config: pytest.Config) -> None:
+    """Every queued report file is on disk before pytest reports the session."""
+    writer = config.stash.get(ALLURE_WRITER, None)
+    if writer is None:
+        return
+    for error in writer.close():
+        config.get_terminal_writer().line(f"allure results: a file could not be written: {error}", yellow=True)
 
 
 def report_dir(config: pytest.Config) -> Path | None:

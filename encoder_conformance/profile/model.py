@@ -333,6 +333,9 @@ class HeartbeatTolerance(StrictModel):
 class Timing(StrictModel):
     bootup_max_ms: float = Field(gt=0, description="reset/power-on to boot-up message")
     sdo_response_max_ms: float = Field(gt=0)
+    pdo_response_max_ms: float = Field(
+        default=10, gt=0, description="SYNC or RTR to the TPDO it triggers; CiA 301 gives no bound, so the "
+        "default is this suite's inference (a device that is slower widens the windows a silence is checked in)")
     nmt_settle_ms: float = Field(default=100, gt=0, description="NMT command to new state visible")
     store_max_ms: float = Field(default=1000, gt=0)
     heartbeat_test_period_ms: int = Field(default=50, ge=1, description="1017h value used by the tests")

@@ -22,6 +22,7 @@ from .node import SimulatedNode
 from .scheduler import DeadlineScheduler
 
 log = logging.getLogger(__name__)
+SERVER_POLL_S = 0.05
 
 
 class SimulatorHost:
@@ -114,7 +115,10 @@ class SimulatorHost:
 
         logging.getLogger("can_remote").setLevel(logging.WARNING)
         self._remote = RemoteServer(host, port, interface="virtual", channel=self.channel)
-        threading.Thread(target=self._remote.serve_forever, name="remote-server", daemon=True).start()
+        # a short poll: shutdown() waits for the serving loop to notice (the default 0.5 s is a run's end)
+        server = self._remote
+        threading.Thread(target=lambda: server.serve_forever(poll_interval=SERVER_POLL_S), name="remote-server",
+                         daemon=True).start()
         return host, self._remote.server_port
 
     def shutdown(self) -> None:
