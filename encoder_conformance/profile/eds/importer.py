@@ -1,0 +1,175 @@
+"""EDS import: a cleaned EDS read with canopen.import_od, turned into profile-shaped objects."""
+
+from __future__ import annotations
+
+import logging
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import canopen
+from canopen.objectdictionary import ODArray, ODRecord, ODVariable
+
+from .. import datatypes
+from ..model import is_node_id_expression
+from .ini_text import CleanedEds
+from .numbers import _ACCESS_ALIASES, parse_number
+from .repair import clean_eds
+
+logger = logging.getLogger(__name__)
+
+
+# --------------------------------------------------------------------------- import
+
+
+@dataclass
+class EdsImport:
+    """An imported EDS: canopen's dictionary, the cleaned sections and the profile objects."""
+
+    path: Path
+    od: canopen.ObjectDictionary
+    cleaned: CleanedEds
+    objects: dict[int, dict[str, Any]]
+    notes: list[str]  # values the profile schema cannot hold (dropped), per entry
+
+    @property
+    def fixes(self) -> list[str]:
+        return self.cleaned.fixes
+
+    @property
+    def device_info(self) -> dict[str, str]:
+        return self.cleaned.sections.get("DeviceInfo", {})
+
+
+def _import_cleaned(cleaned: CleanedEds) -> canopen.ObjectDictionary:
+    with tempfile.TemporaryDirectory(prefix="eds-") as tmp:
+        clean_path = Path(tmp) / "cleaned.eds"
+        clean_path.write_text(cleaned.text, encoding="utf-8")
+        with clean_path.open(encoding="utf-8") as fp:
+            try:
+                return canopen.import_od(fp)
+            except Exception as exc:  # canopen raises configparser/KeyError/... on what we missed
+                raise ValueError(f"canopen cannot read the cleaned EDS: {type(exc).__name__}: {exc}") from exc
+
+
+def read_eds(path: Path) -> EdsImport:
+    """Clean and import ``path``; raises OSError or ValueError."""
+    path = Path(path)
+    cleaned = clean_eds(path.read_bytes())
+    od = _import_cleaned(cleaned)
+    notes: list[str] = []
+    objects = _objects_from_od(od, cleaned, path.name, notes)
+    return EdsImport(path, od, cleaned, objects, notes)
+
+
+def objects_from_eds(path: Path) -> dict[int, dict[str, Any]]:
+    """Object index -> profile-shaped object dict (as under ``objects:``) read from an EDS."""
+    result = read_eds(path)
+    for message in [*result.fixes, *result.notes]:
+        logger.info("%s: %s", Path(path).name, message)
+    return result.objects
+
+
+def _type_name(code: int) -> str | None:
+    try:
+        canonical = datatypes.name_of_code(code)
+    except ValueError:
+        return None
+    short = canonical.replace("UNSIGNED", "U").replace("INTEGER", "I")
+    return short if short != canonical else canonical
+
+
+def _objects_from_od(
+    od: canopen.ObjectDictionary, cleaned: CleanedEds, filename: str, notes: list[str]
+) -> dict[int, dict[str, Any]]:
+    objects: dict[int, dict[str, Any]] = {}
+    for index, obj in sorted(od.indices.items()):
+        if index < 0x1000:  # DummyXXXX and data-type definitions
+            continue
+        manual = f"EDS {filename} [{cleaned.origins.get(f'{index:04X}', f'{index:04X}')}]"
+        if isinstance(obj, ODVariable):
+            objects[index] = {"name": obj.name, **_entry(obj, cleaned, notes), "manual": manual}
+            continue
+        subs = {sub: _sub_entry(obj, sub, cleaned, filename, notes) for sub in sorted(obj.subindices)}
+        if not subs:
+            notes.append(f"0x{index:04X} {obj.name!r}: record/array without sub-indices; skipped")
+            continue
+        kind = {"kind": "array"} if isinstance(obj, ODArray) else {}
+        objects[index] = {"name": obj.name, **kind, "manual": manual, "subs": subs}
+    return objects
+
+
+def _sub_entry(
+    obj: ODRecord | ODArray, sub: int, cleaned: CleanedEds, filename: str, notes: list[str]
+) -> dict[str, Any]:
+    var = obj.subindices[sub]
+    section = f"{obj.index:04X}sub{sub:X}"
+    manual = f"EDS {filename} [{cleaned.origins.get(section, section)}]"
+    return {"name": var.name, **_entry(var, cleaned, notes), "manual": manual}
+
+
+def _entry(var: ODVariable, cleaned: CleanedEds, notes: list[str]) -> dict[str, Any]:
+    """type/access/default/min/max/pdo_mappable of one canopen variable."""
+    where = f"0x{var.index:04X}.{var.subindex} {var.name!r}"
+    type_name = _type_name(var.data_type)
+    entry: dict[str, Any] = {}
+    if type_name is None:
+        notes.append(f"{where}: data type 0x{var.data_type:04X} not supported by the schema; read as DOMAIN")
+        type_name = "DOMAIN"
+    entry["type"] = type_name
+    entry["access"] = _ACCESS_ALIASES.get((var.access_type or "").lower(), "ro")
+    section = cleaned.sections.get(_section_of(var), {})
+    default = _convert_value(getattr(var, "default_raw", None), type_name, where, "default", notes)
+    if default is not None:
+        entry["default"] = default
+    low = _convert_value(section.get("LowLimit"), type_name, where, "LowLimit", notes, is_default=False)
+    high = _convert_value(section.get("HighLimit"), type_name, where, "HighLimit", notes, is_default=False)
+    if low is not None and high is not None and low > high:
+        notes.append(f"{where}: LowLimit {low} > HighLimit {high}; limits dropped")
+        low = high = None
+    if low is not None:
+        entry["min"] = low
+    if high is not None:
+        entry["max"] = high
+    if var.pdo_mappable:
+        entry["pdo_mappable"] = True
+    return entry
+
+
+def _section_of(var: ODVariable) -> str:
+    parent = getattr(var, "parent", None)
+    if isinstance(parent, ODRecord | ODArray):
+        return f"{var.index:04X}sub{var.subindex:X}"
+    return f"{var.index:04X}"
+
+
+def _convert_value(
+    raw: str | None, type_name: str, where: str, what: str, notes: list[str], is_default: bool = True
+) -> int | str | None:
+    """A DefaultValue/LowLimit/HighLimit text as the profile holds it (None: not representable).
+
+    Strings stay strings (defaults only), $NODEID formulas stay formulas, numbers become ints
+    (hex of a signed type as two's complement).
+    """
+    if raw is None or not str(raw).strip():
+        return None
+    raw = str(raw).strip()
+    canonical = datatypes.canonical_name(type_name)
+    if canonical in datatypes.STRING_TYPES:
+        return raw if is_default else None
+    if is_default and is_node_id_expression(raw):
+        return raw
+    limits = datatypes.value_range(canonical)
+    value = parse_number(raw)
+    if limits is None or value is None:
+        notes.append(f"{where}: {what} {raw!r} ({canonical}) cannot be kept in a profile; dropped")
+        return None
+    if datatypes.is_signed(canonical) and value > limits[1] and raw.lower().startswith("0x"):
+        value -= 1 << (8 * (datatypes.size_bytes(canonical) or 0))  # two's complement hex
+    if not limits[0] <= value <= limits[1]:
+        notes.append(f"{where}: {what} {raw!r} does not fit {canonical}; dropped")
+        return None
+    return value
+
+
