@@ -73,12 +73,8 @@ def test_sync_tpdo_sent_on_every_nth_sync(dut, settings_journal, back_to_preoper
     syncs = 3 * every
     for _ in range(syncs):
         dut.send_sync()
-    def is_tpdo(m) -> bool:
-        return m.is_rx and m.arbitration_id == cob_id
-
-    dut.frames.wait_count(is_tpdo, 3, dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000, mark)
-    dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)  # a 4th frame would come within this
-    pdos = dut.frames.since(mark, is_tpdo)
+    window = dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
+    pdos = dut.pdos_counted(lambda m: m.is_rx and m.arbitration_id == cob_id, 3, mark, window)
     evidence.measure(f"TPDO {cob_id:03X}h frames for {syncs} SYNCs", len(pdos), "frames", 3, 3)
     assert len(pdos) == 3, (
         f"{comm:04X}h.02 = {every}: expected 3 TPDOs on {cob_id:03X}h for {syncs} SYNCs, observed {len(pdos)}\n"

@@ -74,7 +74,7 @@ def test_send_repeat_counter_sends_each_change_n_times(
     _start(dut, request)
     turned = dut.frames.mark()
     shaft.turn_by(0.25)
-    pdos = dut.frames.wait_count(_is(cob_id), repeats + 1, _window(dut), turned)
+    pdos = dut.pdos_counted(_is(cob_id), repeats, turned, _window(dut))
     since_start = dut.frames.since(mark, _is(cob_id))
     after_turn = {id(m) for m in dut.frames.since(turned)}
     standing = [m for m in since_start if id(m) not in after_turn]
@@ -88,11 +88,11 @@ def test_send_repeat_counter_sends_each_change_n_times(
 
 
 def _sync_burst(dut, cob_id: int, syncs: int, expected: int) -> tuple[list, Mark]:
-    """Send ``syncs`` SYNCs; the TPDOs on ``cob_id`` (waiting for one more than ``expected``) and a mark."""
+    """Send ``syncs`` SYNCs; the TPDOs on ``cob_id`` (up to one more than ``expected``) and a mark."""
     mark = dut.frames.mark()
     for _ in range(syncs):
         dut.send_sync()
-    return dut.frames.wait_count(_is(cob_id), expected + 1, _window(dut), mark), mark
+    return dut.pdos_counted(_is(cob_id), expected, mark, _window(dut)), mark
 
 
 @pytest.mark.spec("CiA 301 §7.2.2.2 (synchronous TPDO); manufacturer send-repeat counter (quirk)")

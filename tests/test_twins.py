@@ -67,7 +67,7 @@ def test_twin_passes_its_profile(profile, twin_runs):
     assert completed.returncode == 0, f"{profile} twin fails its own profile:\n{completed.stdout[-4000:]}"
     assert (folder / "report" / "report.html").exists()
     assert (folder / "report" / "junit.xml").exists()
-    assert any((folder / "report" / "allure-results").iterdir())
+    assert not (folder / "report" / "allure-results").exists(), "allure results are written only with --allure"
 
 
 def test_wrong_profile_fails_on_identity_without_timeouts(tmp_path):
@@ -79,3 +79,11 @@ def test_wrong_profile_fails_on_identity_without_timeouts(tmp_path):
     assert "0x00000195" in completed.stdout  # the vendor-id the device really reports
     assert "No SDO response" not in completed.stdout
     assert seconds < 30, f"wrong-profile run took {seconds:.0f} s; expected a fast, single-reason failure"
+
+
+def test_allure_results_on_request(tmp_path):
+    """--allure writes allure-pytest results (one result file per test) into the report folder."""
+    completed, _ = run_suite(tmp_path, "--device-profile", "waycon-sx", "-k", "test_identity", "--allure")
+    assert completed.returncode == 0, completed.stdout[-3000:]
+    results = list((tmp_path / "report" / "allure-results").glob("*-result.json"))
+    assert results, "no allure result files"

@@ -9,7 +9,7 @@ is stopping (Ctrl-C), calls raise RunInterrupted except inside ``custody()``, th
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -231,6 +231,14 @@ class DeviceUnderTest:
     def heartbeats(self, after: Mark, count: int, timeout: float) -> list[HeartbeatSample]:
         hits = self.frames.wait_count(lambda m: self.is_heartbeat(m) and bool(m.data), count, timeout, after)
         return [HeartbeatSample(m.timestamp, m.data[0], m.dlc) for m in hits]
+
+    def pdos_counted(self, predicate: Callable[[can.Message], bool], expected: int, after: Mark,
+                     timeout: float) -> list[can.Message]:
+        """The TPDOs ``predicate`` matches after ``after``, at most one more than ``expected``: waits up to
+        ``timeout`` for ``expected`` of them, then one PDO silence window in which a surplus one would come."""
+        self.frames.wait_count(predicate, expected, timeout, after)
+        self.frames.quiet_period(lambda m: False, self.pdo_silence_s)
+        return self.frames.since(after, predicate)[: expected + 1]
 
     def frames_from_node(self, after: Mark, duration: float) -> list[can.Message]:
         """Every frame the node sends in an observation window of ``duration`` seconds."""

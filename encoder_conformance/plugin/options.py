@@ -87,8 +87,11 @@ def add_options(parser: pytest.Parser) -> None:
                     help="the device is in its delivery state (never configured): check factory defaults "
                          "as found, without restoring defaults first (no --allow-destructive needed)")
     group.addoption("--report-dir", default=None,
-                    help="directory for report.html, junit.xml and allure-results "
+                    help="directory for report.html, junit.xml, traces (and allure-results with --allure) "
                          "(default reports/<timestamp>-<profile>/ when the suites run)")
+    group.addoption("--allure", action="store_true", default=False,
+                    help="also write allure-pytest results (allure-results/ in the report folder; render with "
+                         "`npx allure generate`). Off by default: about 3,400 files and 3 s of a 14 s WDGA run")
 
 
 def configure(config: pytest.Config) -> None:

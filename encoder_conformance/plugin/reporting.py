@@ -42,7 +42,7 @@ def configure_outputs(config: pytest.Config) -> None:
         option.self_contained_html = True
     if not getattr(option, "xmlpath", None):
         option.xmlpath = str(folder / "junit.xml")
-    if not getattr(option, "allure_report_dir", None):
+    if config.getoption("--allure") and not getattr(option, "allure_report_dir", None):
         option.allure_report_dir = str(folder / "allure-results")
         option.clean_alluredir = True
 

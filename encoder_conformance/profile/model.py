@@ -3,6 +3,9 @@
 A profile is data (YAML under device_profiles/). It is validated strictly: unknown keys,
 wrong types and missing fields are errors (see loader.py for the messages). The model is
 immutable once loaded.
+
+This module is over 400 lines because it is the one schema of a profile file: its sections
+(identity, bus, capabilities, timing, objects, simulator) are read and changed together.
 """
 
 from __future__ import annotations
