@@ -14,14 +14,15 @@ LIBRARY = REPO / "encoder_conformance"
 MAX_LINES = 400
 
 
-def _module_name(path: Path) -> str:
-    parts = path.relative_to(REPO).with_suffix("").parts
+def _module_name(path: Path, root: Path = REPO) -> str:
+    parts = path.relative_to(root).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _imports(path: Path) -> set[str]:
+def _imports(path: Path, root: Path = REPO) -> set[str]:
     """Every module ``path`` imports, also inside functions and under TYPE_CHECKING."""
-    package = _module_name(path) if path.name == "__init__.py" else _module_name(path).rpartition(".")[0]
+    name = _module_name(path, root)
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found: set[str] = set()
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
         if isinstance(node, ast.Import):
@@ -42,38 +43,68 @@ def _library_graph() -> dict[str, set[str]]:
     return {name: {i for i in _imports(path) if i in modules and i != name} for name, path in modules.items()}
 
 
-def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
-    state: dict[str, int] = {}
+def _loops(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Every set of modules that import each other in a loop (Tarjan's strongly connected components)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
     stack: list[str] = []
+    loops: list[list[str]] = []
 
-    def visit(node: str) -> list[str] | None:
-        state[node] = 1
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
         stack.append(node)
         for nxt in sorted(graph[node]):
-            if state.get(nxt) == 1:
-                return [*stack[stack.index(nxt):], nxt]
-            if nxt not in state and (found := visit(nxt)):
-                return found
-        stack.pop()
-        state[node] = 2
-        return None
+            if nxt not in index:
+                visit(nxt)
+                low[node] = min(low[node], low[nxt])
+            elif nxt in stack:
+                low[node] = min(low[node], index[nxt])
+        if low[node] == index[node]:
+            members = []
+            while (member := stack.pop()) != node:
+                members.append(member)
+            members.append(node)
+            if len(members) > 1:
+                loops.append(sorted(members))
 
     for node in sorted(graph):
-        if node not in state and (found := visit(node)):
-            return found
-    return None
+        if node not in index:
+            visit(node)
+    return sorted(loops)
+
+
+def test_the_import_reader_sees_every_import(tmp_path):
+    """Imports under TYPE_CHECKING, inside functions and relative ones all count."""
+    package = tmp_path / "encoder_conformance" / "sim"
+    package.mkdir(parents=True)
+    module = package / "node.py"
+    module.write_text(
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n    from .access import NodeObjectAccess\n"
+        "def f():\n    from ..dut import device\n    import encoder_conformance.cia301\n",
+        encoding="utf-8",
+    )
+    found = _imports(module, root=tmp_path)
+    assert {"encoder_conformance.sim.access", "encoder_conformance.dut.device",
+            "encoder_conformance.cia301"} <= found
+
+
+def test_the_loop_finder_names_every_loop():
+    """Two separate loops are both reported, a chain without a loop is not."""
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"e"}, "e": {"d"}, "f": {"a"}}
+    assert _loops(graph) == [["a", "b", "c"], ["d", "e"]]
 
 
 def test_no_import_loop_in_the_library():
     """No module imports itself through others, not even under TYPE_CHECKING."""
-    assert _cycle(_library_graph()) is None
+    assert _loops(_library_graph()) == []
 
 
 @pytest.mark.parametrize("folder", ["suites", "fixtures"])
 def test_only_the_simulator_fixture_imports_the_simulator(folder):
     """Suites and fixtures reach the device through the DUT layer; only fixtures/simulator.py starts a twin."""
     offenders = [
-        str(path.relative_to(REPO)) for path in (REPO / folder).glob("*.py")
+        str(path.relative_to(REPO)) for path in (REPO / folder).rglob("*.py")
         if path.name != "simulator.py" or folder != "fixtures"
         if any(i == "encoder_conformance.sim" or i.startswith("encoder_conformance.sim.") for i in _imports(path))
     ]
