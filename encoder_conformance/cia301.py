@@ -24,10 +24,8 @@ COMMUNICATION_AREA = range(0x1000, 0x2000)
 
 SYNC_COB_ID = 0x080  # the pre-defined connection set's SYNC (CiA 301 §7.3.5, 1005h default)
 SDO_REQUEST_BASE = 0x600  # + node-id: client -> server (CiA 301 §7.3.5)
-SDO_RESPONSE_BASE = 0x580  # + node-id: server -> client
 COB_ID_INVALID = 0x80000000  # bit 31 of a PDO/SYNC/EMCY COB-ID: the object does not exist / is not valid
 COB_ID_NO_RTR = 0x40000000  # bit 30 of a TPDO COB-ID: no RTR allowed on this PDO (CiA 301 §7.5.2.35)
-COB_ID_MASK_11BIT = 0x7FF
 TPDO_COMMUNICATION = range(0x1800, 0x1A00)
 TPDO_MAPPING = range(0x1A00, 0x1C00)
 RPDO_COMMUNICATION = range(0x1400, 0x1600)
@@ -74,11 +72,6 @@ COMMAND_FOR_STATE = {
 def cob_id_valid(cob_id: int) -> int:
     """The COB-ID entry with bit 31 cleared: the PDO (or EMCY, SYNC) becomes valid."""
     return cob_id & ~COB_ID_INVALID & 0xFFFFFFFF
-
-
-def cob_id_invalid(cob_id: int) -> int:
-    """The COB-ID entry with bit 31 set: the PDO becomes invalid (CiA 301 §7.5.2.35, before remapping)."""
-    return cob_id | COB_ID_INVALID
 
 
 #: TPDO transmission types (CiA 301 §7.5.2.35 table 71)

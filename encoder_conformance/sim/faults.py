@@ -38,9 +38,6 @@ class FaultSet:
             raise ValueError(f"unknown simulator fault {name!r}; known faults: {known}")
         self._active.add(name)
 
-    def clear(self) -> None:
-        self._active.clear()
-
     def active(self, name: str) -> bool:
         if name not in FAULTS:  # a typo in the simulator must not silently disable a fault
             raise KeyError(name)
