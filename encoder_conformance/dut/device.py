@@ -29,6 +29,7 @@ from .frames import FrameLog, Mark, format_frames
 #: them: SDO round trips to the twin p99 < 20 ms; 50 ms leaves room. A silence window is what the device
 #: owes plus this margin; an expected frame is waited for with the generous limits (boot-up, SDO timeout).
 TESTER_MARGIN_S = 0.05
+STALE_REQUESTS = 8  # an SDO reply that fits one of this many requests before the current one is a late answer
 
 __all__ = ["DeviceUnderTest", "HeartbeatSample", "wake_if_silent"]
 #: failed probes in a row before the device counts as gone (one late answer on a busy PC is not a dead device)
@@ -55,6 +56,7 @@ class DeviceUnderTest:
         self.node.sdo.RESPONSE_TIMEOUT = max(0.3, 4 * profile.timing.sdo_response_max_ms / 1000)
         self._lost: str | None = None
         self.stopping: str | None = None  # why the run is ending early (Ctrl-C, SIGTERM)
+        self.tester_notes: list[str] = []  # what the tester saw that is not a verdict (drained into evidence)
         self._custody = threading.local()
 
     # -- liveness ------------------------------------------------------------------------
@@ -165,14 +167,41 @@ class DeviceUnderTest:
     def sdo_request(self, request: bytes, check_alive: bool = True,
                     timeout: float | None = None) -> sdo_frames.SdoResponse | None:
         """Send one raw SDO request frame; the response frame, or None if none came within ``timeout``
-        (default the SDO timeout; pass ``sdo_silence_s`` where no answer is expected)."""
+        (default the SDO timeout; pass ``sdo_silence_s`` where no answer is expected).
+
+        The answer is matched by content (``sdo_frames.answers``: command specifier and multiplexer), not
+        by order: a reply that fits one of the last requests before this one is a late answer to it,
+        noted in ``tester_notes`` and skipped. A reply that fits no request is the device's answer (a
+        wrong multiplexer is the caller's to judge, not mistaken for silence).
+        """
         if check_alive:
             self._check_alive()
         mark = self.frames.mark()
         self.network.send_message(0x600 + self.node_id, request)
         wait = self.sdo_timeout if timeout is None else timeout
-        reply = self.frames.wait_for(self._is_sdo_response, wait, after=mark)
-        return None if reply is None else sdo_frames.SdoResponse(bytes(reply.data))
+        earlier = [bytes(m.data) for m in self.frames.before(mark, self._is_sdo_request)][-STALE_REQUESTS:]
+
+        def is_answer(msg: can.Message) -> bool:
+            if not self._is_sdo_response(msg):
+                return False
+            data = bytes(msg.data)
+            # a reply that fits this request, or that fits no earlier one (the device's own, wrong answer)
+            return sdo_frames.answers(request, data) or not any(sdo_frames.answers(e, data) for e in earlier)
+
+        reply = self.frames.wait_for(is_answer, wait, after=mark)
+        if reply is None:
+            return None
+        stale = [m for m in self.frames.since(mark, self._is_sdo_response) if m is not reply
+                 and m.timestamp <= reply.timestamp]
+        if stale:
+            self.tester_notes.append(
+                f"request {request.hex(' ').upper()}: skipped {len(stale)} SDO response(s) that do not answer it "
+                f"(late answers to an earlier request?): " + ", ".join(bytes(m.data).hex(" ").upper() for m in stale)
+            )
+        return sdo_frames.SdoResponse(bytes(reply.data))
+
+    def _is_sdo_request(self, msg: can.Message) -> bool:
+        return not msg.is_rx and msg.arbitration_id == SDO_REQUEST_BASE + self.node_id
 
     def _is_sdo_response(self, msg: can.Message) -> bool:
         return msg.is_rx and msg.arbitration_id == 0x580 + self.node_id and not msg.is_remote_frame

@@ -101,6 +101,13 @@ class FrameLog(can.Listener):
         count = min(self._seq - seq, len(frames))
         return [frames[i][1] for i in range(len(frames) - count, len(frames))] if count > 0 else []
 
+    def before(self, mark: Mark, predicate: Predicate, count: int = 200) -> list[can.Message]:
+        """The frames ``predicate`` matches among the ``count`` frames up to ``mark``, oldest first."""
+        with self._cond:
+            frames = self._frames
+            end = len(frames) - min(self._seq - mark.seq, len(frames))
+            return [m for _, m in (frames[i] for i in range(max(0, end - count), end)) if predicate(m)]
+
     def last(self, count: int = 20) -> list[can.Message]:
         with self._cond:
             return [m for _, m in list(self._frames)[-count:]]

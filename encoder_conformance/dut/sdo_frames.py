@@ -23,6 +23,31 @@ def expedited_download_request(index: int, sub: int, data: bytes) -> bytes:
     return struct.pack("<BHB", command, index, sub) + data.ljust(4, b"\x00")
 
 
+ABORT_SCS = 4
+# client command specifier -> the server command specifier of its answer (CiA 301 §7.2.4.3): download
+# segment -> download segment response, initiate download -> its response, initiate upload -> its
+# response, upload segment -> upload segment response, block upload / block download initiate -> theirs
+ANSWER_SCS = {0: 1, 1: 3, 2: 2, 3: 0, 5: 6, 6: 5}
+ECHOES_MULTIPLEXER = {1, 2, 5, 6}  # initiate requests: the answer (also an abort) repeats index and sub-index
+
+
+def answers(request: bytes, reply: bytes) -> bool:
+    """True when ``reply`` can be the server's answer to ``request``: the matching server command (or an
+    abort) and, for an initiate request, the same multiplexer. A reply that fits no open request is a
+    stale one (a late answer to an earlier request), never the answer to this one.
+    """
+    if not request or not reply:
+        return False
+    ccs, scs = request[0] >> 5, reply[0] >> 5
+    if ccs not in ANSWER_SCS:
+        return True  # a reserved command specifier: whatever comes is the device's answer to it
+    if scs not in (ANSWER_SCS[ccs], ABORT_SCS):
+        return False
+    if ccs in ECHOES_MULTIPLEXER and len(request) >= 4 and len(reply) >= 4:
+        return reply[1:4] == request[1:4] or (scs == ABORT_SCS and ccs in (5, 6))
+    return True
+
+
 def abort_name(code: int) -> str:
     """'06010002h (Attempt to write a read only object)' using canopen's abort table."""
     text = SdoAbortedError.CODES.get(code, "not a CiA 301 abort code")

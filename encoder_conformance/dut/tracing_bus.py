@@ -50,13 +50,15 @@ class TracingBus:
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
         if self.lost:
             raise BusLostError(self.lost)
+        # logged before it goes out: the device's answer can arrive (on the receive thread) before send()
+        # returns, and the log and the traces keep the order the frames had on the bus
+        self._log.record_sent(msg)
         try:
             self._bus.send(msg, timeout)
         except (can.CanError, OSError, ValueError, RuntimeError) as exc:
             reason = f"the CAN bus failed on send: {type(exc).__name__}: {exc}"
             self._log.close(reason)
             raise BusLostError(reason) from None
-        self._log.record_sent(msg)
 
     def recv(self, timeout: float | None = None) -> can.Message | None:
         if self.lost:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import signal
 import sys
 import threading
@@ -59,6 +60,8 @@ def serve(
             pass
     except KeyboardInterrupt:
         pass
-    host.shutdown()
+    host.shutdown()  # the memory is written on every store, so nothing is left to save here
     sys.stdout.flush()
-    return 0
+    sys.stderr.flush()
+    # the web-socket server's threads make the interpreter's own shutdown take ~0.1 s, every run's end
+    os._exit(0)

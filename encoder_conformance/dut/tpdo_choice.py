@@ -1,0 +1,77 @@
+"""Which TPDO a transmission test may use: mapped, configurable where the test needs it, not fixed by a quirk.
+
+Shared by the TPDO suites and the periodic capture (heartbeat and event timer measured together), so
+both pick the same TPDO for the same reasons.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..cia301 import COB_ID_INVALID, cob_id_valid
+from ..profile import quirk_effects as fx
+from .device import DeviceUnderTest
+
+
+class NoUsableTpdo(Exception):
+    """No TPDO of the profile can be used for the test; the message says why (a skip reason)."""
+
+    def __init__(self, reason: str, deviations: list[tuple[str, str]]) -> None:
+        super().__init__(reason)
+        self.deviations = deviations
+
+
+@dataclass
+class TpdoChoice:
+    """The TPDO to use, what to write before the test, and what the report should say about the choice."""
+
+    comm: int
+    transmission_type: int
+    enable_cob_id: int | None = None  # sub 1 value that clears bit 31, where the TPDO is disabled
+    notes: list[str] = field(default_factory=list)
+    deviations: list[tuple[str, str]] = field(default_factory=list)  # (quirk id, text)
+
+
+def fixed_behaviour_tpdos(dut: DeviceUnderTest) -> tuple[set[int], tuple[str, str] | None]:
+    """TPDOs whose behaviour a fixed-layout quirk decides (e.g. POSITAL 1800h: cyclic by 2200h, sub 2
+    ignored), and the deviation to report for skipping them."""
+    found = dut.profile.quirk_of(fx.FixedTpdoMapping)
+    if found is None:
+        return set(), None
+    quirk_id, params = found
+    fixed = {spec.tpdo for spec in (*params.cyclic_tpdos, *params.polled_tpdos)}
+    if not fixed:
+        return set(), None
+    title = dut.profile.quirks[quirk_id].title
+    return fixed, (quirk_id, f"{title}: {', '.join(f'{c:04X}h' for c in sorted(fixed))} not used here")
+
+
+def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int]) -> TpdoChoice:
+    """The first TPDO that maps something, whose sub-index ``sub`` is writable and whose type is one of
+    ``usable_types`` (in order of preference): to be written if sub 2 is writable, else as the device has
+    it fixed. A disabled TPDO (sub 1 bit 31) is chosen only if sub 1 is writable (``enable_cob_id``).
+
+    Raises NoUsableTpdo when none qualifies.
+    """
+    fixed, deviation = fixed_behaviour_tpdos(dut)
+    accepted = set(dut.profile.capabilities.tpdo_transmission_types)
+    for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF and i not in fixed):
+        entry, kind, cob = (dut.profile.entry(comm, s) for s in (sub, 2, 1))
+        if entry is None or kind is None or cob is None or not entry.writable:
+            continue
+        if dut.profile.entry(comm + 0x200, 0) is not None and dut.read_uint(comm + 0x200, 0) == 0:
+            continue  # nothing mapped
+        candidates = [t for t in usable_types if t in accepted] if kind.writable else [dut.read_uint(comm, 2)]
+        chosen = next((t for t in candidates if t in usable_types), None)
+        cob_id = dut.read_uint(comm, 1)
+        if chosen is None or (cob_id & COB_ID_INVALID and not cob.writable):
+            continue
+        choice = TpdoChoice(comm, chosen, deviations=[deviation] if deviation else [])
+        if cob_id & COB_ID_INVALID:
+            choice.enable_cob_id = cob_id_valid(cob_id)
+            choice.notes.append(f"{comm:04X}h.01 bit 31 cleared (TPDO enabled) for the test")
+        if not kind.writable:
+            choice.notes.append(f"{comm:04X}h.02 is read-only: its fixed type {chosen} is used")
+        return choice
+    raise NoUsableTpdo(f"not applicable: no mapped TPDO with writable sub-index {sub} and a usable transmission type",
+                       [deviation] if deviation else [])
