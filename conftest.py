@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, settings
 
 from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
-from encoder_conformance.plugin import lifecycle, reporting, selection
+from encoder_conformance.plugin import lifecycle, reporting, selection, verdicts
 from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence"]
@@ -81,6 +81,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]):
         report.longrepr = (str(item.path), item.location[1] or 0, f"not run to the end: {call.excinfo.value}")
     elif call.excinfo is not None and isinstance(call.excinfo.value, DutLostError):
         report.longrepr = f"could not test: {call.excinfo.value}"  # one line: the device is gone
+    verdicts.judge(item, report)  # a broken inferred rule: a warning, or a failure with --strict-inferred
     reporting.attach_evidence(item, call, report)
     lifecycle.note_report(item.config, report)
 

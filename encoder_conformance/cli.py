@@ -155,9 +155,12 @@ def _cmd_fault_matrix(args: argparse.Namespace, extra: list[str]) -> int:
 
 
 def _cmd_faults(args: argparse.Namespace, extra: list[str]) -> int:
-    from .fault_catalogue import FAULTS
+    from .fault_catalogue import FAULTS, VARIANTS
 
     for name, text in sorted(FAULTS.items()):
+        print(f"{name:32s} {text}")
+    print("\nconformant variants (a CiA-conformant device against a rule the profile only infers):")
+    for name, text in sorted(VARIANTS.items()):
         print(f"{name:32s} {text}")
     return 0
 

@@ -110,6 +110,23 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
     ),
 ]
 FAULTS: dict[str, str] = {name: text for _, group in FAULT_GROUPS for name, text in group.items()}
+
+#: Variants: the twin behaves as a device that a strictness option judges differently: one that follows
+#: CiA where the profile's rule is only our inference (a warning; --strict-inferred fails it), one that
+#: answers with an abort code of the right family (--abort-codes). They stay out of the fault matrix;
+#: tests/test_verdict_basis.py shows what each option makes of them.
+VARIANTS: dict[str, str] = {
+    "cia301_transmission_types": (
+        "18xxh sub 2 accepts every transmission type CiA 301 defines (0..240, 252..255), also those the "
+        "profile leaves out because its manual does not list them"
+    ),
+    "write_ro_unsupported_access": (
+        "writes to ro/const objects abort with 06010000h (unsupported access), the family of CiA 301's "
+        "06010002h: fails with --abort-codes exact, passes with --abort-codes family"
+    ),
+}
+#: every name the simulator's --fault takes
+SIMULATOR_DEVIATIONS: dict[str, str] = {**FAULTS, **VARIANTS}
 #: fault -> the suite modules (file stems under suites/) it is made for
 TARGET_MODULES: dict[str, tuple[str, ...]] = {
     name: modules for modules, group in FAULT_GROUPS for name in group

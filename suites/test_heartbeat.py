@@ -22,7 +22,8 @@ def test_heartbeat_period_within_tolerance(dut, periodic_capture, evidence):
     assert len(stream.timestamps) == stream.wanted, (
         f"only {len(stream.timestamps)} of {stream.wanted} heartbeats in time (1017h = {stream.period_ms} ms)"
     )
-    check_periodic(stream.timestamps, stream.period_ms, dut.profile.timing.heartbeat_tolerance, "heartbeat", evidence)
+    check_periodic(stream.timestamps, stream.period_ms, dut.profile.timing.heartbeat_tolerance, "heartbeat", evidence,
+                   periodic_capture.host)
 
 
 def test_heartbeat_frame_format(dut, heartbeat):

@@ -98,9 +98,11 @@ def _decode(entry, data: bytes):
     return int.from_bytes(data, "little", signed=datatypes.is_signed(entry.type))
 
 
-def test_factory_default(dut, default_entry, factory_state):
+def test_factory_default(dut, default_entry, factory_state, evidence):
     """Right after restore-defaults and reset, each entry shows the factory default the manual gives."""
     index, sub, _, entry = default_entry
+    source = entry.manual or f"profile {dut.profile.id}"
+    evidence.rests_on("cia" if source.startswith("CiA") else "manual", source)
     excluded = dut.profile.quirk_objects(fx.RestoreExcludes)
     if excluded is not None and index in excluded[1]:
         pytest.skip(f"not applicable: restore-defaults leaves {index:04X}h as it was (quirk {excluded[0]})")

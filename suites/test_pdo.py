@@ -70,7 +70,7 @@ def test_event_timer_period_within_tolerance(dut, periodic_capture, evidence):
         f"{stream.period_ms} ms"
     )
     check_periodic(stream.timestamps, stream.period_ms, dut.profile.timing.heartbeat_tolerance, "event timer",
-                   evidence)
+                   evidence, periodic_capture.host)
 
 
 def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_to_preoperational, shaft, evidence):

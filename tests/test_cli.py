@@ -14,7 +14,7 @@ import can
 import pytest
 
 from encoder_conformance.dut.frames import FrameLog
-from encoder_conformance.fault_catalogue import FAULTS
+from encoder_conformance.fault_catalogue import FAULTS, VARIANTS
 from encoder_conformance.profile.loader import DEFAULT_PROFILE_DIR
 from encoder_conformance.sim_process import SimulatorControl, start_simulator
 
@@ -53,9 +53,10 @@ def test_faults_lists_every_fault(runs):
     """'faults' prints one line per named fault with its description, sorted, exit 0."""
     result = runs["faults"]
     assert result.returncode == 0, result.stderr
-    lines = result.stdout.splitlines()
-    names = [line.split()[0] for line in lines]
+    faults, _, variants = result.stdout.partition("\n\nconformant variants")
+    names = [line.split()[0] for line in faults.splitlines()]
     assert names == sorted(FAULTS)
+    assert [line.split()[0] for line in variants.splitlines()[1:]] == sorted(VARIANTS)
     assert FAULTS["wrong_vendor_id"] in result.stdout
 
 

@@ -12,6 +12,7 @@ import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Literal
 
 import can
 import canopen
@@ -29,6 +30,10 @@ from .frames import FrameLog, Mark, format_frames
 #: them: SDO round trips to the twin p99 < 20 ms; 50 ms leaves room. A silence window is what the device
 #: owes plus this margin; an expected frame is waited for with the generous limits (boot-up, SDO timeout).
 TESTER_MARGIN_S = 0.05
+#: exact: the code CiA 301 (or the manual, through a quirk) names for the situation; family: any code of
+#: its family (the same code but for the last digit, e.g. 06090031h for 06090030h), as the CiA
+#: conformance test tool accepts
+AbortCodeMode = Literal["exact", "family"]
 STALE_REQUESTS = 8  # an SDO reply that fits one of this many requests before the current one is a late answer
 
 __all__ = ["DeviceUnderTest", "HeartbeatSample", "wake_if_silent"]
@@ -57,6 +62,7 @@ class DeviceUnderTest:
         self._lost: str | None = None
         self.stopping: str | None = None  # why the run is ending early (Ctrl-C, SIGTERM)
         self.tester_notes: list[str] = []  # what the tester saw that is not a verdict (drained into evidence)
+        self.abort_codes: AbortCodeMode = "exact"  # how SDO abort codes are judged (--abort-codes)
         self._custody = threading.local()
 
     # -- liveness ------------------------------------------------------------------------

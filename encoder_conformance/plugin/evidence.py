@@ -1,4 +1,5 @@
-"""Per-test evidence: measurements with limits, documented deviations, notes, the bus trace."""
+"""Per-test evidence: measurements with limits, documented deviations, notes, the bus trace, and what
+the verdict rests on (a CiA clause, the device's manual, or our own inference)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+
+from ..basis import BASES, Basis
+
+__all__ = ["BASES", "EVIDENCE", "Basis", "Evidence", "InferredProblem", "Measurement"]
 
 
 @dataclass(frozen=True)
@@ -30,6 +35,19 @@ class Measurement:
         return f"{self.name} = {self.value:g} {self.unit} {limits} {'PASS' if self.passed else 'FAIL'}"
 
 
+
+
+@dataclass(frozen=True)
+class InferredProblem:
+    """What the device did against a rule that no CiA text or manual states: our reading of silence."""
+
+    observation: str
+    rests_on: str  # the profile key and the reading it holds, e.g. "capabilities.tpdo_transmission_types ..."
+
+    def describe(self) -> str:
+        return f"{self.observation} [inferred: {self.rests_on}]"
+
+
 @dataclass
 class Evidence:
     """Collected while a test runs; written to the reports by the makereport hook."""
@@ -39,6 +57,9 @@ class Evidence:
     deviations: list[tuple[str, str]] = field(default_factory=list)  # (quirk id, text)
     notes: list[str] = field(default_factory=list)
     trace_path: Path | None = None
+    basis: Basis | None = None  # set where a test knows better than its spec marker (see verdict_basis)
+    basis_source: str | None = None  # the clause or manual section the verdict rests on
+    inferred: list[InferredProblem] = field(default_factory=list)
 
     def measure(self, name: str, value: float, unit: str, low: float | None = None,
                 high: float | None = None) -> Measurement:
@@ -52,6 +73,25 @@ class Evidence:
 
     def note(self, text: str) -> None:
         self.notes.append(text)
+
+    def rests_on(self, basis: Basis, source: str) -> None:
+        """The verdict rests on ``source`` (a CiA clause or a manual section), of kind ``basis``."""
+        self.basis, self.basis_source = basis, source
+
+    def inferred_problem(self, observation: str, rests_on: str) -> None:
+        """A deviation from a rule we inferred: a warning by default, a failure with --strict-inferred."""
+        self.inferred.append(InferredProblem(observation, rests_on))
+
+    def verdict_basis(self, hard_failure: bool = False) -> Basis:
+        """What the verdict rests on: our inference where only an inferred rule was broken; else the device's
+        manual where a documented deviation or a manual fact decided it; else the CiA clause of the spec marker."""
+        if self.inferred and not hard_failure:
+            return "inferred"
+        if self.basis is not None:
+            return self.basis
+        if self.deviations or not (self.spec or "").startswith("CiA"):
+            return "manual"
+        return "cia"
 
 
 EVIDENCE = pytest.StashKey[Evidence]()

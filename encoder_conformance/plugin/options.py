@@ -9,10 +9,11 @@ from pathlib import Path
 import pytest
 
 from ..bus_config import BusConfig, resolve_bus_config
-from ..fault_catalogue import FAULTS
+from ..fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS  # faults and conformant variants
 from ..paths import DEFAULT_PROFILE
 from ..profile.loader import LoadedProfile, load_profile
 from ..station import Station, StationError, StationPower, load_station
+from . import verdicts
 
 PROFILE_ENV = "ENCODER_CONFORMANCE_PROFILE"
 
@@ -89,6 +90,11 @@ def add_options(parser: pytest.Parser) -> None:
     group.addoption("--report-dir", default=None,
                     help="directory for report.html, junit.xml, traces (and allure-results with --allure) "
                          "(default reports/<timestamp>-<profile>/ when the suites run)")
+    verdicts.add_option(group)
+    group.addoption("--abort-codes", choices=("exact", "family"), default="exact",
+                    help="how SDO abort codes are judged: 'exact' (default) the code CiA 301 or the manual names for "
+                         "the situation; 'family' any code that differs only in its last digit (06090031h for "
+                         "06090030h), as the CiA conformance test tool accepts")
     group.addoption("--allure", action="store_true", default=False,
                     help="also write allure-pytest results (allure-results/ in the report folder; render with "
                          "`npx allure generate`). Off by default: about 3,400 files and 3 s of a 14 s WDGA run")

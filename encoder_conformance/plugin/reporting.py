@@ -12,6 +12,8 @@ from ..paths import REPO_ROOT, SUITES_DIR
 from .allure_writer import BackgroundWriter, write_in_background
 from .evidence import EVIDENCE
 from .options import settings_of
+from .verdicts import add_property, html_section, terminal_lines
+from .verdicts import strict as verdicts_strict
 
 REPORT_DIR = pytest.StashKey[Path]()
 ALLURE_WRITER = pytest.StashKey[BackgroundWriter]()
@@ -87,6 +89,8 @@ def set_metadata(config: pytest.Config) -> None:
     for key, value in settings.bus.kwargs.items():
         data[f"Bus {key}"] = f"{value} (from {settings.bus.sources.get(key, 'default')})"
     data["Node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
+    data["SDO abort codes"] = f"{config.getoption('--abort-codes')} (--abort-codes)"
+    data["Inferred rules"] = "failures (--strict-inferred)" if verdicts_strict(config) else "warnings"
 
 
 def record_identity(config: pytest.Config, identity: dict[str, str]) -> None:
@@ -105,6 +109,8 @@ def header_lines(config: pytest.Config) -> list[str]:
         f"device profile: {loaded.profile.id} ({loaded.path}) sha256 {loaded.sha256[:16]}",
         f"bus: {settings.bus.describe()}",
         f"node-id: {settings.node_id} ({settings.node_id_source})",
+        f"verdicts: SDO abort codes {config.getoption('--abort-codes')} (--abort-codes); rules we inferred judged as "
+        f"{'failures (--strict-inferred)' if verdicts_strict(config) else 'warnings (--strict-inferred fails them)'}",
     ]
     folder = report_dir(config)
     if folder:
@@ -117,6 +123,10 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
     evidence = item.stash.get(EVIDENCE, None)
     if evidence is None or report.when != "call":
         return
+    dut = getattr(item, "funcargs", {}).get("dut")
+    if dut is not None:  # what the DUT layer noticed during the test (late SDO answers, family abort codes)
+        evidence.notes.extend(dut.tester_notes)
+        dut.tester_notes.clear()
     try:
         from pytest_html import extras as html_extras
     except ImportError:  # pragma: no cover - pytest-html is a dependency
@@ -129,6 +139,9 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
         rows.append(f"<tr><th>measurement</th><td>{html.escape(m.describe())}</td></tr>")
     for quirk_id, text in evidence.deviations:
         rows.append(f"<tr><th>documented deviation</th><td>{html.escape(quirk_id)}: {html.escape(text)}</td></tr>")
+    for problem in evidence.inferred:
+        rows.append("<tr><th style='color:#b60'>inferred rule broken</th>"
+                    f"<td>{html.escape(problem.describe())}</td></tr>")
     for note in evidence.notes:
         rows.append(f"<tr><th>note</th><td>{html.escape(note)}</td></tr>")
     if rows:
@@ -139,12 +152,13 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
         extras.append(html_extras.url(relative, name="bus trace (ASC)"))
     report.extras = extras
     for quirk_id, _ in evidence.deviations:
-        report.user_properties.append(("documented_deviation", quirk_id))
+        add_property(item, report, "documented_deviation", quirk_id)
 
 
 def html_summary(prefix: list[str], session: pytest.Session, run_lines: list[tuple[str, bool]]) -> None:
     """Run outcome and device custody (alarms in red), the identity read, the documented deviations."""
     config = session.config
+    prefix.append(html_section(config))
     if run_lines:
         items = "".join(
             f"<li style='color:{'#c00;font-weight:bold' if alarm else 'inherit'}'>{html.escape(text)}</li>"
@@ -173,6 +187,16 @@ def terminal_summary(terminalreporter, config: pytest.Config,  # noqa: ANN001 - 
                      run_lines: list[tuple[str, bool]]) -> None:
     if REPORT_DIR not in config.stash:
         return
+    by_basis, warnings = terminal_lines(config)
+    if by_basis:
+        terminalreporter.write_sep("-", "verdicts by what they rest on (cia / manual / inferred)")
+        for line in by_basis:
+            terminalreporter.write_line(f"  {line}")
+    if warnings:
+        terminalreporter.write_sep("-", "warnings: rules we only inferred were broken (fail them with "
+                                        "--strict-inferred)", yellow=True)
+        for line in warnings:
+            terminalreporter.write_line(line, yellow=True)
     if run_lines:
         terminalreporter.write_sep("-", "the device on the bench")
         for text, alarm in run_lines:

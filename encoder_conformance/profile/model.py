@@ -15,6 +15,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from ..basis import Basis
 from . import datatypes
 from .quirk_effects import EffectParams, ObjectList, P
 from .quirks import Quirk, QuirkBase
@@ -109,6 +110,11 @@ class EntrySpec(StrictModel):
         default=None,
         description="values the device accepts, e.g. '0..4, 6..9' (integers and inclusive a..b ranges)",
     )
+    domain_basis: Basis = Field(
+        default="manual",
+        description="what says values outside min/max/allowed are refused: 'manual' (the manual states the range), "
+        "'cia' (a CiA text does), 'inferred' (our reading, e.g. of a manual that only lists what it supports)",
+    )
     pdo_mappable: bool = False
     persisted_by: Persistence = "none"
     manual: str | None = Field(default=None, description="manual section/table the facts come from")
@@ -176,6 +182,7 @@ class ObjectSpec(StrictModel):
     min: int | None = None
     max: int | None = None
     allowed: str | None = None
+    domain_basis: Basis = "manual"
     pdo_mappable: bool = False
     persisted_by: Persistence = "none"
     notes: str | None = None
@@ -218,6 +225,7 @@ class ObjectSpec(StrictModel):
             "min": self.min,
             "max": self.max,
             "allowed": self.allowed,
+            "domain_basis": self.domain_basis,
             "pdo_mappable": self.pdo_mappable,
             "persisted_by": self.persisted_by,
             "manual": self.manual,
@@ -308,6 +316,11 @@ class Capabilities(StrictModel):
     tpdo_transmission_types: list[int] = Field(
         default_factory=lambda: [*range(0, 241), 252, 253, 254, 255],
         description="accepted 18xxh sub 2 values",
+    )
+    tpdo_transmission_types_refusal: Basis = Field(
+        default="inferred",
+        description="what says the 18xxh sub 2 values outside tpdo_transmission_types are refused: 'manual' where "
+        "the manual says so, 'inferred' (default) where it only lists the types it supports",
     )
     lss: list[LssService] = Field(default_factory=list)
     scaling: bool = False

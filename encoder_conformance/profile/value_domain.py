@@ -7,6 +7,7 @@ value outside it; ``probe_values`` are the values just outside each boundary tha
 
 from __future__ import annotations
 
+from ..basis import Basis
 from . import datatypes
 from .model import DeviceProfile
 from .value_set import ValueSet
@@ -43,3 +44,28 @@ def probe_values(profile: DeviceProfile, index: int, sub: int) -> list[int]:
     limits = datatypes.value_range(entry.type)
     assert limits is not None  # declared_domain returned a set, so the type is an integer type
     return domain.probes(*limits)
+
+
+def refusal_basis(profile: DeviceProfile, index: int, sub: int, value: int) -> tuple[Basis, str]:
+    """What says ``value`` (outside the declared domain) must be refused, and the profile key that holds it.
+
+    The entry's own min/max/allowed rest on its ``domain_basis``; a transmission type refused only
+    because capabilities.tpdo_transmission_types leaves it out rests on
+    ``tpdo_transmission_types_refusal``. Where both exclude the value, the stronger basis counts.
+    """
+    entry = profile.entry(index, sub)
+    assert entry is not None, f"{index:04X}h.{sub:02X} is not declared"
+    where = f"objects {index:04X}h.{sub:02X} min/max/allowed (domain_basis: {entry.domain_basis})"
+    limits = datatypes.value_range(entry.type)
+    if limits is None:
+        return entry.domain_basis, where
+    own = ValueSet.span(limits[0] if entry.min is None else entry.min, limits[1] if entry.max is None else entry.max)
+    if entry.value_set is not None:
+        own &= entry.value_set
+    if value not in own and entry.domain_basis != "inferred":
+        return entry.domain_basis, where
+    if index in TPDO_COMMUNICATION and sub == TRANSMISSION_TYPE_SUB:
+        basis = profile.capabilities.tpdo_transmission_types_refusal
+        if basis != "inferred" or value in own:
+            return basis, f"capabilities.tpdo_transmission_types (refusal: {basis})"
+    return "inferred", where if value not in own else "capabilities.tpdo_transmission_types (refusal: inferred)"

@@ -169,10 +169,29 @@ class WrongAbortWriteReadOnly(ObjectAccess):
         raise SdoAbort(Abort.GENERAL_ERROR)
 
 
+@breaks(ObjectAccess, "write_ro_unsupported_access")
+class UnsupportedAccessWriteReadOnly(ObjectAccess):
+    """A variant: 06010000h (unsupported access) instead of 06010002h (attempt to write a read only object)."""
+
+    def write_read_only(self) -> None:
+        raise SdoAbort(Abort.UNSUPPORTED_ACCESS)
+
+
 @breaks(ObjectAccess, "value_domain_ignored")
 class ValueDomainIgnored(ObjectAccess):
     def check_domain(self, key: Key, value: int) -> None:
         return
+
+
+@breaks(ObjectAccess, "cia301_transmission_types")
+class Cia301TransmissionTypes(ObjectAccess):
+    """A variant, not a fault: every transmission type CiA 301 defines is accepted (0..240, 252..255)."""
+
+    def check_domain(self, key: Key, value: int) -> None:
+        index, sub = key
+        if 0x1800 <= index <= 0x19FF and sub == 2 and (value <= 240 or value >= 252):
+            return
+        super().check_domain(key, value)
 
 
 @breaks(ObjectAccess, "write_rw_ignored")

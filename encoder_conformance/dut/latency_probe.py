@@ -1,0 +1,72 @@
+"""How late the tester's own host runs while a timing measurement is taken.
+
+Frame timestamps on a twin or a software-stamped adapter are taken by processes on the tester's
+host; when that host is overloaded, a frame looks late although the device sent it on time. The
+probe is a thread that asks to wake every ``TICK_S`` and records how late each wake-up came: a
+direct measure of the host's scheduling latency during the capture. A timing verdict that fails
+while the probe saw lateness beyond the tolerance is inconclusive, not a device failure.
+"""
+
+from __future__ import annotations
+
+import statistics
+import threading
+import time
+from dataclasses import dataclass
+
+TICK_S = 0.005
+
+
+@dataclass(frozen=True)
+class HostLatency:
+    """The probe's wake-up lateness over a capture window (milliseconds), and when each came (wall clock,
+    the clock of frame timestamps)."""
+
+    samples: int
+    worst_ms: float
+    p95_ms: float
+    wakeups: tuple[tuple[float, float], ...] = ()  # (time.time(), lateness ms)
+
+    def worst_near(self, when: float, window_s: float) -> float:
+        """The latest wake-up (ms) within ``window_s`` of ``when``."""
+        return max((late for t, late in self.wakeups if abs(t - when) <= window_s), default=0.0)
+
+    def describe(self) -> str:
+        return f"the tester's own {TICK_S * 1000:.0f} ms timer woke up to {self.worst_ms:.1f} ms late " \
+               f"(p95 {self.p95_ms:.1f} ms, {self.samples} wake-ups)"
+
+    def sustained(self, tolerance_ms: float) -> bool:
+        """True when the host ran later than ``tolerance_ms`` for more than 5 % of the window."""
+        return self.p95_ms > tolerance_ms
+
+
+class LatencyProbe:
+    """Context manager: ``with LatencyProbe() as probe: ...; probe.result()``."""
+
+    def __init__(self) -> None:
+        self._wakeups: list[tuple[float, float]] = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="host-latency-probe", daemon=True)
+
+    def __enter__(self) -> LatencyProbe:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join(1.0)
+
+    def _run(self) -> None:
+        while True:
+            due = time.perf_counter() + TICK_S
+            if self._stop.wait(TICK_S):
+                return
+            self._wakeups.append((time.time(), max(0.0, (time.perf_counter() - due) * 1000)))
+
+    def result(self) -> HostLatency:
+        wakeups = tuple(self._wakeups)
+        late = [ms for _, ms in wakeups]
+        if not late:
+            return HostLatency(0, 0.0, 0.0)
+        p95 = statistics.quantiles(late, n=20)[-1] if len(late) >= 20 else max(late)
+        return HostLatency(len(late), max(late), p95, wakeups)
