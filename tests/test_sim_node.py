@@ -321,3 +321,68 @@ def test_sdo_abort_codes_of_the_twin(rig, minimal_profile):
         client.sdo.upload(0x2000, 0)
     assert int(info.value.code) == 0x06010001
 
+
+
+@pytest.fixture
+def inhibit_profile(tmp_path) -> DeviceProfile:
+    """The minimal encoder with an inhibit time (1800h sub 3) and a second, SYNC-driven TPDO."""
+    text = MINIMAL.read_text(encoding="utf-8")
+    text = text.replace(
+        "      5: {name: Event timer, type: U16, access: rw, default: 0, persisted_by: store_comm}",
+        "      3: {name: Inhibit time, type: U16, access: rw, default: 0, persisted_by: store_comm}\n"
+        "      5: {name: Event timer, type: U16, access: rw, default: 0, persisted_by: store_comm}", 1)
+    assert "Inhibit time" in text
+    path = tmp_path / "inhibit" / MINIMAL.name  # a profile's file name is its id
+    path.parent.mkdir()
+    path.write_text(text, encoding="utf-8")
+    return load_profile(str(path)).profile
+
+
+def _configure_tpdo1(client: canopen.RemoteNode, kind: int, inhibit_100us: int, timer_ms: int) -> None:
+    client.sdo.download(0x1800, 2, bytes([kind]))
+    client.sdo.download(0x1800, 3, struct.pack("<H", inhibit_100us))
+    client.sdo.download(0x1800, 5, struct.pack("<H", timer_ms))
+
+
+def test_inhibit_time_delays_event_timer_tpdo_not_drops_it(rig, inhibit_profile):
+    """CiA 301: an event inside the inhibit time is sent when it ends. Timer 40 ms, inhibit 50 ms: frames
+    50 ms apart (dropping the early events would space them 80 ms apart)."""
+    node, client = booted(rig, inhibit_profile)
+    _configure_tpdo1(client, 255, 500, 40)
+    cob = 0x180 + node.node_id
+    mark = rig.nmt(0x01, node.node_id)
+    frames = rig.log.wait_count(lambda m: m.is_rx and m.arbitration_id == cob, 7, 2.0, mark)
+    gaps = [(b.timestamp - a.timestamp) * 1000 for a, b in itertools.pairwise(frames[1:])]
+    assert len(frames) == 7
+    assert min(gaps) >= 48, gaps  # never closer than the inhibit time
+    assert statistics.median(gaps) < 65, gaps  # delayed to the inhibit time's end, not dropped
+
+
+def test_inhibit_time_does_not_apply_to_sync_tpdos(rig, inhibit_profile):
+    """CiA 301 limits the inhibit time to types 254/255: a type-1 TPDO answers every SYNC."""
+    node, client = booted(rig, inhibit_profile)
+    _configure_tpdo1(client, 1, 10000, 0)  # 1 s inhibit, ignored for a SYNC-driven TPDO
+    cob = 0x180 + node.node_id
+    rig.nmt(0x01, node.node_id)
+    u32(client, 0x1000)  # the start was handled
+    mark = rig.log.mark()
+    for _ in range(3):
+        sync = rig.send(0x80)
+        assert rig.frame(cob, sync) is not None, "a SYNC inside the inhibit time got no TPDO"
+    assert len(rig.frames(cob, mark)) == 3
+
+
+def test_non_encoder_profile_keeps_its_6004h(rig, tmp_path):
+    """A profile that is not an encoder (capabilities.encoder: false) gets no computed position: its 6004h
+    holds what was written, whatever the shaft does (issue 9: the twin wrote encoder values into any 6004h)."""
+    text = MINIMAL.read_text(encoding="utf-8")
+    text = text.replace("capabilities: {cia406: true,", "capabilities: {encoder: false, cia406: false,", 1)
+    text = text.replace("encoder_class: C2, ", "", 1).replace("scaling: true, preset: true", "scaling: false", 1)
+    path = tmp_path / "not-an-encoder" / MINIMAL.name
+    path.parent.mkdir()
+    path.write_text(text, encoding="utf-8")
+    profile = load_profile(str(path)).profile
+    node, client = booted(rig, profile)
+    before = u32(client, 0x6004)
+    node.shaft.turn_by(0.3)
+    assert u32(client, 0x6004) == before

@@ -126,7 +126,9 @@ class SimulatedNode:
             self._built(fx.WritesNeedScalingBit, lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
             store_commands,
             self.emcy,
-            _EncoderBehaviour(self.encoder, self.nvm),
+            # the encoder function (position, speed, preset) only where the profile is an encoder: a drive or an
+            # I/O module keeps whatever its 6004h/6030h/6500h hold
+            _EncoderBehaviour(self.encoder, self.nvm) if self.profile.capabilities.encoder else None,
             self._built(fx.BitsForcedAtInit, lambda p: assemble(ForcedBits, faults)(p, self.store)),
             self.heartbeat,
             self._built(fx.NmtAutostartObject, lambda p: assemble(Autostart, faults)(p, self.read_int,

@@ -209,15 +209,26 @@ class TpdoEngine:
         return data[:8]
 
     def _transmit(self, config: TpdoConfig, inhibit: bool = True) -> None:
+        """Send now, or, for an event-driven TPDO inside its inhibit time, once that time is over (CiA 301
+        §7.5.2.35: the inhibit time applies to types 254/255 only, and delays a transmission, never drops it)."""
         if not self.running:
             return
         now = time.monotonic()
-        if inhibit and config.inhibit_100us and now - config.last_sent < config.inhibit_100us / 10000:
+        wait = config.inhibit_100us / 10000 - (now - config.last_sent)
+        if inhibit and config.inhibit_100us and config.transmission_type in (254, 255) and wait > 0:
+            if not config.delayed:
+                config.delayed = True
+                self._jobs.append(self._scheduler.call_later(wait, lambda: self._send_delayed(config)))
             return
         payload = self._payload(config)
         config.last_payload = payload
         config.last_sent = now
         self._send(config.cob_id, payload)
+
+
+    def _send_delayed(self, config: TpdoConfig) -> None:
+        config.delayed = False
+        self._transmit(config)
 
 
 @breaks(TpdoEngine, "sync_tpdo_every_sync")

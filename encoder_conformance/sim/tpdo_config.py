@@ -25,3 +25,4 @@ class TpdoConfig:
     sync_sent: int = 0
     last_payload: bytes | None = None
     last_sent: float = field(default=-1e9)
+    delayed: bool = False  # a transmission waits for the end of the inhibit time
