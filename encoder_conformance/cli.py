@@ -85,8 +85,12 @@ def _cmd_profile_validate(args: argparse.Namespace, extra: list[str]) -> int:
             status = 1
             continue
         profile = loaded.profile
+        open_todos = f", {len(profile.todo)} assumptions unconfirmed (todo:)" if profile.todo else ""
         print(f"{loaded.path}: ok ({profile.id}, {len(profile.iter_entries())} entries, "
-              f"{len(profile.quirks)} quirks, sha256 {loaded.sha256[:12]})")
+              f"{len(profile.quirks)} quirks, sha256 {loaded.sha256[:12]}{open_todos})")
+        if args.todo:
+            for number, todo in enumerate(profile.todo, 1):
+                print(f"  TODO {number}: {todo}")
     return status
 
 
@@ -112,12 +116,31 @@ def _cmd_profile_list(args: argparse.Namespace, extra: list[str]) -> int:
 def _cmd_profile_from_eds(args: argparse.Namespace, extra: list[str]) -> int:
     from .profile.eds import profile_draft_from_eds, write_profile_draft
 
-    draft, todos = profile_draft_from_eds(Path(args.eds), args.id)
-    out = Path(args.output or f"{draft['id']}.yaml")
-    write_profile_draft(draft, out)
-    print(f"wrote {out} ({len(draft.get('objects', {}))} objects); {len(todos)} things to check:")
-    for todo in todos:
-        print(f"  - {todo}")
+    eds = Path(args.eds)
+    if not eds.is_file():
+        print(f"from-eds: {eds}: no such file; give the path of the device's EDS", file=sys.stderr)
+        return RunExit.USAGE_ERROR
+    out = Path(args.output) if args.output else None
+    # without --id the id follows the output file's name: a profile's id must equal its file name
+    profile_id = args.id or (out.stem if out is not None else None)
+    try:
+        draft, todos = profile_draft_from_eds(eds, profile_id)
+    except (OSError, ValueError) as exc:
+        print(f"from-eds: {eds}: {exc}", file=sys.stderr)
+        return 1
+    out = out or Path(f"{draft['id']}.yaml")
+    if out.stem != draft["id"]:
+        print(f"from-eds: --id {draft['id']} and -o {out}: a profile's id must equal its file name; give one "
+              f"of them only, or make them agree", file=sys.stderr)
+        return RunExit.USAGE_ERROR
+    if out.exists() and not args.force:
+        print(f"from-eds: {out} exists; not overwritten (pass --force to replace it)", file=sys.stderr)
+        return RunExit.USAGE_ERROR
+    write_profile_draft(draft, out, todos)
+    print(f"wrote {out} ({len(draft.get('objects', {}))} objects); {len(todos)} assumptions to confirm against "
+          f"the manual (listed under todo:, and by `profile validate --todo`):")
+    for number, todo in enumerate(todos, 1):
+        print(f"  TODO {number}: {todo}")
     return 0
 
 
@@ -232,6 +255,8 @@ def build_parser() -> argparse.ArgumentParser:
     psub = profile.add_subparsers(dest="profile_command", required=True)
     validate = psub.add_parser("validate", help="check profile files and print every problem")
     validate.add_argument("files", nargs="+")
+    validate.add_argument("--todo", action="store_true",
+                          help="also list each profile's unconfirmed assumptions (todo:), numbered")
     validate.set_defaults(func=_cmd_profile_validate)
     listing = psub.add_parser("list", help="the profiles in device_profiles/")
     listing.set_defaults(func=_cmd_profile_list)
@@ -239,8 +264,9 @@ def build_parser() -> argparse.ArgumentParser:
     effects.set_defaults(func=_cmd_profile_effects)
     from_eds = psub.add_parser("from-eds", help="write a profile draft from a vendor EDS")
     from_eds.add_argument("eds")
-    from_eds.add_argument("--id", help="profile id (default from the EDS product name)")
-    from_eds.add_argument("-o", "--output")
+    from_eds.add_argument("--id", help="profile id (default: the output file's name, else the EDS file's name)")
+    from_eds.add_argument("-o", "--output", help="profile file to write (default: ID.yaml); its name is the id")
+    from_eds.add_argument("--force", action="store_true", help="replace an existing output file")
     from_eds.set_defaults(func=_cmd_profile_from_eds)
     to_eds = psub.add_parser("to-eds", help="export a profile as an EDS")
     to_eds.add_argument("profile")

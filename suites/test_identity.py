@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.checks import describe_value
+from encoder_conformance.profile import datatypes
 
 pytestmark = pytest.mark.spec("CiA 301 §7.5.2")
 
@@ -27,8 +28,9 @@ def test_device_type_matches_profile(dut, evidence):
 def test_device_name_matches_profile(dut):
     """1008h reads the manufacturer device name the profile declares."""
     expected = _expect(dut.profile.identity.device_name, "device name", "identity.device_name")
-    observed = dut.read(0x1008).decode("latin-1").rstrip("\x00")
-    assert observed == expected, f"1008h: expected {expected!r}, observed {observed!r}"
+    observed = dut.read(0x1008).rstrip(b"\x00")
+    wanted = datatypes.string_bytes("VISIBLE_STRING", expected)
+    assert observed == wanted, f"1008h: expected {expected!r} ({wanted.hex(' ')}), observed {observed!r}"
 
 
 @pytest.mark.spec("CiA 301 §7.5.2.23 (1018h sub 1 vendor-ID)")

@@ -92,10 +92,16 @@ def test_undeclared_subindex_aborts(dut, evidence):
 
 def _decode(entry, data: bytes):
     if entry.type == "VISIBLE_STRING":
-        return data.decode("latin-1").rstrip("\x00")
+        return data.rstrip(b"\x00")
     if entry.type in datatypes.STRING_TYPES:
         return data
     return int.from_bytes(data, "little", signed=datatypes.is_signed(entry.type))
+
+
+def _expected(entry, node_id: int):
+    """The default as the device sends it: bytes for strings (hex for OCTET_STRING), an int otherwise."""
+    value = resolve_node_id_expression(entry.default, node_id)
+    return datatypes.string_bytes(entry.type, value) if isinstance(value, str) else value
 
 
 def test_factory_default(dut, default_entry, factory_state, evidence):
@@ -106,7 +112,7 @@ def test_factory_default(dut, default_entry, factory_state, evidence):
     excluded = dut.profile.quirk_objects(fx.RestoreExcludes)
     if excluded is not None and index in excluded[1]:
         pytest.skip(f"not applicable: restore-defaults leaves {index:04X}h as it was (quirk {excluded[0]})")
-    expected = resolve_node_id_expression(entry.default, dut.node_id)
+    expected = _expected(entry, dut.node_id)
     observed = _decode(entry, _read_or_fail(dut, index, sub))
     assert observed == expected, (
         f"{index:04X}h.{sub:02X} {entry.name}: default {describe_value(expected)} ({entry.manual}), "

@@ -286,7 +286,7 @@ def test_more_oddities(tmp_path):
     assert sorted(objects[0x1018]["subs"]) == [0, 1]
     assert 0x1200 not in objects
     assert objects[0x2001]["type"] == "DOMAIN"
-    assert "data type 0x000C not supported" in notes
+    assert "data type 0x000C is not a CiA 301 basic type; read as DOMAIN" in notes
     assert objects[0x2002]["type"] == "REAL32"
     assert "default" not in objects[0x2002]
     assert "min" not in objects[0x2002]

@@ -8,6 +8,7 @@ wait raises BusLostError at once: a dead bus must not look like a silent device.
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections import deque
@@ -17,6 +18,8 @@ from dataclasses import dataclass
 import can
 
 from ..errors import BusLostError
+
+log = logging.getLogger(__name__)
 
 Predicate = Callable[[can.Message], bool]
 
@@ -55,13 +58,19 @@ class FrameLog(can.Listener):
 
     # can.Listener
     def on_message_received(self, msg: can.Message) -> None:
+        # listeners (the per-test trace writers) run under the lock, before the waiters wake: a test that
+        # has its answer finds it in its trace, and a writer removed at teardown is never called after
+        # (outside the lock, the receive thread wrote into a closed trace file, which ended the run as a
+        # "lost bus" on a loaded machine)
         with self._cond:
             self._seq += 1
             self._frames.append((self._seq, msg))
+            for listener in self._listeners:
+                try:
+                    listener.on_message_received(msg)
+                except Exception as exc:  # a trace that cannot be written is not a lost bus
+                    log.warning("frame listener %r failed: %s", listener, exc)
             self._cond.notify_all()
-            listeners = list(self._listeners)
-        for listener in listeners:
-            listener.on_message_received(msg)
 
     def record_sent(self, msg: can.Message) -> None:
         """Called by TracingBus for the tester's own frames."""

@@ -44,10 +44,19 @@ def _optional_u32(dut: DeviceUnderTest, index: int, sub: int, malformed: list[st
     return int.from_bytes(data, "little")
 
 
+def text_of(data: bytes) -> str:
+    """A VISIBLE_STRING as text: UTF-8 where it decodes as such (some devices hold it), else latin-1."""
+    data = data.rstrip(b"\x00")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
 def read_identity(dut: DeviceUnderTest) -> DeviceIdentity:
     """Everything the device says about itself; absent objects read as None."""
     try:
-        name = dut.read(0x1008, 0).decode("latin-1").rstrip("\x00")
+        name = text_of(dut.read(0x1008, 0))
     except SdoAbortedError:
         name = None
     malformed: list[str] = []

@@ -102,10 +102,17 @@ def record_identity(config: pytest.Config, identity: dict[str, str]) -> None:
             data[f"Device {key}"] = value
 
 
+def draft_banner(profile) -> str:  # noqa: ANN001 - DeviceProfile
+    """The line every report of a profile with open assumptions starts with."""
+    return (f"draft profile: {len(profile.todo)} assumptions unconfirmed (profile {profile.id}, todo:); verdicts "
+            "that rest on them may be wrong until they are checked against the manual")
+
+
 def header_lines(config: pytest.Config) -> list[str]:
     settings = settings_of(config)
     loaded = settings.loaded
     lines = [
+        *([draft_banner(loaded.profile)] if loaded.profile.todo else []),
         f"device profile: {loaded.profile.id} ({loaded.path}) sha256 {loaded.sha256[:16]}",
         f"bus: {settings.bus.describe()}",
         f"node-id: {settings.node_id} ({settings.node_id_source})",
@@ -158,6 +165,11 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
 def html_summary(prefix: list[str], session: pytest.Session, run_lines: list[tuple[str, bool]]) -> None:
     """Run outcome and device custody (alarms in red), the identity read, the documented deviations."""
     config = session.config
+    profile = settings_of(config).loaded.profile
+    if profile.todo:
+        items = "".join(f"<li>{html.escape(todo)}</li>" for todo in profile.todo)
+        prefix.append(f"<h2 style='color:#b60'>{html.escape(draft_banner(profile))}</h2>"
+                      f"<details><summary>the assumptions (todo: in the profile)</summary><ol>{items}</ol></details>")
     prefix.append(html_section(config))
     if run_lines:
         items = "".join(
@@ -187,6 +199,9 @@ def terminal_summary(terminalreporter, config: pytest.Config,  # noqa: ANN001 - 
                      run_lines: list[tuple[str, bool]]) -> None:
     if REPORT_DIR not in config.stash:
         return
+    profile = settings_of(config).loaded.profile
+    if profile.todo:
+        terminalreporter.write_sep("-", draft_banner(profile).split(";")[0], yellow=True)
     by_basis, warnings = terminal_lines(config)
     if by_basis:
         terminalreporter.write_sep("-", "verdicts by what they rest on (cia / manual / inferred)")

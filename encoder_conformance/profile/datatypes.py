@@ -97,3 +97,32 @@ def name_of_code(code: int) -> str:
         if value == code:
             return name
     raise ValueError(f"unknown CANopen data-type code 0x{code:04X}")
+
+
+#: string types whose profile (and EDS) default is written as hex bytes ("01 0A FF"), as CiA 306 and canopen
+HEX_STRING_TYPES = frozenset({"OCTET_STRING", "DOMAIN"})
+
+
+def parse_hex_bytes(text: str) -> bytes:
+    """'01 0A ff', '010AFF' or '0x010AFF' as bytes; raises ValueError naming the text."""
+    compact = "".join(text.split())
+    if compact.lower().startswith("0x"):
+        compact = compact[2:]
+    try:
+        return bytes.fromhex(compact)
+    except ValueError:
+        raise ValueError(f"{text!r} is not hex bytes (write OCTET_STRING/DOMAIN values as e.g. '01 0A FF')") from None
+
+
+def string_bytes(name: str, text: str) -> bytes:
+    """A string value as the device sends it: OCTET_STRING/DOMAIN from hex, UNICODE_STRING as UTF-16LE,
+    VISIBLE_STRING as latin-1 (UTF-8 where a character lies outside latin-1, as some EDS files hold)."""
+    canon = canonical_name(name)
+    if canon in HEX_STRING_TYPES:
+        return parse_hex_bytes(text)
+    if canon == "UNICODE_STRING":
+        return text.encode("utf-16-le")
+    try:
+        return text.encode("latin-1")
+    except UnicodeEncodeError:
+        return text.encode("utf-8")

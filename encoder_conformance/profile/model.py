@@ -140,6 +140,8 @@ class EntrySpec(StrictModel):
                 f"default {self.default!r} is a string but type {self.type} is numeric; "
                 "write a number or a '$NODEID+0x180' formula"
             )
+        if isinstance(self.default, str) and self.type in datatypes.HEX_STRING_TYPES:
+            datatypes.parse_hex_bytes(self.default)  # ValueError names the text and the expected form
         if limits and isinstance(self.default, int) and not limits[0] <= self.default <= limits[1]:
             raise ValueError(f"default {self.default} does not fit {self.type} ({limits[0]}..{limits[1]})")
         if self.min is not None and self.max is not None and self.min > self.max:
@@ -263,6 +265,7 @@ class Identity(StrictModel):
     revision: RevisionRange | None = None
     device_type: int | None = Field(description="1000h value; null if the manual does not give it")
     device_name: str | None = Field(default=None, description="1008h text, if the manual gives it")
+    order_code: str | None = Field(default=None, description="order code (EDS [DeviceInfo] OrderCode)")
     manual: str = Field(description="title, document number and edition of the source manual")
 
 
@@ -321,6 +324,10 @@ class Capabilities(StrictModel):
         default="inferred",
         description="what says the 18xxh sub 2 values outside tpdo_transmission_types are refused: 'manual' where "
         "the manual says so, 'inferred' (default) where it only lists the types it supports",
+    )
+    pdo_granularity: int | None = Field(
+        default=None, ge=0, le=64,
+        description="PDO mapping granularity in bits (EDS [DeviceInfo] Granularity; 0: the mapping cannot change)",
     )
     lss: list[LssService] = Field(default_factory=list)
     scaling: bool = False
@@ -386,6 +393,11 @@ class DeviceProfile(StrictModel):
     objects: dict[int, ObjectSpec] = Field(default_factory=dict)
     quirks: dict[str, Quirk] = Field(default_factory=dict)
     simulator: SimulatorSpec = SimulatorSpec()
+    todo: list[str] = Field(
+        default_factory=list,
+        description="assumptions not yet confirmed against the manual (e.g. a draft from an EDS); runs with the "
+        "profile say 'draft profile: N assumptions unconfirmed'; `profile validate --todo` lists them",
+    )
 
     @model_validator(mode="after")
     def _indices_in_range(self) -> DeviceProfile:

@@ -17,6 +17,7 @@ def initial_value(profile: DeviceProfile, index: int, sub: int, entry: EntrySpec
     per_unit = {
         (0x1018, 3): sim.revision_number,
         (0x1018, 4): sim.serial_number,
+        (0x650B, 0): sim.serial_number,  # CiA 406 serial number: the same as 1018h sub 4
         (0x1009, 0): sim.hardware_version,
         (0x100A, 0): sim.software_version,
     }

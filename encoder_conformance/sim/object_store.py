@@ -63,7 +63,7 @@ class ObjectStore:
         if isinstance(value, bytes):
             return value
         if isinstance(value, str):
-            return value.encode("latin-1")
+            return datatypes.string_bytes(self.entries[key].type, value)
         return self.variable(key).encode_raw(value)
 
     def decode(self, key: Key, data: bytes) -> int | str | bytes:

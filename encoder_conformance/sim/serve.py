@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import logging
 import os
 import signal
 import sys
@@ -30,6 +31,8 @@ def serve(
     # the receive/remote threads are busy; 0.5 ms keeps heartbeat jitter well below the CI
     # tolerance (reference/python-stack-measured.md §6: p99 4.9 ms -> 1.8 ms).
     sys.setswitchinterval(0.0005)
+    # python-can-remote reports a dropped client through logging only: into the simulator's log
+    logging.basicConfig(level=logging.WARNING, stream=sys.stderr, format="%(asctime)s %(name)s: %(message)s")
     host = SimulatorHost(channel=f"sim-{time.monotonic_ns()}")
     for i, name in enumerate(profiles):
         loaded = load_profile(name)

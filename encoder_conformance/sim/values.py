@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from ..profile import datatypes
 from .faults import breaks
 from .hooks import NodeHooks, Value
 from .nvm import Key
@@ -36,9 +37,9 @@ class ObjectValues:
         value = self.current(key, channel)
         if isinstance(value, bytes):
             return value
-        if isinstance(value, str):
-            return value.encode("latin-1")
         store = self._store
+        if isinstance(value, str):
+            return datatypes.string_bytes(store.entries[key].type, value)
         size = store.size(key)
         if isinstance(value, int) and size and not store.entries[key].type.startswith("REAL"):
             return (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")  # two's complement

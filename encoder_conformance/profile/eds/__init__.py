@@ -10,7 +10,8 @@ Export (``export``): a profile becomes an EDS through ``od_builder.build_object_
 canopen's exporter, so other CANopen tools can drive the simulated twin.
 """
 
-from .draft import profile_draft_from_eds, write_profile_draft
+from .draft import profile_draft_from_eds
+from .draft_yaml import write_profile_draft
 from .export import export_eds
 from .importer import EdsImport, objects_from_eds, read_eds
 from .numbers import normalise_node_id_formula, parse_number

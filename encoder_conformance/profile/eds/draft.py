@@ -7,8 +7,6 @@ import re
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .importer import EdsImport, read_eds
 from .numbers import _DYNAMIC_OBJECTS, _LSS_ASSUMED, _TIMING_PLACEHOLDERS, parse_number
 
@@ -37,23 +35,21 @@ def _info_number(info: dict[str, str], key: str) -> int | None:
 
 def _identity(result: EdsImport, todos: list[str]) -> dict[str, Any]:
     info, objects, source = result.device_info, result.objects, f"EDS {result.path.name}"
-    identity: dict[str, Any] = {
-        "vendor_name": info.get("VendorName") or "TODO vendor",
-        "product_name": info.get("ProductName") or "TODO product",
+    identity: dict[str, Any] = {  # as the EDS has them, also empty: a placeholder would reach to-eds
+        "vendor_name": info.get("VendorName", ""),
+        "product_name": info.get("ProductName", ""),
     }
-    for key, eds_key, sub in (("vendor_id", "VendorNumber", 1), ("product_code", "ProductNumber", 2)):
-        in_od, in_info = _object_default(objects, 0x1018, sub), _info_number(info, eds_key)
-        if isinstance(in_od, int) and in_info is not None and in_od != in_info:
-            todos.append(f"identity.{key}: 1018h sub {sub} default 0x{in_od:X} != {eds_key} 0x{in_info:X}")
-        value = in_od if isinstance(in_od, int) else in_info
-        identity[key] = value
-        if value is None:
-            todos.append(f"identity.{key}: neither 1018h sub {sub} nor [DeviceInfo] {eds_key} gives it")
-    revision = _object_default(objects, 0x1018, 3)
-    revision = revision if isinstance(revision, int) else _info_number(info, "RevisionNumber")
-    if revision:
-        identity["revision"] = {"min": revision, "max": revision}
-        todos.append("identity.revision: only the EDS revision is accepted; widen the range per the manual")
+    if info.get("OrderCode"):
+        identity["order_code"] = info["OrderCode"]
+    for key, eds_key, sub in (("vendor_id", "VendorNumber", 1), ("product_code", "ProductNumber", 2),
+                              ("revision", "RevisionNumber", 3)):
+        value = _identity_number(objects, info, key, eds_key, sub, todos)
+        if key == "revision":
+            if value is not None:
+                identity["revision"] = {"min": value, "max": value}
+                todos.append("identity.revision: only the EDS revision is accepted; widen the range per the manual")
+        else:
+            identity[key] = value
     device_type = _object_default(objects, 0x1000)
     identity["device_type"] = device_type if isinstance(device_type, int) else None
     if identity["device_type"] is None:
@@ -66,6 +62,34 @@ def _identity(result: EdsImport, todos: list[str]) -> dict[str, Any]:
         todos.append("identity: VendorName/ProductName missing in [DeviceInfo]")
     todos.append("identity.manual: cite the device manual (title, document number, edition)")
     return identity
+
+
+def _identity_number(objects: dict[int, dict[str, Any]], info: dict[str, str], key: str, eds_key: str, sub: int,
+                     todos: list[str]) -> int | None:
+    """1018h sub ``sub`` as the profile should expect it, and the object's default set to match (the twin
+    then reports it). None where 1018h has no such sub-index: the device cannot report it."""
+    entry = objects.get(0x1018, {}).get("subs", {}).get(sub)
+    in_info = _info_number(info, eds_key)
+    if entry is None:
+        if in_info:
+            todos.append(f"identity.{key}: [DeviceInfo] {eds_key} = 0x{in_info:X}, but 1018h has no sub {sub}, so the "
+                         "device cannot report it; not checked")
+        return None
+    in_od = entry.get("default")
+    in_od = in_od if isinstance(in_od, int) else None
+    if in_od and in_info is not None and in_od != in_info:
+        todos.append(f"identity.{key}: 1018h sub {sub} default 0x{in_od:X} != {eds_key} 0x{in_info:X}; the object's "
+                     "value is used")
+    value = in_od or in_info  # a 0 default in 1018h is an EDS placeholder where [DeviceInfo] gives the number
+    if value is None:
+        todos.append(f"identity.{key}: neither 1018h sub {sub} nor [DeviceInfo] {eds_key} gives it")
+        return None
+    if in_od != value:
+        todos.append(f"identity.{key}: 1018h sub {sub} has {'no' if in_od is None else 'a 0'} default; "
+                     f"[DeviceInfo] {eds_key} 0x{value:X} taken")
+    entry.pop("per_unit", None)
+    entry["default"] = value
+    return value
 
 
 def _names_matching(objects: dict[int, dict[str, Any]], pattern: str) -> bool:
@@ -130,17 +154,36 @@ def _cam(objects: dict[int, dict[str, Any]], todos: list[str]) -> dict[str, int]
     return {"channels": min(channels, 254), "cams_per_channel": min(cams, 8)}
 
 
+#: CiA device profiles by the number in 1000h bits 0..15
+CIA_PROFILES = {401: "generic I/O module", 402: "drive and motion control", 404: "measuring device",
+                406: "encoder", 410: "inclinometer", 0: "no standard device profile"}
+
+
+def _cia_profile(objects: dict[int, dict[str, Any]], device_type: int, todos: list[str]) -> int:
+    """The CiA device profile number 1000h names (bits 0..15); encoder capabilities are drafted for 406 only."""
+    number = device_type & 0xFFFF
+    in_range = any(0x6000 <= index <= 0x65FF for index in objects)
+    if number != 406 and in_range:
+        todos.append(f"capabilities.cia406: 1000h = 0x{device_type:08X} names CiA profile {number} "
+                     f"({CIA_PROFILES.get(number, 'other')}), not 406, although objects 6000h..65FFh exist: drafted "
+                     "as a non-encoder; if the device is an encoder, set cia406/encoder/multiturn from its manual")
+    if number == 406 and device_type >> 16 not in (1, 2):
+        todos.append(f"capabilities.multiturn: 1000h = 0x{device_type:08X} says neither single-turn (1) nor "
+                     "multi-turn (2) in bits 16..31; set it from the manual")
+    return number
+
+
 def _capabilities(result: EdsImport, todos: list[str]) -> dict[str, Any]:
     objects, info = result.objects, result.device_info
     device_type = _object_default(objects, 0x1000)
     device_type = device_type if isinstance(device_type, int) else 0
-    cia406 = any(0x6000 <= index <= 0x65FF for index in objects)
+    cia406 = _cia_profile(objects, device_type, todos) == 406
     lss = bool(_info_number(info, "LSS_Supported"))
     caps: dict[str, Any] = {
         "cia406": cia406,
-        "encoder": cia406 or (device_type & 0xFFFF) == 406,
+        "encoder": cia406,
         "encoder_class": None,
-        "multiturn": (device_type >> 16) == 2,
+        "multiturn": cia406 and (device_type >> 16) == 2,
         "heartbeat_producer": 0x1017 in objects,
         "heartbeat_consumer_entries": len(_sub_numbers(objects, 0x1016)),
         "node_guarding": 0x100C in objects,
@@ -150,30 +193,42 @@ def _capabilities(result: EdsImport, todos: list[str]) -> dict[str, Any]:
         "restore_subindices": _sub_numbers(objects, 0x1011),
         "tpdos": _count(objects, 0x1800, 0x19FF),
         "rpdos": _count(objects, 0x1400, 0x15FF),
+        "pdo_granularity": _info_number(info, "Granularity"),
         "lss": list(_LSS_ASSUMED) if lss else [],
-        "scaling": 0x6000 in objects and (0x6001 in objects or 0x6002 in objects),
-        "preset": 0x6003 in objects,
-        "speed": 0x6030 in objects,
-        "work_area": 0x6400 in objects,
-        "cam": _cam(objects, todos),
+        "scaling": cia406 and 0x6000 in objects and (0x6001 in objects or 0x6002 in objects),
+        "preset": cia406 and 0x6003 in objects,
+        "speed": cia406 and 0x6030 in objects,
+        "work_area": cia406 and 0x6400 in objects,
+        "cam": _cam(objects, todos) if cia406 else None,
     }
     _capability_todos(result, caps, device_type, todos)
     return caps
 
 
+def _tpdo_todos(objects: dict[int, dict[str, Any]], todos: list[str]) -> None:
+    """A TPDO without a transmission type or a mapping in the EDS: what makes it send is unknown."""
+    for comm in sorted(i for i in objects if 0x1800 <= i <= 0x19FF):
+        subs = objects[comm].get("subs", {})
+        missing = [what for what, known in (("transmission type (sub 2)", 2 in subs and "default" in subs[2]),
+                                            (f"mapping ({comm + 0x200:04X}h)", comm + 0x200 in objects)) if not known]
+        if missing:
+            todos.append(f"TPDO {comm:04X}h: the EDS gives no {' and no '.join(missing)}; the twin sends nothing "
+                         "on it and the suites that need a sending TPDO skip: complete it from the manual")
+
+
 def _capability_todos(result: EdsImport, caps: dict[str, Any], device_type: int, todos: list[str]) -> None:
     info = result.device_info
+    _tpdo_todos(result.objects, todos)
     for key, cap in (("NrOfTXPDO", "tpdos"), ("NrOfRXPDO", "rpdos")):
         declared = _info_number(info, key)
         if declared is not None and declared != caps[cap]:
             todos.append(f"capabilities.{cap}: {caps[cap]} objects in the EDS but {key}={declared}")
-    if caps["cia406"] and device_type >> 16 not in (1, 2):
-        todos.append(f"capabilities.multiturn: 1000h = 0x{device_type:08X} is not 0x0001xxxx/0x0002xxxx")
     if caps["lss"]:
         todos.append("capabilities.lss: LSS_Supported=1 only says 'LSS'; the service list is a minimal guess")
         if _sub_numbers(result.objects, 0x1018) != [1, 2, 3, 4]:
             todos.append("capabilities.lss: LSS needs 1018h sub 1..4, the EDS does not list all four")
-    todos.append("capabilities.encoder_class: C1/C2/C3 is not in the EDS; set it from the manual")
+    if caps["cia406"]:
+        todos.append("capabilities.encoder_class: C1/C2/C3 is not in the EDS; set it from the manual")
     todos.append("capabilities: segmented/block SDO and tpdo_transmission_types are CiA defaults; check")
 
 
@@ -186,10 +241,21 @@ def _mark_run_time_values(objects: dict[int, dict[str, Any]], todos: list[str]) 
         for entry in entries:
             _flag(entry, "dynamic", "value changes at run time")
         marked.append(f"{index:04X}h")
+    history = objects.get(0x1003, {}).get("subs", {})
+    if history:  # CiA 301 §7.5.2.4: sub 0 counts the errors (rw, writing 0 clears them), subs 1.. hold them
+        count = history.get(0)
+        if count is not None:
+            count.update(name="Number of errors", access="rw")
+        for entry in history.values():
+            _flag(entry, "dynamic", "the error history changes at run time")
+        marked.append("1003h (error history: sub 0 the count, rw)")
     serial = objects.get(0x1018, {}).get("subs", {}).get(4)
     if serial is not None:
         _flag(serial, "per_unit", "serial number differs per unit")
         marked.append("1018h sub 4 (per_unit)")
+    if 0x650B in objects and "subs" not in objects[0x650B]:
+        _flag(objects[0x650B], "per_unit", "serial number differs per unit")
+        marked.append("650Bh (per_unit)")
     if marked:
         todos.append(f"objects: marked dynamic/per_unit without a default check: {', '.join(marked)}")
 
@@ -204,18 +270,47 @@ def _flag(entry: dict[str, Any], flag: str, why: str) -> None:
         entry["manual"] = manual
 
 
+#: 1010h sub-index -> (persisted_by label, the object range CiA 301 §7.5.2.13 gives that sub-index)
+STORE_GROUP_RANGES = {2: ("store_comm", range(0x1000, 0x2000)), 3: ("store_app", range(0x6000, 0xA000)),
+                      4: ("store_manufacturer", range(0x2000, 0x6000))}
+NOT_STORED = {0x1010, 0x1011, 0x1003, 0x1F51}  # commands, the error history, program control
+
+
+def _draft_persistence(objects: dict[int, dict[str, Any]], todos: list[str]) -> None:
+    """persisted_by for the writable values with a default, from the sub-indices 1010h offers (CiA 301:
+    1 all, 2 communication 1000h..1FFFh, 3 application 6000h..9FFFh, 4 manufacturer 2000h..5FFFh)."""
+    subs = set(_sub_numbers(objects, 0x1010))
+    if not subs:
+        return
+    labelled = 0
+    for index, obj in objects.items():
+        if index in NOT_STORED or index in _DYNAMIC_OBJECTS:
+            continue
+        entries = [e for sub, e in obj["subs"].items() if sub != 0] if "subs" in obj else [obj]
+        group = next((label for sub, (label, span) in STORE_GROUP_RANGES.items() if sub in subs and index in span),
+                     "store_all" if 1 in subs else None)
+        for entry in entries:
+            if group and entry.get("access") in ("rw", "rwr", "rww") and "default" in entry:
+                entry["persisted_by"] = group
+                labelled += 1
+    if labelled:
+        todos.append(f"objects.persisted_by: {labelled} writable values labelled from 1010h sub {sorted(subs)} by "
+                     "CiA 301's groups; check which values the device really stores (the manual's storage table)")
+
+
 def profile_draft_from_eds(path: Path, profile_id: str | None = None) -> tuple[dict[str, Any], list[str]]:
     """A complete profile draft from an EDS plus TODO notes for what the EDS does not say."""
     result = read_eds(Path(path))
     todos: list[str] = []
     objects = result.objects
     _mark_run_time_values(objects, todos)
+    _draft_persistence(objects, todos)
     identity = _identity(result, todos)
     capabilities = _capabilities(result, todos)
     draft: dict[str, Any] = {
         "schema_version": 1,
         "id": profile_id or _slug(result.path.stem),
-        "title": f"{identity['vendor_name']} {identity['product_name']} (draft from {result.path.name})",
+        "title": f"{identity['vendor_name']} {identity['product_name']}".strip() + f" (draft from {result.path.name})",
         "identity": identity,
         "bus": _bus(result, bool(capabilities["lss"]), todos),
         "capabilities": capabilities,
@@ -225,81 +320,6 @@ def profile_draft_from_eds(path: Path, profile_id: str | None = None) -> tuple[d
     todos.append("timing: CiA-neutral placeholders (boot-up 1000 ms, SDO 100 ms); take them from the manual")
     todos.append("objects: manual references point at the EDS; cite the manual's tables instead")
     todos.extend(f"EDS repaired: {fix}" for fix in result.fixes)
-    todos.extend(f"EDS value dropped: {note}" for note in result.notes)
+    todos.extend(f"EDS: {note}" for note in result.notes)
+    draft["todo"] = [" ".join(todo.split()) for todo in todos]
     return draft, todos
-
-
-# --------------------------------------------------------------------------- YAML output
-
-
-class _HexInt(int):
-    """An int written as 0x... in YAML."""
-
-
-class _FlowDict(dict):
-    """A mapping written in flow style ({a: 1, b: 2})."""
-
-
-class _DraftDumper(yaml.SafeDumper):
-    """SafeDumper without anchors/aliases."""
-
-    def ignore_aliases(self, data: Any) -> bool:
-        return True
-
-
-_DraftDumper.add_representer(
-    _HexInt,
-    lambda dumper, value: dumper.represent_scalar(
-        "tag:yaml.org,2002:int", f"0x{int(value):08X}" if value > 0xFFFF else f"0x{int(value):X}"
-    ),
-)
-_DraftDumper.add_representer(
-    _FlowDict, lambda dumper, value: dumper.represent_mapping("tag:yaml.org,2002:map", value, flow_style=True)
-)
-
-
-def _wants_hex(index: int, key: str, value: object) -> bool:
-    """Identity values, COB-IDs, mappings and other U32 communication values are written in hex."""
-    if key not in ("default", "min", "max") or type(value) is not int or value < 0:
-        return False
-    return index in (0x1000, 0x1018) or value >= 0x100
-
-
-def _hex_entry(index: int, entry: dict[str, Any]) -> dict[str, Any]:
-    if index >= 0x2000 or entry.get("type") not in ("U32", "UNSIGNED32"):
-        return dict(entry)
-    return {key: _HexInt(value) if _wants_hex(index, key, value) else value for key, value in entry.items()}
-
-
-def _yaml_ready(draft: dict[str, Any]) -> dict[str, Any]:
-    data = dict(draft)
-    identity = dict(data.get("identity", {}))
-    for key in ("vendor_id", "product_code", "device_type"):
-        if isinstance(identity.get(key), int):
-            identity[key] = _HexInt(identity[key])
-    if isinstance(identity.get("revision"), dict):
-        identity["revision"] = _FlowDict({k: _HexInt(v) for k, v in identity["revision"].items()})
-    data["identity"] = identity
-    objects: dict[Any, Any] = {}
-    for index, obj in sorted(data.get("objects", {}).items()):
-        obj = _hex_entry(index, obj)
-        if "subs" in obj:
-            obj["subs"] = {sub: _FlowDict(_hex_entry(index, e)) for sub, e in sorted(obj["subs"].items())}
-        objects[_HexInt(index)] = obj
-    data["objects"] = objects
-    return data
-
-
-def write_profile_draft(draft: dict[str, Any], out: Path, todos: list[str] | None = None) -> None:
-    """Write ``draft`` as YAML, hex indices/ids/COB-IDs, with the TODO notes as a header comment."""
-    header = [
-        f"# Profile draft {draft.get('id', '')!r} generated from an EDS by encoder_conformance.profile.eds.",
-        "# Check every TODO against the device manual, then delete this header.",
-    ]
-    if todos:
-        header.append("# TODO:")
-        header.extend(f"#   - {' '.join(todo.split())}" for todo in todos)
-    body = yaml.dump(_yaml_ready(draft), Dumper=_DraftDumper, sort_keys=False, allow_unicode=True, width=200)
-    Path(out).write_text("\n".join(header) + "\n\n" + body, encoding="utf-8")
-
-

@@ -61,6 +61,8 @@ def export_eds(profile: DeviceProfile, path: Path, node_id: int | None = None) -
     _limits_from_allowed(profile, od)
     info = od.device_information
     info.LSS_supported = bool(profile.capabilities.lss)
+    info.order_code = profile.identity.order_code
+    info.granularity = profile.capabilities.pdo_granularity
     revision = profile.identity.revision
     if revision is not None and revision.min == revision.max:
         info.revision_number = revision.min

@@ -19,6 +19,10 @@ from .repair import clean_eds
 
 logger = logging.getLogger(__name__)
 
+#: device type and error register: mandatory in every edition of DS 301 / CiA 301 (1018h became mandatory
+#: later, and legacy devices such as the POSITAL AWC 58 lack it)
+MANDATORY_OBJECTS = (0x1000, 0x1001)
+
 
 # --------------------------------------------------------------------------- import
 
@@ -47,19 +51,35 @@ def _import_cleaned(cleaned: CleanedEds) -> canopen.ObjectDictionary:
         clean_path = Path(tmp) / "cleaned.eds"
         clean_path.write_text(cleaned.text, encoding="utf-8")
         with clean_path.open(encoding="utf-8") as fp:
+            canopen_eds_log = logging.getLogger("canopen.objectdictionary.eds")
+            level = canopen_eds_log.level
+            canopen_eds_log.setLevel(logging.ERROR)  # its warnings (unknown data types) become our notes
             try:
                 return canopen.import_od(fp)
             except Exception as exc:  # canopen raises configparser/KeyError/... on what we missed
                 raise ValueError(f"canopen cannot read the cleaned EDS: {type(exc).__name__}: {exc}") from exc
+            finally:
+                canopen_eds_log.setLevel(level)
 
 
 def read_eds(path: Path) -> EdsImport:
     """Clean and import ``path``; raises OSError or ValueError."""
     path = Path(path)
-    cleaned = clean_eds(path.read_bytes())
+    data = path.read_bytes()
+    if not data.strip():
+        raise ValueError("the file is empty, not an EDS")
+    if b"\x00" in data[:4096]:
+        raise ValueError("the file holds binary data (NUL bytes), not an EDS (a text file in INI format, CiA 306)")
+    cleaned = clean_eds(data)
     od = _import_cleaned(cleaned)
     notes: list[str] = []
     objects = _objects_from_od(od, cleaned, path.name, notes)
+    missing = [f"{index:04X}h" for index in MANDATORY_OBJECTS if index not in objects]
+    if missing:
+        listed = "a [MandatoryObjects] section" if "MandatoryObjects" in cleaned.sections else "no [MandatoryObjects]"
+        raise ValueError(f"not a usable EDS: it lacks the objects every CANopen device has ({', '.join(missing)}: "
+                         f"CiA 301 mandatory objects, CiA 306 [MandatoryObjects]); the file has {listed} and "
+                         f"{len(objects)} objects")
     return EdsImport(path, od, cleaned, objects, notes)
 
 
@@ -112,14 +132,17 @@ def _sub_entry(
 def _entry(var: ODVariable, cleaned: CleanedEds, notes: list[str]) -> dict[str, Any]:
     """type/access/default/min/max/pdo_mappable of one canopen variable."""
     where = f"0x{var.index:04X}.{var.subindex} {var.name!r}"
+    section = cleaned.sections.get(_section_of(var), {})
+    declared = parse_number(section.get("DataType", ""))  # canopen turns an unknown type into DOMAIN silently
+    unknown = var.data_type if _type_name(var.data_type) is None else declared
     type_name = _type_name(var.data_type)
     entry: dict[str, Any] = {}
-    if type_name is None:
-        notes.append(f"{where}: data type 0x{var.data_type:04X} not supported by the schema; read as DOMAIN")
+    if unknown is not None and _type_name(unknown) is None:
+        notes.append(f"{where}: data type 0x{unknown:04X} is not a CiA 301 basic type; read as DOMAIN (bytes "
+                     "as found): set the real type")
         type_name = "DOMAIN"
     entry["type"] = type_name
     entry["access"] = _ACCESS_ALIASES.get((var.access_type or "").lower(), "ro")
-    section = cleaned.sections.get(_section_of(var), {})
     default = _convert_value(getattr(var, "default_raw", None), type_name, where, "default", notes)
     if default is not None:
         entry["default"] = default
@@ -144,6 +167,21 @@ def _section_of(var: ODVariable) -> str:
     return f"{var.index:04X}"
 
 
+def _hex_default(raw: str, where: str, what: str, notes: list[str]) -> str | None:
+    """An OCTET_STRING/DOMAIN default as hex bytes ('01 0A'): hex text as CiA 306 writes it, or a number
+    some EDS files write instead (one byte per two hex digits); None (dropped, noted) otherwise."""
+    try:
+        data = datatypes.parse_hex_bytes(raw)
+    except ValueError:
+        number = parse_number(raw)
+        if number is None or number < 0:
+            notes.append(f"{where}: {what} {raw!r} is neither hex bytes nor a number; dropped")
+            return None
+        data = number.to_bytes(max(1, (number.bit_length() + 7) // 8), "big")
+        notes.append(f"{where}: {what} {raw!r} read as the bytes {data.hex(' ').upper()}")
+    return data.hex(" ").upper()
+
+
 def _convert_value(
     raw: str | None, type_name: str, where: str, what: str, notes: list[str], is_default: bool = True
 ) -> int | str | None:
@@ -156,6 +194,8 @@ def _convert_value(
         return None
     raw = str(raw).strip()
     canonical = datatypes.canonical_name(type_name)
+    if canonical in datatypes.HEX_STRING_TYPES:
+        return _hex_default(raw, where, what, notes) if is_default else None
     if canonical in datatypes.STRING_TYPES:
         return raw if is_default else None
     if is_default and is_node_id_expression(raw):

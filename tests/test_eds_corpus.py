@@ -1,0 +1,78 @@
+"""Profiles drafted from EDS files nobody here wrote are trustworthy (issue 9).
+
+For every EDS under tests/data/eds (public vendor files in vendors/, with their sources and licences in
+vendors/SOURCES.md, and our own files that each show an oddity): `profile from-eds` gives a draft that
+validates; the draft exports back to an EDS with every object's type, access and default; and the
+simulated twin of the draft passes the conformance suites with no failure.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+from encoder_conformance.profile import datatypes
+from encoder_conformance.profile.eds import export_eds, objects_from_eds, profile_draft_from_eds, write_profile_draft
+from encoder_conformance.profile.loader import load_profile
+from tests.test_twins import PARALLEL_RUNS, run_suite
+
+EDS_DIR = Path(__file__).parent / "data" / "eds"
+CORPUS = sorted([*EDS_DIR.glob("*.eds"), *(EDS_DIR / "vendors").glob("*.eds")])
+IDS = [path.stem for path in CORPUS]
+
+
+def _draft_file(eds: Path, folder: Path) -> Path:
+    draft, todos = profile_draft_from_eds(eds, eds.stem.lower())
+    out = folder / f"{draft['id']}.yaml"
+    write_profile_draft(draft, out, todos)
+    return out
+
+
+def test_corpus_has_a_dozen_vendor_files_of_several_classes():
+    vendors = list((EDS_DIR / "vendors").glob("*.eds"))
+    assert len(vendors) >= 12
+    listed = (EDS_DIR / "vendors" / "SOURCES.md").read_text(encoding="utf-8")
+    assert all(path.name in listed for path in vendors), "every vendor file names its source and licence"
+
+
+@pytest.mark.parametrize("eds", CORPUS, ids=IDS)
+def test_draft_validates_and_round_trips_through_to_eds(eds: Path, tmp_path: Path):
+    profile = load_profile(str(_draft_file(eds, tmp_path))).profile
+    assert profile.todo, "a draft lists what the EDS cannot tell as todo:"
+    exported = export_eds(profile, tmp_path / f"{profile.id}-export.eds")
+    back = objects_from_eds(exported)
+    problems = []
+    for index, sub, _, entry in profile.iter_entries():
+        obj = back.get(index)
+        again = None if obj is None else (obj["subs"].get(sub) if "subs" in obj else obj if sub == 0 else None)
+        if again is None:
+            problems.append(f"{index:04X}h.{sub:02X} missing after to-eds")
+            continue
+        if datatypes.canonical_name(again["type"]) != datatypes.canonical_name(entry.type):
+            problems.append(f"{index:04X}h.{sub:02X} type {entry.type} -> {again['type']}")
+        if again["access"] != entry.access:
+            problems.append(f"{index:04X}h.{sub:02X} access {entry.access} -> {again['access']}")
+        if again.get("default") != entry.default:
+            problems.append(f"{index:04X}h.{sub:02X} default {entry.default!r} -> {again.get('default')!r}")
+    assert not problems, f"{eds.name}: to-eds lost {len(problems)} fact(s): {problems[:10]}"
+
+
+@pytest.fixture(scope="module")
+def twin_runs(tmp_path_factory):
+    """The suites against the twin of each draft (a few at a time)."""
+    def one(eds: Path):
+        folder = tmp_path_factory.mktemp(eds.stem)
+        profile = _draft_file(eds, folder)
+        return eds.stem, run_suite(folder, "--device-profile", str(profile))[0]
+
+    with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
+        return dict(pool.map(one, CORPUS))
+
+
+@pytest.mark.parametrize("name", IDS)
+def test_twin_of_the_draft_passes_the_suites(name: str, twin_runs):
+    completed = twin_runs[name]
+    assert completed.returncode == 0, f"{name}: the twin of its own draft fails:\n{completed.stdout[-3000:]}"
+    assert "draft profile:" in completed.stdout, "a run with a draft profile says so"
