@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from .errors import BusSetupError, ProfileError
-from .exit_codes import RunExit
+from .exit_codes import RunExit, interrupted_by
 from .paths import DEFAULT_PROFILE, SUITES_DIR
 
 
@@ -290,12 +290,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from .plugin.interrupt import EARLY_SIGNALS, catch_early
+
+    catch_early()  # a Ctrl-C during start-up must end the run, also where the interpreter drops the exception
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)
     if extra and args.command != "run":
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     try:
-        return int(args.func(args, extra))
+        status = int(args.func(args, extra))
+        return RunExit.INTERRUPTED if EARLY_SIGNALS and status == RunExit.PASSED else status
     except ProfileError as exc:
         print(exc, file=sys.stderr)
         return RunExit.USAGE_ERROR
@@ -305,7 +309,7 @@ def main(argv: list[str] | None = None) -> int:
         # a plugin can make it end "killed by SIGINT" (-2) after a normal return (seen at ~0.9 s into a run)
         sys.stdout.flush()
         sys.stderr.flush()
-        os._exit(RunExit.INTERRUPTED)
+        os._exit(interrupted_by(EARLY_SIGNALS[-1]) if EARLY_SIGNALS else RunExit.INTERRUPTED)
 
 
 if __name__ == "__main__":
