@@ -18,7 +18,11 @@ import pytest
 from encoder_conformance.cia305 import MASTER_COB_ID, SLAVE_COB_ID, UNCONFIGURED_NODE_ID, LssState
 from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.dut.lss_master import LssAddress, LssMaster
+from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.sim.lss_slave import LssSlave
+from tests import sim_rig
+
+rig = sim_rig.rig  # the shared simulator fixture
 
 ALL_SERVICES = frozenset({"switch_global", "switch_selective", "configure_node_id", "configure_bit_timing",
                           "activate_bit_timing", "store_configuration", "inquire_identity", "inquire_node_id",
@@ -127,3 +131,20 @@ def test_identify_by_ranges_and_non_configured(lss_bus):
 def test_configuration_services_need_configuration_state(lss_bus):
     assert lss_bus.master.configure_node_id(5) is None  # waiting state: no answer
     assert lss_bus.master.inquire("serial") is None
+
+
+@pytest.fixture
+def wdga_twin(rig):
+    node, client = rig.boot(load_profile("wachendorff-wdga-mt").profile)
+    return rig, node, client
+
+
+def test_wdga_twin_lss_selective_and_inquiry(wdga_twin):
+    rig, node, client = wdga_twin
+    master = LssMaster(lambda cob, data: rig.network.send_message(cob, data), rig.log, 0.2)
+    identity = LssAddress(*(int.from_bytes(client.sdo.upload(0x1018, sub), "little") for sub in range(1, 5)))
+    assert master.switch_selective(identity)
+    assert master.inquire_address() == identity
+    assert master.inquire_node_id() == node.node_id
+    master.switch_global(LssState.WAITING)
+    assert master.inquire_node_id() is None  # waiting state: inquiry is not answered

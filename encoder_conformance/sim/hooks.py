@@ -58,6 +58,8 @@ class NodeHooks:
     sources: list[ValueSource] = field(default_factory=list)
     sync: list[Callable[[], None]] = field(default_factory=list)
     remote_frame: list[Callable[[int], None]] = field(default_factory=list)
+    #: LSS master frames (7E5h), whatever the NMT state
+    lss: list[Callable[[bytes], None]] = field(default_factory=list)
 
     def on_written(self, reaction: Reaction, indices: Iterable[int] | None = None) -> None:
         """``reaction`` runs after a write to one of ``indices`` (None: any object) was stored."""

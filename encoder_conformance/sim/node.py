@@ -18,6 +18,8 @@ from typing import Protocol, TypeVar
 
 import can
 
+from ..cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
+from ..cia305 import SLAVE_COB_ID as LSS_SLAVE_COB_ID
 from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
 from ..profile.od_builder import initial_value
@@ -30,6 +32,7 @@ from .forced_bits import ForcedBits
 from .guarding import GuardingHeartbeatExclusion
 from .heartbeat import HeartbeatProducer
 from .hooks import NodeHooks
+from .lss_slave import LssSlave
 from .nmt import NmtState, sync_allowed
 from .nmt_slave import NmtSlave
 from .nvm import Key, NonVolatileMemory
@@ -136,8 +139,21 @@ class SimulatedNode:
             self.tpdo,
             self._built(fx.StoreObjectReadsBack, _ReadsBack),
             self.sdo_channel,
+            self._lss_slave(),
         ]
         return [b for b in optional if b is not None]
+
+    def _lss_slave(self) -> _LssBehaviour | None:
+        """The LSS slave, where the profile declares LSS services (capabilities.lss)."""
+        services = frozenset(self.profile.capabilities.lss)
+        if not services:
+            return None
+        def address() -> tuple[int, int, int, int]:  # 1018h as the device shows it (identity faults included)
+            parts = [self.current_value((0x1018, sub)) if self.store.has((0x1018, sub)) else 0 for sub in range(1, 5)]
+            return tuple(p if isinstance(p, int) else 0 for p in parts)  # type: ignore[return-value]
+
+        slave = LssSlave(services, address, lambda: self.node_id, lambda data: self._send(LSS_SLAVE_COB_ID, data))
+        return _LssBehaviour(slave)
 
     # -- helpers -------------------------------------------------------------------------
     def _built(self, effect: type[P], build: Callable[[P], T]) -> T | None:
@@ -212,6 +228,9 @@ class SimulatedNode:
             can_id = msg.arbitration_id
             if can_id == 0 and not msg.is_extended_id:
                 self.nmt.on_command(bytes(msg.data))
+            elif can_id == LSS_MASTER_COB_ID and not msg.is_extended_id and not msg.is_remote_frame:
+                for listener in self.hooks.lss:
+                    listener(bytes(msg.data))
             elif can_id == 0x600 + self.node_id and not msg.is_remote_frame:
                 self.sdo_channel.on_request(bytes(msg.data))
             elif self._is_sync(msg) and sync_allowed(self.state):
@@ -265,6 +284,16 @@ class _EncoderBehaviour:
         hooks.before_set.append(self._encoder.on_write)
         hooks.reload.append(lambda event: self._encoder.reload(self._nvm) if event.everything else None)
         hooks.powered_off.append(self._encoder.thaw)
+
+
+class _LssBehaviour:
+    """Registers the LSS slave for the LSS master's frames."""
+
+    def __init__(self, slave: LssSlave) -> None:
+        self.slave = slave
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.lss.append(self.slave.on_frame)
 
 
 class _ReadsBack:
