@@ -83,6 +83,10 @@ class InterruptGuard:
                 os.close(self._stderr)
             self._stderr = None
 
+    def since_interrupt(self) -> float | None:
+        """Seconds since the first signal (None without one)."""
+        return None if self.at is None else round(time.monotonic() - self.at, 3)
+
     def remaining(self) -> float:
         """Seconds left of the restore budget since the first signal (inf without one)."""
         if self.at is None:

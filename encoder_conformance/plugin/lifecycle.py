@@ -188,6 +188,9 @@ def _write_outcome(session: pytest.Session, state: RunState) -> None:
         "tests_collected": state.collected,
         "tests_reported": len(state.reported),
         "device_restored": None if record is None else record.ok,
+        # the run's own clock from the interrupt to here (device given back, verdict decided); what a
+        # caller measures adds the process's exit and its own wake-up on a loaded machine
+        "stopped_after_s": state.guard.since_interrupt(),
     }
     (folder / OUTCOME_FILE).write_text(json.dumps(outcome, indent=1), encoding="utf-8")
 
