@@ -28,6 +28,8 @@ def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
     for flag in ("allow_destructive", "power_manual", "delivery_state"):
         if getattr(args, flag):
             argv.append(f"--{flag.replace('_', '-')}")
+    if args.strict:
+        argv.append("--strict-inferred")  # pytest's own --strict is about markers and config
     for fault in args.sim_fault:
         argv += ["--sim-fault", fault]
     status = int(pytest.main(argv + extra))
@@ -223,6 +225,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--delivery-state", action="store_true",
                      help="the device is fresh from the factory: check its factory defaults as found")
     run.add_argument("--sim-fault", action="append", default=[], help="simulator fault (see 'faults')")
+    run.add_argument("--strict", action="store_true",
+                     help="fail a device also on rules we only inferred (pytest option --strict-inferred); by "
+                          "default they give warnings. SDO abort codes: --abort-codes exact|family (to pytest)")
     run.set_defaults(func=_cmd_run)
 
     restore = sub.add_parser("restore", help="put a device back as a run's snapshot found it (after a crash)")

@@ -80,3 +80,16 @@ def test_abort_code_family_mode(tmp_path):
     report = (tmp_path / "family" / "report" / "report.html").read_text(encoding="utf-8")
     assert "family (--abort-codes)" in report  # the mode is in the report's environment table
     assert "accepted by family" in report  # and the test's evidence says what was accepted
+
+
+def test_run_strict_maps_to_strict_inferred(monkeypatch):
+    """`encoder-conformance run --strict` asks pytest for --strict-inferred (pytest's own --strict is another thing)."""
+    from encoder_conformance import cli
+    from encoder_conformance.plugin import interrupt
+
+    seen: list[list[str]] = []
+    monkeypatch.setattr(interrupt, "catch_early", lambda: None)  # this process keeps its own signal handling
+    monkeypatch.setattr(pytest, "main", lambda argv: seen.append(argv) or 0)
+    assert cli.main(["run", "--profile", WDGA, "--strict"]) == 0
+    assert "--strict-inferred" in seen[0]
+    assert "--strict" not in seen[0]
