@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.checks import check_periodic, documented_quirk
+from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
@@ -61,16 +61,7 @@ def test_sync_tpdo_sent_on_every_nth_sync(dut, settings_journal, back_to_preoper
 
 def test_event_timer_period_within_tolerance(dut, periodic_capture, evidence):
     """Transmission type 255 with event timer T: the TPDO comes every T ms (>= 20 intervals, profile tolerance)."""
-    stream = periodic_capture.event_timer
-    stream.replay(evidence)
-    if periodic_capture.heartbeat.timestamps:
-        evidence.note(f"captured together with the heartbeat during {periodic_capture.captured_in} (its bus trace)")
-    assert len(stream.timestamps) == stream.wanted, (
-        f"only {len(stream.timestamps)} of {stream.wanted} TPDOs on {stream.cob_id:03X}h with event timer "
-        f"{stream.period_ms} ms"
-    )
-    check_periodic(stream.timestamps, stream.period_ms, dut.profile.timing.heartbeat_tolerance, "event timer",
-                   evidence, periodic_capture.host)
+    periodic_capture.judge(periodic_capture.event_timer, evidence, dut.profile.timing.heartbeat_tolerance)
 
 
 def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_to_preoperational, shaft, evidence):

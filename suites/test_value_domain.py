@@ -104,6 +104,7 @@ def test_write_outside_declared_domain_is_refused(dut, value_domain_entry, setti
         )
     label = {"value_high": "above the maximum", "value_low": "below the minimum", "gap": "between allowed values"}
 
+    basis_of = {probe: refusal_basis(dut.profile, index, sub, probe) for probe in probes}  # what says "refuse"
     original = _read(dut, index, sub) if entry.readable else None
     problems: list[str] = []
     refused = 0
@@ -119,7 +120,7 @@ def test_write_outside_declared_domain_is_refused(dut, value_domain_entry, setti
             break
         evidence.note(f"{describe_value(probe)} ({label[kind]}): {response.describe()}")
         # a value accepted against a domain that only our inference draws is a warning, not a failure
-        basis, rests_on = refusal_basis(dut.profile, index, sub, probe)
+        basis, rests_on = basis_of[probe]
         found = problems if response.is_abort or basis != "inferred" else None
         if abort_accepted(dut, response, wanted[kind]):
             refused += 1
@@ -138,10 +139,10 @@ def test_write_outside_declared_domain_is_refused(dut, value_domain_entry, setti
             ), rests_on)
         if not response.is_abort or after != original:
             _put_back(dut, settings_journal, index, sub, original)
-    bases = {refusal_basis(dut.profile, index, sub, probe)[0] for probe in probes}
+    bases = {basis for basis, _ in basis_of.values()}
     firm = [b for b in ("manual", "cia") if b in bases]
     evidence.rests_on(firm[0] if firm else "inferred", entry.manual or where)
-    required = sum(1 for probe in probes if refusal_basis(dut.profile, index, sub, probe)[0] != "inferred")
+    required = sum(1 for basis, _ in basis_of.values() if basis != "inferred")
     evidence.measure("probe values refused", refused, "", low=required, high=len(probes))
     if required < len(probes):
         evidence.note(f"{len(probes) - required} of the probe values are refused only by our inference "

@@ -79,17 +79,15 @@ class LssMaster:
 
     def answer(self, command: int, mark: Mark, timeout: float | None = None) -> can.Message | None:
         """The first slave frame with ``command`` after ``mark``, within the response window."""
-        return self.frames.wait_for(
-            lambda m: m.is_rx and m.arbitration_id == SLAVE_COB_ID and bool(m.data) and m.data[0] == command,
-            self.response_s if timeout is None else timeout, mark,
-        )
+        return self.frames.wait_for(self._is_answer(command), self.response_s if timeout is None else timeout, mark)
+
+    @staticmethod
+    def _is_answer(command: int) -> Callable[[can.Message], bool]:
+        return lambda m: m.is_rx and m.arbitration_id == SLAVE_COB_ID and bool(m.data) and m.data[0] == command
 
     def answers(self, command: int, mark: Mark, window: float | None = None) -> list[can.Message]:
         """Every slave frame with ``command`` in the response window after ``mark`` (waits the whole window)."""
-        self.frames.quiet_period(lambda m: False, self.response_s if window is None else window, mark)
-        return self.frames.since(
-            mark, lambda m: m.is_rx and m.arbitration_id == SLAVE_COB_ID and bool(m.data) and m.data[0] == command
-        )
+        return self.frames.quiet_period(self._is_answer(command), self.response_s if window is None else window, mark)
 
     # -- state -------------------------------------------------------------------------------------
     def switch_global(self, state: LssState) -> Mark:

@@ -101,24 +101,22 @@ class LssSlave:
 
     # -- configuration (configuration state only) --------------------------------------------------
     def _configure_node_id(self, data: bytes) -> None:
-        if self.state is not LssState.CONFIGURATION:
-            return
         node_id = data[1]
-        if 1 <= node_id <= MAX_NODE_ID or node_id == UNCONFIGURED_NODE_ID:
+        valid = 1 <= node_id <= MAX_NODE_ID or node_id == UNCONFIGURED_NODE_ID
+        if self._configured(LssCommand.CONFIGURE_NODE_ID, valid):
             self.pending_node_id = node_id
-            self._send(LssCommand.CONFIGURE_NODE_ID, bytes([ERROR_NONE]))
-        else:
-            self._send(LssCommand.CONFIGURE_NODE_ID, bytes([ERROR_OUT_OF_RANGE]))
 
     def _configure_bit_timing(self, data: bytes) -> None:
-        if self.state is not LssState.CONFIGURATION:
-            return
         table, index = data[1], data[2]
-        if table == 0 and index in BIT_TIMING_TABLE_0:
+        if self._configured(LssCommand.CONFIGURE_BIT_TIMING, table == 0 and index in BIT_TIMING_TABLE_0):
             self.pending_bit_index = index
-            self._send(LssCommand.CONFIGURE_BIT_TIMING, bytes([ERROR_NONE]))
-        else:
-            self._send(LssCommand.CONFIGURE_BIT_TIMING, bytes([ERROR_OUT_OF_RANGE]))
+
+    def _configured(self, command: int, valid: bool) -> bool:
+        """Answer a configure request (configuration state only): error 0 when ``valid``, else 1 (out of range)."""
+        if self.state is not LssState.CONFIGURATION:
+            return False
+        self._send(command, bytes([ERROR_NONE if valid else ERROR_OUT_OF_RANGE]))
+        return valid
 
     def _store_configuration(self, data: bytes) -> None:
         if self.state is not LssState.CONFIGURATION:

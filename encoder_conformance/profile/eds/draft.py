@@ -218,7 +218,6 @@ def _tpdo_todos(objects: dict[int, dict[str, Any]], todos: list[str]) -> None:
 
 def _capability_todos(result: EdsImport, caps: dict[str, Any], device_type: int, todos: list[str]) -> None:
     info = result.device_info
-    _tpdo_todos(result.objects, todos)
     for key, cap in (("NrOfTXPDO", "tpdos"), ("NrOfRXPDO", "rpdos")):
         declared = _info_number(info, key)
         if declared is not None and declared != caps[cap]:
@@ -307,6 +306,7 @@ def profile_draft_from_eds(path: Path, profile_id: str | None = None) -> tuple[d
     _draft_persistence(objects, todos)
     identity = _identity(result, todos)
     capabilities = _capabilities(result, todos)
+    _tpdo_todos(objects, todos)
     draft: dict[str, Any] = {
         "schema_version": 1,
         "id": profile_id or _slug(result.path.stem),
