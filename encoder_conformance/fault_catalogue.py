@@ -102,6 +102,35 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             ),
         },
     ),
+    (  # LSS (CiA 305)
+        ("test_lss",),
+        {
+            "lss_configure_not_answered": "configure node-ID is carried out but never answered",
+            "lss_node_id_range_unchecked": "configure node-ID accepts 0 and 128..254 (error 0)",
+            "lss_bit_timing_unchecked": "configure bit timing accepts any table and index (error 0)",
+            "lss_bit_timing_refused": "configure bit timing refuses every index (error 1)",
+            "lss_only_in_stopped": "LSS frames are obeyed only in NMT stopped",
+            "lss_ignored_in_stopped": "LSS frames are ignored in NMT stopped",
+            "lss_configuration_in_waiting": "configure, store and inquire are answered in the waiting state too",
+            "lss_selective_ignores_serial": "switch state selective matches whatever serial number it is given",
+            "lss_inquire_wrong_serial": "inquire serial number answers the serial number plus one",
+            "lss_identify_answered_when_configured": "identify non-configured remote slave is answered by a "
+                                                     "configured node",
+            "lss_identify_ignores_ranges": "identify remote slave is answered whatever the revision and serial "
+                                           "ranges",
+            "lss_fastscan_ignores_checked_bit": "fastscan steps compare one bit too few (the checked bit is ignored)",
+            "lss_fastscan_completes_early": "fastscan enters the configuration state whenever LSSNext < LSSSub, "
+                                            "before the serial number was checked (CANopenNode PR#647)",
+            "lss_fastscan_reset_ignored": "fastscan BitChecked 80h is answered but does not restart a scan",
+            "lss_node_id_active_immediately": "a node-ID configured by LSS is active at once, not after NMT reset "
+                                              "communication",
+            "lss_store_not_persisted": "store configuration answers success and keeps nothing",
+            "lss_unconfigured_boots": "a node with node-ID 255 (unconfigured) boots and answers SDO at 7FFh/67Fh",
+            "lss_obeyed_in_any_state": "LSS frames are obeyed in every NMT state (quirk lss_only_in_states ignored)",
+            "lss_auto_store_ignored": "a node-ID configured by LSS is not stored by itself (quirk "
+                                      "lss_config_auto_stored ignored)",
+        },
+    ),
     (  # emcy
         ("test_emcy",),
         {
@@ -142,6 +171,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
     "send_repeat_counter_ignored": "pdo_send_repeat_counters",
     "forced_bits_not_applied": "bits_forced_at_init",
     "autostart_ignored": "nmt_autostart_object",
+    "lss_obeyed_in_any_state": "lss_only_in_states",
+    "lss_auto_store_ignored": "lss_config_auto_stored",
 }
 
 

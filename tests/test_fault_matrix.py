@@ -16,12 +16,13 @@ from encoder_conformance.profile.loader import load_profile
 
 MAIN_PROFILE = "wachendorff-wdga-mt"
 #: profiles with what the WDGA lacks, tried in order: a write-only object; a store-by-reboot command;
-#: the quirks other families document (guarding/heartbeat exclusivity and immediate reload on the
-#: FAULHABER, a second store object and type 255 without timer on the WayCon, send-repeat counters
-#: and PDO2 disabled at init on the SIKO)
+#: every LSS service (identify, fastscan); the quirks other families document (guarding/heartbeat
+#: exclusivity, immediate reload and LSS self-store on the FAULHABER, a second store object and
+#: type 255 without timer on the WayCon, send-repeat counters and PDO2 disabled at init on the SIKO)
 COMPLEMENT_PROFILES = [
     "tests/data/profiles/minimal-encoder.yaml",
     "tests/data/profiles/posital-fast-reboot.yaml",
+    "cia406-c3-st",
     "faulhaber-mc5005",
     "waycon-sx",
     "siko-wx58m-1212-mt",

@@ -51,7 +51,7 @@ def lss_bus(request) -> Iterator[LssBus]:
         slave_side.send(can.Message(arbitration_id=SLAVE_COB_ID, data=data, is_extended_id=False))
 
     slaves = [LssSlave(ALL_SERVICES, lambda n=n: (VENDOR, PRODUCT, REVISION, 1000 + n),
-                       lambda n=n: node_ids[n], answer, store=lambda node_id, bit: True) for n in range(count)]
+                       lambda n=n: node_ids[n], answer) for n in range(count)]
 
     def dispatch(msg: can.Message) -> None:
         if msg.arbitration_id == MASTER_COB_ID:

@@ -16,6 +16,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from ..basis import Basis
+from ..cia305 import AUTO_BIT_RATE_INDEX, BIT_TIMING_TABLE_0
 from . import datatypes
 from .quirk_effects import EffectParams, ObjectList, P
 from .quirks import Quirk, QuirkBase
@@ -275,7 +276,20 @@ class BusDefaults(StrictModel):
     bitrates: list[int] = Field(description="bit rates the device supports, bit/s")
     node_id_set_by: list[Literal["sdo", "lss", "switches", "fixed", "other"]]
     bitrate_set_by: list[Literal["sdo", "lss", "switches", "fixed", "auto", "other"]]
+    bit_timing_table: dict[int, int] | None = Field(
+        default=None, description="the device's LSS bit-timing table 0 (index -> bit/s) where its manual gives "
+        "one that differs from CiA 305's (default: CiA 305 table 0)")
     manual: str
+
+    def lss_table(self) -> dict[int, int]:
+        return self.bit_timing_table or BIT_TIMING_TABLE_0
+
+    def lss_bit_indices(self) -> frozenset[int]:
+        """The LSS table-0 indices the device accepts: its bit rates, and 9 where it detects the rate itself."""
+        indices = {index for index, rate in self.lss_table().items() if rate in self.bitrates}
+        if self.bitrate == "auto" or "auto" in self.bitrate_set_by:
+            indices.add(AUTO_BIT_RATE_INDEX)
+        return frozenset(indices)
 
 
 LssService = Literal[
@@ -361,6 +375,9 @@ class Timing(StrictModel):
         "default is this suite's inference (a device that is slower widens the windows a silence is checked in)")
     nmt_settle_ms: float = Field(default=100, gt=0, description="NMT command to new state visible")
     store_max_ms: float = Field(default=1000, gt=0)
+    lss_response_ms: float = Field(
+        default=50, gt=0, description="LSS request to the slave's answer; CiA 305 gives no bound, so the default "
+        "is this suite's inference (each LSS request nobody should answer waits this long)")
     heartbeat_test_period_ms: int = Field(default=50, ge=1, description="1017h value used by the tests")
     heartbeat_intervals: int = Field(default=20, ge=20, description="intervals measured per check")
     heartbeat_tolerance: HeartbeatTolerance = HeartbeatTolerance()

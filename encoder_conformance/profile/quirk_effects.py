@@ -8,7 +8,7 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 
 Adding an effect: write its model here (the docstring says what the device does, each field
 what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 25 effects, one small model
+This module is over 400 lines because it is the catalogue of the 29 effects, one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -397,6 +397,53 @@ class ReloadImmediate(EffectParams):
     read_value: Documentation = _doc("what the subs read back")
 
 
+
+NmtStateName = Literal["pre-operational", "operational", "stopped"]
+
+
+class LssOnlyInStates(EffectParams):
+    """LSS (CiA 305) answers only in the listed NMT states (its frames are ignored in the others), and a
+    node-ID configured by LSS becomes active as ``activation`` says."""
+
+    effect = "lss_only_in_states"
+    states: list[NmtStateName] = Field(description="the NMT states in which LSS frames are obeyed")
+    activation: Literal["reset_communication", "power_cycle"] = Field(
+        default="reset_communication",
+        description="when a configured node-ID becomes active: NMT reset communication (CiA 305 v3) or only at "
+        "the next power-on, from what was stored (legacy)")
+
+
+class LssConfigAutoStored(EffectParams):
+    """The device stores a node-ID / bit timing configured by LSS by itself (no store configuration
+    service needed): it survives a power cycle."""
+
+    effect = "lss_config_auto_stored"
+    auto_stored: list[Literal["node_id", "bit_timing"]] = Field(description="what is stored at once")
+    lss_cob_ids: Documentation = _doc("the LSS COB-IDs the manual gives")
+
+
+class UnconfiguredNodeId(EffectParams):
+    """Node-ID 255 marks the node as unconfigured: after power-on it sends no boot-up and only LSS
+    answers, until LSS gives it a valid node-ID; then NMT initialisation continues with that ID."""
+
+    effect = "unconfigured_node_id"
+    unconfigured_node_id: Literal[255] = Field(default=255, description="the node-ID that means unconfigured")
+    bootup_after_valid_node_id: bool = Field(
+        default=False, description="true: boots as soon as a valid node-ID is configured; false (CiA 305): when "
+        "switched back to the waiting state")
+    cob_ids_reset_to_default: list[ObjectKeyField] = Field(
+        default_factory=list, description="COB-IDs set to their node-ID based defaults when it gets a valid ID")
+    cob_ids_persist_by: Documentation = _doc("the store object that keeps those COB-IDs")
+
+
+class LssNodeIdRange(EffectParams):
+    """The manual gives a configure node-ID range other than CiA 305's 1..127 (and FFh): the suite
+    does not judge the values the two disagree on."""
+
+    effect = "lss_node_id_range"
+    node_id_range: tuple[int, int] = Field(description="lowest and highest node-ID the manual allows")
+
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -405,6 +452,7 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         BitsForcedAtInit, StoreRebootsWithoutReply, WritesNeedScalingBit, AbortCode, StoreObjectReadsBack,
         StoreAutomatic, PositionFrozenDuringExecution, SecondNode, ManufacturerEncoderObjects,
         LimitSwitchFlags, FixedTpdoMapping, GuardingHeartbeatExclusive, RestoreExcludes, NmtAutostartObject,
-        ReloadImmediate, ManufacturerStoreObject, SignedPositionRange,
+        ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
+        UnconfiguredNodeId, LssNodeIdRange,
     )
 }

@@ -1,8 +1,10 @@
 """The twin's LSS slave (CiA 305): LSS state, selective switch, configuration, inquiry, identification, fastscan.
 
 Only the services the profile declares (capabilities.lss) answer; the others are ignored, as a device
-without them would. The configured node-ID and bit timing are pending until the node applies them
-(``pending_node_id``/``pending_bit_index``); store configuration hands them to ``store``.
+without them would. The configured node-ID and bit timing go to ``config`` (``sim/lss_configuration.py``:
+pending until the node applies them, stored by store configuration); ``events`` tells the node when
+something was configured and when the slave left the configuration state. Faults that break the slave
+are the small classes at the bottom.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from ..cia305 import (
     BIT_TIMING_TABLE_0,
@@ -25,22 +28,46 @@ from ..cia305 import (
     LssCommand,
     LssState,
 )
+from .faults import breaks
+from .lss_configuration import LssConfiguration
+from .nvm import NonVolatileMemory
 
 Address = Callable[[], tuple[int, int, int, int]]  # 1018h sub 1..4 as the device holds them
 
 
+class LssEvents(Protocol):
+    """What the node hears from its LSS slave."""
+
+    def configured(self, what: str) -> None:
+        """A configure request succeeded: ``what`` is "node_id" or "bit_timing"."""
+
+    def left_configuration(self) -> None:
+        """Switched from the configuration state to the waiting state."""
+
+
+class _NoEvents:
+    def configured(self, what: str) -> None:
+        pass
+
+    def left_configuration(self) -> None:
+        pass
+
+
 @dataclass
 class LssSlave:
-    """One node's LSS slave. ``answer`` sends one frame on 7E4h; ``node_id`` is the active node-ID."""
+    """One node's LSS slave. ``answer`` sends one frame on 7E4h; ``node_id`` is the active node-ID;
+    ``allowed`` says whether LSS frames are obeyed now (a device may take them only in some NMT states)."""
 
     services: frozenset[str]
     address: Address
     node_id: Callable[[], int]
     answer: Callable[[bytes], None]
-    store: Callable[[int | None, int | None], bool] | None = None  # (node-ID, bit index) -> stored
+    config: LssConfiguration = field(default_factory=lambda: LssConfiguration(NonVolatileMemory(None)))
+    events: LssEvents = field(default_factory=_NoEvents)
+    allowed: Callable[[], bool] = lambda: True
+    can_store: bool = True
+    bit_indices: frozenset[int] = frozenset(BIT_TIMING_TABLE_0)  # the table-0 indices the device accepts
     state: LssState = LssState.WAITING
-    pending_node_id: int | None = None
-    pending_bit_index: int | None = None
     _selective: int = 0  # parts of the address matched so far, in order
     _identify: list[int] = field(default_factory=list)  # the identify-remote values received so far
     _scan_position: int | None = None  # fastscan LSSPos (None: not taking part)
@@ -53,8 +80,16 @@ class LssSlave:
     def configured(self) -> bool:
         return self.node_id() != UNCONFIGURED_NODE_ID
 
+    @property
+    def pending_node_id(self) -> int | None:
+        return self.config.pending_node_id
+
+    @property
+    def pending_bit_index(self) -> int | None:
+        return self.config.pending_bit_index
+
     def on_frame(self, data: bytes) -> None:
-        if len(data) < 8:
+        if len(data) < 8 or not self.allowed():
             return  # CiA 305 frames are 8 bytes; a shorter one is not an LSS request
         command = data[0]
         handler = self._by_command.get(command)
@@ -85,7 +120,9 @@ class LssSlave:
     # -- state ---------------------------------------------------------------------------------
     def _switch_global(self, data: bytes) -> None:
         if data[1] in (LssState.WAITING, LssState.CONFIGURATION):
-            self.state = LssState(data[1])
+            previous, self.state = self.state, LssState(data[1])
+            if previous is LssState.CONFIGURATION and self.state is LssState.WAITING:
+                self.events.left_configuration()
 
     def _switch_selective(self, data: bytes) -> None:
         part = SELECTIVE_COMMANDS.index(data[0])
@@ -100,38 +137,46 @@ class LssSlave:
             self._send(LssCommand.SWITCH_SELECTIVE_RESPONSE)
 
     # -- configuration (configuration state only) --------------------------------------------------
+    def node_id_valid(self, node_id: int) -> bool:
+        return 1 <= node_id <= MAX_NODE_ID or node_id == UNCONFIGURED_NODE_ID
+
+    def bit_timing_valid(self, table: int, index: int) -> bool:
+        return table == 0 and index in self.bit_indices
+
     def _configure_node_id(self, data: bytes) -> None:
-        node_id = data[1]
-        valid = 1 <= node_id <= MAX_NODE_ID or node_id == UNCONFIGURED_NODE_ID
-        if self._configured(LssCommand.CONFIGURE_NODE_ID, valid):
-            self.pending_node_id = node_id
+        if self._configured(LssCommand.CONFIGURE_NODE_ID, self.node_id_valid(data[1])):
+            self.config.configure_node_id(data[1])
+            self.events.configured("node_id")
 
     def _configure_bit_timing(self, data: bytes) -> None:
-        table, index = data[1], data[2]
-        if self._configured(LssCommand.CONFIGURE_BIT_TIMING, table == 0 and index in BIT_TIMING_TABLE_0):
-            self.pending_bit_index = index
+        if self._configured(LssCommand.CONFIGURE_BIT_TIMING, self.bit_timing_valid(data[1], data[2])):
+            self.config.configure_bit_index(data[2])
+            self.events.configured("bit_timing")
+
+    def in_configuration(self) -> bool:
+        return self.state is LssState.CONFIGURATION
 
     def _configured(self, command: int, valid: bool) -> bool:
         """Answer a configure request (configuration state only): error 0 when ``valid``, else 1 (out of range)."""
-        if self.state is not LssState.CONFIGURATION:
+        if not self.in_configuration():
             return False
         self._send(command, bytes([ERROR_NONE if valid else ERROR_OUT_OF_RANGE]))
         return valid
 
     def _store_configuration(self, data: bytes) -> None:
-        if self.state is not LssState.CONFIGURATION:
+        if not self.in_configuration():
             return
-        stored = self.store is not None and self.store(self.pending_node_id, self.pending_bit_index)
+        stored = self.can_store and self.config.store(self.node_id())
         self._send(LssCommand.STORE_CONFIGURATION, bytes([ERROR_NONE if stored else ERROR_STORE_NOT_SUPPORTED]))
 
     # -- inquiry (configuration state only) --------------------------------------------------------
     def _inquire(self, data: bytes) -> None:
-        if self.state is LssState.CONFIGURATION:
+        if self.in_configuration():
             value = self.address()[INQUIRE_COMMANDS.index(data[0])]
             self._send(data[0], struct.pack("<I", value))
 
     def _inquire_node_id(self, data: bytes) -> None:
-        if self.state is LssState.CONFIGURATION:
+        if self.in_configuration():
             self._send(LssCommand.INQUIRE_NODE_ID, bytes([self.node_id()]))
 
     # -- identification ------------------------------------------------------------------------------
@@ -146,11 +191,14 @@ class LssSlave:
         self._identify.append(value)
         if step < 5:
             return
-        vendor, product, revision_low, revision_high, serial_low, serial_high = self._identify
-        own = self.address()
-        if (own[0] == vendor and own[1] == product and revision_low <= own[2] <= revision_high
-                and serial_low <= own[3] <= serial_high):
+        if self.identify_matches(*self._identify):
             self._send(LssCommand.IDENTIFY_SLAVE)
+
+    def identify_matches(self, vendor: int, product: int, revision_low: int, revision_high: int,
+                         serial_low: int, serial_high: int) -> bool:
+        own = self.address()
+        return (own[0] == vendor and own[1] == product and revision_low <= own[2] <= revision_high
+                and serial_low <= own[3] <= serial_high)
 
     def _identify_non_configured(self, data: bytes) -> None:
         if not self.configured:
@@ -167,13 +215,118 @@ class LssSlave:
             return
         if self._scan_position != sub or bit_checked > 31 or sub > 3:
             return
-        mask = (0xFFFFFFFF << bit_checked) & 0xFFFFFFFF
-        if (id_number ^ self.address()[sub]) & mask:
+        if not self.scan_matches(id_number, bit_checked, sub):
             return
         self._send(LssCommand.IDENTIFY_SLAVE)
-        if bit_checked == 0:  # all 32 bits matched: LSSPos becomes LSSNext; wrapping back means found
-            if next_sub < sub:
+        if bit_checked == 0:  # all 32 bits of this part matched: LSSPos becomes LSSNext
+            if self.scan_complete(sub, next_sub):
                 self._scan_position = None
                 self.state = LssState.CONFIGURATION
             else:
-                self._scan_position = next_sub
+                self._scan_position = next_sub & 3
+
+    def scan_matches(self, id_number: int, bit_checked: int, sub: int) -> bool:
+        """Bits 31..bit_checked of ``id_number`` equal this part of the address."""
+        mask = (0xFFFFFFFF << bit_checked) & 0xFFFFFFFF
+        return not (id_number ^ self.address()[sub]) & mask
+
+    def scan_complete(self, sub: int, next_sub: int) -> bool:
+        """The whole address matched: the serial number (LSSSub 3) confirmed and LSSNext back at the vendor-ID
+        (CANopenNode PR#647: ``LSSNext < LSSSub`` alone lets a slave in before its serial number was checked)."""
+        return sub == 3 and next_sub == 0
+
+
+# -- faults ----------------------------------------------------------------------------------------------
+@breaks(LssSlave, "lss_configure_not_answered")
+class ConfigureNotAnswered(LssSlave):
+    """Configure node-ID is carried out but never answered."""
+
+    def _configure_node_id(self, data: bytes) -> None:
+        if self.in_configuration() and self.node_id_valid(data[1]):
+            self.config.configure_node_id(data[1])
+            self.events.configured("node_id")
+
+
+@breaks(LssSlave, "lss_node_id_range_unchecked")
+class NodeIdRangeUnchecked(LssSlave):
+    def node_id_valid(self, node_id: int) -> bool:
+        return True
+
+
+@breaks(LssSlave, "lss_bit_timing_unchecked")
+class BitTimingUnchecked(LssSlave):
+    def bit_timing_valid(self, table: int, index: int) -> bool:
+        return True
+
+
+@breaks(LssSlave, "lss_configuration_in_waiting")
+class ConfigurationInWaiting(LssSlave):
+    """Configure, store and inquire are answered in the waiting state too."""
+
+    def in_configuration(self) -> bool:
+        return True
+
+
+@breaks(LssSlave, "lss_selective_ignores_serial")
+class SelectiveIgnoresSerial(LssSlave):
+    def _switch_selective(self, data: bytes) -> None:
+        if data[0] == SELECTIVE_COMMANDS[-1]:
+            data = data[:1] + struct.pack("<I", self.address()[3]) + data[5:]
+        super()._switch_selective(data)
+
+
+@breaks(LssSlave, "lss_inquire_wrong_serial")
+class InquireWrongSerial(LssSlave):
+    def _send(self, command: int, payload: bytes = b"") -> None:
+        if command == LssCommand.INQUIRE_SERIAL:
+            payload = struct.pack("<I", (struct.unpack_from("<I", payload)[0] + 1) & 0xFFFFFFFF)
+        super()._send(command, payload)
+
+
+@breaks(LssSlave, "lss_identify_answered_when_configured")
+class IdentifyAnsweredWhenConfigured(LssSlave):
+    def _identify_non_configured(self, data: bytes) -> None:
+        self._send(LssCommand.IDENTIFY_NON_CONFIGURED_SLAVE)
+
+
+@breaks(LssSlave, "lss_identify_ignores_ranges")
+class IdentifyIgnoresRanges(LssSlave):
+    """Identify remote slave is answered whatever the revision and serial ranges."""
+
+    def identify_matches(self, vendor: int, product: int, *ranges: int) -> bool:
+        return (vendor, product) == self.address()[:2]
+
+
+@breaks(LssSlave, "lss_fastscan_ignores_checked_bit")
+class FastscanIgnoresCheckedBit(LssSlave):
+    """Fastscan steps compare one bit too few: the bit being checked is ignored."""
+
+    def scan_matches(self, id_number: int, bit_checked: int, sub: int) -> bool:
+        mask = (0xFFFFFFFF << (bit_checked + 1)) & 0xFFFFFFFF
+        return not (id_number ^ self.address()[sub]) & mask
+
+
+@breaks(LssSlave, "lss_fastscan_completes_early")
+class FastscanCompletesEarly(LssSlave):
+    """The completion condition is too broad (CANopenNode PR#647): a slave enters the configuration state
+    whenever LSSNext is lower than LSSSub, before its serial number was checked."""
+
+    def scan_complete(self, sub: int, next_sub: int) -> bool:
+        return next_sub < sub
+
+
+@breaks(LssSlave, "lss_fastscan_reset_ignored")
+class FastscanResetIgnored(LssSlave):
+    """BitChecked 80h is answered but does not restart a scan in progress."""
+
+    def _fastscan(self, data: bytes) -> None:
+        position = self._scan_position
+        super()._fastscan(data)
+        if data[5] == FASTSCAN_RESET_BIT and position is not None:
+            self._scan_position = position
+
+
+@breaks(LssSlave, "lss_bit_timing_refused")
+class BitTimingRefused(LssSlave):
+    def bit_timing_valid(self, table: int, index: int) -> bool:
+        return False

@@ -3,7 +3,8 @@
 It owns the node's NMT state and node-id and tells the other behaviours through the node's hooks:
 ``halted`` when services stop (reset, reboot, power off), ``reload`` with what a (re)start reloads,
 ``booted`` after the boot-up message, ``state`` on every state change. Faults that break it are the
-small classes at the bottom.
+small classes at the bottom. A node whose node-ID is 255 (unconfigured, CiA 305) stays initialising
+without a boot-up until LSS gives it a node-ID (``continue_initialisation``).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import threading
 from collections.abc import Callable
 
 from ..cia301 import COMMUNICATION_AREA
+from ..cia305 import UNCONFIGURED_NODE_ID
 from .faults import breaks
 from .hooks import NodeHooks, ReloadEvent
 from .nmt import TARGET, NmtCommand, NmtState
@@ -37,7 +39,7 @@ class NmtSlave:
         store: ObjectStore,
         scheduler: DeadlineScheduler,
         send: Callable[[int, bytes], None],
-        node_id_at_power_on: Callable[[], int],
+        node_id_for: Callable[[ReloadEvent | None], int],
         boot_delay_s: float,
         silent_until_bus_traffic: bool,
         lock: threading.RLock,
@@ -47,10 +49,10 @@ class NmtSlave:
         self._store = store
         self._scheduler = scheduler
         self._send = send
-        self._node_id_at_power_on = node_id_at_power_on
+        self._node_id_for = node_id_for
         self._boot_delay_s = boot_delay_s
         self._silent_until_traffic = silent_until_bus_traffic
-        self.node_id = node_id_at_power_on()
+        self.node_id = node_id_for(None)
         self.state: NmtState | None = None  # None = powered off
         self.awaiting_traffic = False
         self._boot_job: JobHandle | None = None
@@ -75,7 +77,8 @@ class NmtSlave:
         self._halt()
         self.state = NmtState.INITIALISING
         self._reload(ReloadEvent("power_on", everything=True))
-        self._boot_job = self._scheduler.call_later(delay_s, lambda: self._finish_boot(power_on=True))
+        if not self.waiting_for_node_id:
+            self._boot_job = self._scheduler.call_later(delay_s, lambda: self._finish_boot(power_on=True))
 
     def bus_traffic_seen(self) -> bool:
         """A frame arrived: True if it only served to detect the bit rate (automatic bit-rate quirk)."""
@@ -131,7 +134,7 @@ class NmtSlave:
         return True
 
     def _reload(self, event: ReloadEvent) -> None:
-        self.node_id = self._node_id_at_power_on()
+        self.node_id = self._node_id_for(event)
         self._store.reload(_everything if event.everything else _communication_area, self.node_id)
         self._hooks.emit_reload(event)
 
@@ -142,7 +145,19 @@ class NmtSlave:
         for listener in self._hooks.halted:
             listener()
 
+    @property
+    def waiting_for_node_id(self) -> bool:
+        """Unconfigured (node-ID 255): initialising, no boot-up until LSS gives a node-ID."""
+        return self.state is NmtState.INITIALISING and self.node_id == UNCONFIGURED_NODE_ID
+
+    def continue_initialisation(self) -> None:
+        """LSS gave the unconfigured node a node-ID: communication starts with it, then the boot-up."""
+        self._reload(ReloadEvent("nmt_82h", everything=False))
+        self._schedule_boot(power_on=False)
+
     def _schedule_boot(self, power_on: bool) -> None:
+        if self.waiting_for_node_id:
+            return  # CiA 305: an unconfigured node waits for LSS
         self._boot_job = self._scheduler.call_later(self._boot_delay_s, lambda: self._finish_boot(power_on))
 
     def _finish_boot(self, power_on: bool) -> None:
@@ -196,4 +211,13 @@ class ObeysAnyNode(NmtSlave):
 @breaks(NmtSlave, "reset_node_keeps_values")
 class ResetNodeKeepsValues(NmtSlave):
     def reset_reloads_everything(self, node: bool) -> bool:
+        return False
+
+
+@breaks(NmtSlave, "lss_unconfigured_boots")
+class UnconfiguredBoots(NmtSlave):
+    """Node-ID 255 is taken as a node-ID like any other: the node boots with it."""
+
+    @property
+    def waiting_for_node_id(self) -> bool:
         return False

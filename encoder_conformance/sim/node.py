@@ -19,7 +19,6 @@ from typing import Protocol, TypeVar
 import can
 
 from ..cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
-from ..cia305 import SLAVE_COB_ID as LSS_SLAVE_COB_ID
 from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
 from ..profile.od_builder import initial_value
@@ -31,8 +30,9 @@ from .faults import FaultSet, assemble
 from .forced_bits import ForcedBits
 from .guarding import GuardingHeartbeatExclusion
 from .heartbeat import HeartbeatProducer
-from .hooks import NodeHooks
-from .lss_slave import LssSlave
+from .hooks import NodeHooks, ReloadEvent
+from .lss_behaviour import LssBehaviour
+from .lss_configuration import usable_node_id
 from .nmt import NmtState, sync_allowed
 from .nmt_slave import NmtSlave
 from .nvm import Key, NonVolatileMemory
@@ -78,9 +78,10 @@ class SimulatedNode:
         self._preconfigure_node_id()
         self.lock = threading.RLock()
         self.hooks = hooks = NodeHooks()
-        self.store = assemble(ObjectStore, faults)(profile, self.nvm, self._node_id_at_power_on())
+        self.lss: LssBehaviour | None = None
+        self.store = assemble(ObjectStore, faults)(profile, self.nvm, self._node_id_for(None))
         self.nmt = assemble(NmtSlave, faults)(
-            hooks, self.store, scheduler, self._send, self._node_id_at_power_on,
+            hooks, self.store, scheduler, self._send, self._node_id_for,
             boot_delay_s=profile.simulator.bootup_delay_ms / 1000,
             silent_until_bus_traffic=profile.has_effect(fx.SilentUntilBusTraffic),
             lock=self.lock,
@@ -143,17 +144,18 @@ class SimulatedNode:
         ]
         return [b for b in optional if b is not None]
 
-    def _lss_slave(self) -> _LssBehaviour | None:
+    def _lss_slave(self) -> LssBehaviour | None:
         """The LSS slave, where the profile declares LSS services (capabilities.lss)."""
-        services = frozenset(self.profile.capabilities.lss)
-        if not services:
+        if not self.profile.capabilities.lss:
             return None
+
         def address() -> tuple[int, int, int, int]:  # 1018h as the device shows it (identity faults included)
             parts = [self.current_value((0x1018, sub)) if self.store.has((0x1018, sub)) else 0 for sub in range(1, 5)]
             return tuple(p if isinstance(p, int) else 0 for p in parts)  # type: ignore[return-value]
 
-        slave = LssSlave(services, address, lambda: self.node_id, lambda data: self._send(LSS_SLAVE_COB_ID, data))
-        return _LssBehaviour(slave)
+        self.lss = assemble(LssBehaviour, self.faults)(self.profile, self.nvm, self.store, self.nmt, address,
+                                                       self._send, self.faults)
+        return self.lss
 
     # -- helpers -------------------------------------------------------------------------
     def _built(self, effect: type[P], build: Callable[[P], T]) -> T | None:
@@ -182,11 +184,17 @@ class SimulatedNode:
         if quirk and self.configured_node_id != self.profile.bus.node_id and quirk.key not in self.nvm:
             self.nvm.put_many({quirk.key: self.configured_node_id})
 
-    def _node_id_at_power_on(self) -> int:
+    def _node_id_for(self, event: ReloadEvent | None) -> int:
+        """The node-ID a (re)start takes (None: construction): what LSS applied or stored, else the
+        manufacturer node-ID object's stored value, else the node-ID the twin was started with."""
+        if event is not None and self.lss is not None:
+            by_lss = self.lss.node_id_after(event)
+            if by_lss is not None:
+                return by_lss
         quirk = self.profile.params_of(fx.NodeIdObject)
         if quirk:
-            stored = self.nvm.get(quirk.key)
-            if isinstance(stored, int) and 1 <= stored <= 127:
+            stored = usable_node_id(self.nvm.get(quirk.key))
+            if stored is not None:
                 return stored
         return self.configured_node_id
 
@@ -223,14 +231,16 @@ class SimulatedNode:
                 return
             if self.nmt.bus_traffic_seen():
                 return  # bit rate detected from this frame
+            can_id = msg.arbitration_id
+            if can_id == LSS_MASTER_COB_ID and not msg.is_extended_id and not msg.is_remote_frame:
+                if self.state is not NmtState.INITIALISING or self.nmt.waiting_for_node_id:
+                    for listener in self.hooks.lss:
+                        listener(bytes(msg.data))
+                return
             if self.state is NmtState.INITIALISING:
                 return
-            can_id = msg.arbitration_id
             if can_id == 0 and not msg.is_extended_id:
                 self.nmt.on_command(bytes(msg.data))
-            elif can_id == LSS_MASTER_COB_ID and not msg.is_extended_id and not msg.is_remote_frame:
-                for listener in self.hooks.lss:
-                    listener(bytes(msg.data))
             elif can_id == 0x600 + self.node_id and not msg.is_remote_frame:
                 self.sdo_channel.on_request(bytes(msg.data))
             elif self._is_sync(msg) and sync_allowed(self.state):
@@ -284,16 +294,6 @@ class _EncoderBehaviour:
         hooks.before_set.append(self._encoder.on_write)
         hooks.reload.append(lambda event: self._encoder.reload(self._nvm) if event.everything else None)
         hooks.powered_off.append(self._encoder.thaw)
-
-
-class _LssBehaviour:
-    """Registers the LSS slave for the LSS master's frames."""
-
-    def __init__(self, slave: LssSlave) -> None:
-        self.slave = slave
-
-    def register(self, hooks: NodeHooks) -> None:
-        hooks.lss.append(self.slave.on_frame)
 
 
 class _ReadsBack:

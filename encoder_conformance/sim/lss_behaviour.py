@@ -1,0 +1,116 @@
+"""The twin's LSS behaviour: the LSS slave, and what its configuration does to the node.
+
+Registers the slave for the LSS master's frames (7E5h, answered in the NMT states the profile allows:
+quirk ``lss_only_in_states``), tells the NMT slave which node-ID a (re)start takes (``node_id_after``),
+and starts an unconfigured node (node-ID 255) once it has a valid node-ID: when switched back to the
+waiting state (CiA 305) or at once (quirk ``unconfigured_node_id`` with ``bootup_after_valid_node_id``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ..cia301 import NmtState
+from ..cia305 import SLAVE_COB_ID
+from ..profile import quirk_effects as fx
+from ..profile.model import DeviceProfile, resolve_node_id_expression
+from .faults import FaultSet, assemble, breaks
+from .hooks import NodeHooks, ReloadEvent
+from .lss_configuration import LssConfiguration
+from .lss_slave import LssSlave
+from .nmt_slave import NmtSlave
+from .nvm import NonVolatileMemory
+from .object_store import ObjectStore
+
+_STATES = {"pre-operational": NmtState.PRE_OPERATIONAL, "operational": NmtState.OPERATIONAL,
+           "stopped": NmtState.STOPPED}
+
+
+class LssBehaviour:
+    """One node's LSS: slave, configuration, and the unconfigured start."""
+
+    def __init__(
+        self,
+        profile: DeviceProfile,
+        nvm: NonVolatileMemory,
+        store: ObjectStore,
+        nmt: NmtSlave,
+        address: Callable[[], tuple[int, int, int, int]],
+        send: Callable[[int, bytes], None],
+        faults: FaultSet,
+    ) -> None:
+        self._nmt = nmt
+        self._store = store
+        self.config = assemble(LssConfiguration, faults).for_profile(profile, nvm, nmt.node_id)
+        only_in = profile.params_of(fx.LssOnlyInStates)
+        self._states = None if only_in is None else frozenset(_STATES[name] for name in only_in.states)
+        self._unconfigured = profile.params_of(fx.UnconfiguredNodeId)
+        self.slave = assemble(LssSlave, faults)(
+            frozenset(profile.capabilities.lss), address, lambda: nmt.node_id,
+            lambda data: send(SLAVE_COB_ID, data), config=self.config, events=self, allowed=self.allowed,
+            can_store="store_configuration" in profile.capabilities.lss, bit_indices=profile.bus.lss_bit_indices(),
+        )
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.lss.append(self.slave.on_frame)
+
+    def allowed(self) -> bool:
+        """LSS frames are obeyed in this NMT state (always while waiting for a node-ID)."""
+        state = self._nmt.state
+        return self._states is None or state in self._states or self._nmt.waiting_for_node_id
+
+    def node_id_after(self, event: ReloadEvent) -> int | None:
+        return self.config.node_id_after(event)
+
+    # -- events from the slave ---------------------------------------------------------------------
+    def configured(self, what: str) -> None:
+        if what != "node_id":
+            return
+        if self._nmt.waiting_for_node_id:
+            if self._unconfigured is not None and self._unconfigured.bootup_after_valid_node_id:
+                self._start()
+        elif self.config.active_node_id not in (None, self._nmt.node_id):
+            self._nmt.node_id = self.config.active_node_id  # only a fault makes it active at once
+
+    def left_configuration(self) -> None:
+        if self._nmt.waiting_for_node_id:
+            self._start()
+
+    def _start(self) -> None:
+        """The unconfigured node got a valid node-ID: NMT initialisation continues with it."""
+        node_id = self.config.take_pending_node_id()
+        if node_id is None:
+            return
+        self._nmt.continue_initialisation()
+        self.reset_cob_ids(node_id)
+
+    def reset_cob_ids(self, node_id: int) -> None:
+        """Quirk ``unconfigured_node_id``: the listed COB-IDs take their defaults for the new node-ID."""
+        for key in () if self._unconfigured is None else self._unconfigured.cob_ids_reset_to_default:
+            entry_key = (key.index, key.sub)
+            if self._store.has(entry_key):
+                default = resolve_node_id_expression(self._store.default_of(entry_key, node_id), node_id)
+                if isinstance(default, int):
+                    self._store.set(entry_key, default)
+
+
+@breaks(LssBehaviour, "lss_obeyed_in_any_state")
+class ObeyedInAnyState(LssBehaviour):
+    """LSS frames are obeyed in every NMT state, also where the manual allows them only in some."""
+
+    def allowed(self) -> bool:
+        return True
+
+
+@breaks(LssBehaviour, "lss_only_in_stopped")
+class OnlyInStopped(LssBehaviour):
+    """LSS frames are obeyed only in stopped (and while unconfigured)."""
+
+    def allowed(self) -> bool:
+        return self._nmt.state is NmtState.STOPPED or self._nmt.waiting_for_node_id
+
+
+@breaks(LssBehaviour, "lss_ignored_in_stopped")
+class IgnoredInStopped(LssBehaviour):
+    def allowed(self) -> bool:
+        return self._nmt.state is not NmtState.STOPPED and super().allowed()

@@ -1,0 +1,312 @@
+"""Layer setting services (CiA 305): every service the profile declares, in the LSS and NMT states it
+allows, the node-ID life cycle (pending, active, stored, unconfigured) and fastscan.
+
+Sources: CiA 305 v3 as summarised in reference/conformance-landscape.md §3.1 (command specifiers,
+bit-timing table, service availability per LSS state, fastscan, PR#647); the device manuals for
+their quirks. Devices without LSS (switch-configured) skip every test with that reason. Every test
+puts the device back at the node-ID it was found at (fixtures/lss.py), also when it fails.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.checks import documented_quirk
+from encoder_conformance.cia305 import (
+    FASTSCAN_RESET_BIT,
+    MAX_NODE_ID,
+    UNCONFIGURED_NODE_ID,
+    LssCommand,
+    LssState,
+)
+from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.lss_device import LssDevice, expect_success
+from encoder_conformance.dut.lss_master import LssAddress
+from encoder_conformance.plugin.options import settings_of
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.model import resolve_node_id_expression
+from fixtures.lss import require_service
+
+CIA305 = "CiA 305 v3 (reference/conformance-landscape.md §3.1)"
+pytestmark = pytest.mark.spec(CIA305)
+
+NMT_STATES = {"pre-operational": ("pre-operational", 0x7F), "operational": ("start", 0x05),
+              "stopped": ("stop", 0x04)}
+
+
+# -- LSS states and addressing ---------------------------------------------------------------------------
+def test_switch_global_enters_and_leaves_configuration(lss: LssDevice):
+    """Switch state global 1 -> inquire node-ID is answered with the active node-ID; 0 -> not answered."""
+    require_service(lss, "switch_global", "inquire_node_id")
+    lss.master.switch_global(LssState.CONFIGURATION)
+    assert lss.master.inquire_node_id() == lss.node_id, "inquire node-ID in configuration state"
+    lss.leave()
+    assert lss.master.inquire_node_id() is None, "inquire node-ID answered in the waiting state"
+
+
+def test_switch_selective_only_own_address(lss: LssDevice):
+    """Switch state selective: the device answers 44h to its own LSS address (1018h sub 1..4), not to one
+    that differs in the serial number."""
+    require_service(lss, "switch_selective")
+    other = LssAddress(*lss.address.parts()[:3], (lss.address.serial + 1) & 0xFFFFFFFF)
+    assert not lss.master.switch_selective(other), f"answered 44h to another serial number: {other.describe()}"
+    assert lss.master.switch_selective(lss.address), f"no 44h to its own address {lss.address.describe()}"
+
+
+def test_inquire_identity_equals_1018h(lss: LssDevice):
+    """Inquire vendor-ID, product code, revision and serial number (5Ah-5Dh) answer 1018h sub 1..4."""
+    require_service(lss, "inquire_identity")
+    assert lss.select()
+    found = lss.master.inquire_address()
+    assert found == lss.address, f"inquired {found.describe() if found else 'no answer'}, 1018h holds " \
+                                 f"{lss.address.describe()}"
+
+
+@pytest.mark.parametrize("service", ["configure_node_id", "inquire_identity", "inquire_node_id"])
+def test_configuration_services_not_answered_in_waiting_state(lss: LssDevice, service: str):
+    """Configure and inquire services belong to the configuration state: unanswered in the waiting state."""
+    require_service(lss, service)
+    lss.leave()
+    answer = {"configure_node_id": lambda: lss.master.configure_node_id(lss.node_id),
+              "inquire_identity": lambda: lss.master.inquire("serial"),
+              "inquire_node_id": lss.master.inquire_node_id}[service]()
+    assert answer is None, f"{service} answered in the LSS waiting state: {answer}"
+
+
+@pytest.mark.parametrize("state", list(NMT_STATES))
+def test_lss_in_nmt_state(lss: LssDevice, state: str, back_to_preoperational, evidence):
+    """CiA 305: LSS works in every NMT state; a device whose manual allows it only in some
+    (quirk lss_only_in_states) must ignore it in the others."""
+    require_service(lss, "inquire_node_id")
+    command, _ = NMT_STATES[state]
+    lss.dut.nmt(command)
+    quirk = lss.dut.profile.params_of(fx.LssOnlyInStates)
+    allowed = quirk is None or state in quirk.states
+    if quirk is not None:
+        documented_quirk(lss.dut, fx.LssOnlyInStates, evidence, "")
+    lss.dut.frames.quiet_period(lambda m: False, lss.dut.profile.timing.nmt_settle_ms / 1000)
+    lss.select()
+    answer = lss.master.inquire_node_id()
+    lss.leave()
+    assert (answer is not None) == allowed, (f"in NMT {state} the device {'ignored' if allowed else 'obeyed'} LSS "
+                                             f"({'allowed' if allowed else 'not allowed'} here)")
+    if allowed:
+        assert answer == lss.node_id, f"inquire node-ID in NMT {state}: {answer}, the device is {lss.node_id}"
+
+
+# -- configure node-ID and bit timing ----------------------------------------------------------------------
+NODE_ID_CASES = [(1, 0), (MAX_NODE_ID, 0), (UNCONFIGURED_NODE_ID, 0), (0, 1), (128, 1), (254, 1)]
+
+
+@pytest.mark.parametrize(("node_id", "error"), NODE_ID_CASES, ids=[f"{n}->{e}" for n, e in NODE_ID_CASES])
+def test_configure_node_id_range(lss: LssDevice, node_id: int, error: int, evidence):
+    """Configure node-ID: 1..127 and 255 (unconfigured) accepted (error 0), 0 and 128..254 refused (error 1).
+    The value is only pending: the test configures the device's own node-ID again before leaving."""
+    require_service(lss, "configure_node_id")
+    manual_range = lss.dut.profile.params_of(fx.LssNodeIdRange)
+    if manual_range is not None and (manual_range.node_id_range[0] <= node_id <= manual_range.node_id_range[1]) \
+            != (error == 0):
+        pytest.skip(f"not judged: the manual's node-ID range {manual_range.node_id_range} and CiA 305 disagree "
+                    f"on node-ID {node_id} (quirk lss_node_id_range)")
+    if lss.auto_stored and error == 0 and node_id != lss.node_id:
+        evidence.note("the device stores a configured node-ID by itself: the test stores its own node-ID again")
+    assert lss.select()
+    answer = lss.master.configure_node_id(node_id)
+    if answer is not None and answer.error == 0:
+        lss.master.configure_node_id(lss.node_id)  # pending (and stored, where the device stores by itself)
+    assert answer is not None, f"configure node-ID {node_id}: no answer within {lss.master.response_s * 1000:.0f} ms"
+    assert answer.error == error, f"configure node-ID {node_id}: error {answer.error}, expected {error}"
+
+
+@pytest.mark.parametrize("index", [*range(0, 11)], ids=[f"index {i}" for i in range(11)])
+def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence):
+    """Configure bit timing, table 0: the indices of the bit rates the profile lists (and 9, automatic
+    detection, where the device has it) are accepted; the reserved index 5 and indices past 9 are refused
+    with error 1 (CiA 305), so are the rates the profile does not list (our inference: a manual lists what
+    a device supports). The bit rate in use is configured again afterwards."""
+    require_service(lss, "configure_bit_timing")
+    bus = lss.dut.profile.bus
+    expected_ok = index in bus.lss_bit_indices()
+    if expected_ok and lss.bit_index is None and "bit_timing" in lss.auto_stored:
+        pytest.skip("the bit rate in use is unknown and the device stores a configured bit rate by itself")
+    assert lss.select()
+    answer = lss.master.configure_bit_timing(index)
+    if answer is not None and answer.error == 0 and lss.bit_index is not None:
+        lss.master.configure_bit_timing(lss.bit_index)  # the rate in use pending again
+    assert answer is not None, f"configure bit timing {index}: no answer"
+    if (answer.error == 0) == expected_ok:
+        return
+    observed = (f"configure bit timing table 0 index {index} ({bus.lss_table().get(index, 'reserved / auto')}): "
+                f"error {answer.error}; the profile's bit rates are {bus.bitrates}")
+    if not expected_ok and index in bus.lss_table() and index not in (5, 9):
+        evidence.inferred_problem(observed, "a rate the manual does not list is taken as not supported")
+        return
+    raise AssertionError(observed)
+
+
+# -- the node-ID life cycle ----------------------------------------------------------------------------------
+def test_configured_node_id_pending_until_reset(lss: LssDevice, evidence):
+    """A configured node-ID is pending: the device keeps answering at its node-ID (and inquire node-ID
+    says so) until NMT reset communication, after which it boots with the new one (CiA 305 v3; a legacy
+    device applies it only at power-on, quirk lss_only_in_states)."""
+    require_service(lss, "configure_node_id")
+    new_id = lss.free_node_id()
+    assert lss.select()
+    expect_success(lss.master.configure_node_id(new_id), f"configure node-ID {new_id}")
+    lss.moved_to.add(new_id)
+    if "inquire_node_id" in lss.services:
+        assert lss.master.inquire_node_id() == lss.node_id, "inquire node-ID: the pending node-ID is active at once"
+    lss.leave()
+    assert lss.answers_at(lss.node_id), f"after configure node-ID {new_id} the device no longer answers at " \
+                                        f"{lss.node_id}: the new node-ID was active at once"
+    assert not lss.answers_at(new_id, timeout=lss.dut.sdo_silence_s), f"answers at {new_id} before any reset"
+    mark = lss.reset_communication(lss.node_id)
+    boot = lss.wait_bootup_at(new_id, mark)
+    if not lss.applies_on_reset:
+        documented_quirk(lss.dut, fx.LssOnlyInStates, evidence, "")
+        assert boot is None, "the manual says a configured node-ID applies only at power-on; reset communication " \
+                             "applied it"
+        assert lss.wait_bootup_at(lss.node_id, mark) is not None, f"no boot-up at {lss.node_id} after reset"
+        return
+    if boot is None:
+        evidence.inferred_problem(
+            f"no boot-up at the new node-ID {new_id} after NMT reset communication\n"
+            f"{format_frames(lss.dut.frames.since(mark)) or '  no frames'}",
+            "CiA 305 v3: the pending node-ID becomes active on reset communication (spec recall, "
+            "reference/conformance-landscape.md §3.1)")
+        return
+    assert lss.answers_at(new_id), f"boot-up at {new_id}, but no SDO answer there"
+
+
+def test_identify_remote_slave_by_ranges(lss: LssDevice):
+    """Identify remote slave: answered (4Fh) when the device's revision and serial lie in the ranges, not
+    when the serial range excludes it."""
+    require_service(lss, "identify_remote_slave")
+    address = lss.address
+    low = LssAddress(address.vendor, address.product, 0, max(address.serial - 1, 0))
+    high = LssAddress(address.vendor, address.product, 0xFFFFFFFF, address.serial)
+    assert lss.master.identify_remote(low, high) >= 1, "no 4Fh although the ranges contain the device"
+    above = LssAddress(address.vendor, address.product, 0, address.serial + 1)
+    top = LssAddress(address.vendor, address.product, 0xFFFFFFFF, 0xFFFFFFFF)
+    if address.serial < 0xFFFFFFFF:
+        assert lss.master.identify_remote(above, top) == 0, "4Fh although the serial range excludes the device"
+
+
+def test_configured_device_not_identified_as_non_configured(lss: LssDevice):
+    """Identify non-configured remote slave (4Ch) is answered only by a device with node-ID FFh."""
+    require_service(lss, "identify_non_configured")
+    assert lss.master.identify_non_configured() == 0, f"a configured device (node-ID {lss.node_id}) answered 50h"
+
+
+@pytest.fixture
+def unconfigured(lss: LssDevice, pytestconfig: pytest.Config) -> LssDevice:
+    """The device made unconfigured: node-ID 255 configured and applied (put back by the lss fixture).
+    Where that means storing (legacy activation, or a device that stores by itself) it is destructive."""
+    require_service(lss, "configure_node_id")
+    stores = not lss.applies_on_reset or "node_id" in lss.auto_stored
+    if stores and not settings_of(pytestconfig).allow_destructive:
+        pytest.skip("destructive here (the device stores the node-ID to apply it): run with --allow-destructive")
+    lss.apply_node_id(UNCONFIGURED_NODE_ID, lss.node_id)
+    return lss
+
+
+def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
+    """Node-ID 255: no boot-up and no SDO until LSS gives a node-ID; then the device boots with it."""
+    lss = unconfigured
+    quiet = lss.dut.frames.mark()
+    assert lss.wait_bootup_at(lss.node_id, quiet) is None, "unconfigured, but a boot-up at the old node-ID"
+    assert not lss.answers_at(lss.node_id, timeout=lss.dut.sdo_silence_s), "unconfigured, but answers SDO"
+    if "identify_non_configured" in lss.services:
+        assert lss.master.identify_non_configured() == 1, "unconfigured, but no answer to identify non-configured"
+    frames = lss.dut.frames.since(quiet, lambda m: m.is_rx and m.arbitration_id in (0x7FF, 0x77F, 0x6FF, 0x5FF))
+    assert not frames, f"an unconfigured device sent frames as node 127 or 255:\n{format_frames(frames)}"
+    assert lss.select()
+    mark = lss.dut.frames.mark()
+    assert lss.master.configure_node_id(lss.node_id) is not None
+    lss.leave()
+    assert lss.wait_bootup_at(lss.node_id, mark) is not None, (
+        f"no boot-up at {lss.node_id} after the unconfigured device got its node-ID\n"
+        f"{format_frames(lss.dut.frames.since(mark)) or '  no frames'}")
+    quirk = lss.dut.profile.params_of(fx.UnconfiguredNodeId)
+    if quirk is not None:
+        documented_quirk(lss.dut, fx.UnconfiguredNodeId, evidence, "")
+        for key in quirk.cob_ids_reset_to_default:
+            entry = lss.dut.profile.entry(key.index, key.sub)
+            if entry is None or entry.default is None:
+                continue
+            expected = resolve_node_id_expression(entry.default, lss.node_id)
+            value = lss.dut.read_uint(key.index, key.sub)
+            assert value == expected, f"{key}: 0x{value:X} after the node-ID was given, its default is 0x{expected:X}"
+
+
+def test_fastscan_finds_exact_identity(unconfigured: LssDevice, evidence):
+    """Fastscan (no part known) finds the unconfigured device's exact LSS address, which is then in the
+    configuration state (inquire node-ID answers FFh)."""
+    require_service(unconfigured, "fastscan")
+    lss = unconfigured
+    steps = lss.master.steps
+    found = lss.master.fastscan()
+    evidence.measure("fastscan frames", lss.master.steps - steps, "frames")
+    assert found == lss.address, f"fastscan found {found.describe() if found else 'nothing'}, the device is " \
+                                 f"{lss.address.describe()}"
+    if "inquire_node_id" in lss.services:
+        assert lss.master.inquire_node_id() == UNCONFIGURED_NODE_ID
+
+
+def test_fastscan_reset_restarts_a_partial_scan(unconfigured: LssDevice):
+    """BitChecked 80h restarts the scan: after the vendor-ID was confirmed, a reset and a full fastscan
+    still find the device."""
+    require_service(unconfigured, "fastscan")
+    lss = unconfigured
+    lss.master.request(LssCommand.FASTSCAN, bytes(4) + bytes([FASTSCAN_RESET_BIT, 0, 0]))
+    lss.master.request(LssCommand.FASTSCAN, lss.address.vendor.to_bytes(4, "little") + bytes([0, 0, 1]))
+    assert lss.master.fastscan() == lss.address, "after a reset (BitChecked 80h) the fastscan did not find it"
+
+
+def test_fastscan_no_configuration_before_serial(unconfigured: LssDevice):
+    """The device enters the configuration state only after the serial number was confirmed: a master that
+    confirms vendor-ID and product code and then sends LSSNext back to the vendor-ID does not select it
+    (CANopenNode PR#647)."""
+    require_service(unconfigured, "fastscan", "inquire_node_id")
+    lss = unconfigured
+    lss.master.request(LssCommand.FASTSCAN, bytes(4) + bytes([FASTSCAN_RESET_BIT, 0, 0]))
+    lss.master.request(LssCommand.FASTSCAN, lss.address.vendor.to_bytes(4, "little") + bytes([0, 0, 1]))
+    mark = lss.master.request(LssCommand.FASTSCAN, lss.address.product.to_bytes(4, "little") + bytes([0, 1, 0]))
+    assert lss.master.answer(LssCommand.IDENTIFY_SLAVE, mark) is not None, "product code confirm not answered"
+    assert lss.master.inquire_node_id() is None, "in the configuration state before its serial number was checked"
+
+
+@pytest.mark.destructive
+def test_store_configuration_survives_power_cycle(lss: LssDevice, power_cycle):
+    """Store configuration (17h) keeps a configured node-ID over a power cycle."""
+    require_service(lss, "configure_node_id", "store_configuration")
+    _stored_node_id_survives_power_cycle(lss, store=True)
+
+
+@pytest.mark.destructive
+def test_self_stored_node_id_survives_power_cycle(lss: LssDevice, power_cycle, evidence):
+    """A device that stores a configured node-ID by itself (quirk lss_config_auto_stored) boots with it
+    after a power cycle, without store configuration."""
+    require_service(lss, "configure_node_id")
+    documented_quirk(lss.dut, fx.LssConfigAutoStored, evidence, "the device stores by store configuration only")
+    if "node_id" not in lss.auto_stored:
+        pytest.skip("not applicable: the device stores its bit rate by itself, not its node-ID")
+    _stored_node_id_survives_power_cycle(lss, store=False)
+
+
+def _stored_node_id_survives_power_cycle(lss: LssDevice, store: bool) -> None:
+    """Configure another node-ID (and store it), power cycle: the device boots with it; then the same way
+    back to the node-ID it was found at."""
+    new_id = lss.free_node_id()
+    for node_id in (new_id, lss.node_id):
+        assert lss.select()
+        expect_success(lss.master.configure_node_id(node_id), f"configure node-ID {node_id}")
+        lss.moved_to.add(node_id)
+        if store:
+            expect_success(lss.master.store_configuration(), "store configuration")
+        lss.leave()
+        mark = lss.dut.frames.mark()
+        lss.power_cycle()  # type: ignore[misc]
+        assert lss.wait_bootup_at(node_id, mark) is not None or lss.answers_at(node_id), (
+            f"after a power cycle the device is not at the stored node-ID {node_id}\n"
+            f"{format_frames(lss.dut.frames.since(mark)) or '  no frames'}")
