@@ -9,6 +9,8 @@ puts the device back at the node-ID it was found at (fixtures/lss.py), also when
 
 from __future__ import annotations
 
+import time
+
 import pytest
 
 from encoder_conformance.checks import documented_quirk
@@ -25,7 +27,7 @@ from encoder_conformance.dut.lss_master import LssAddress
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.model import resolve_node_id_expression
-from fixtures.lss import require_service
+from fixtures.lss import destructive_if_self_stored, require_service
 
 CIA305 = "CiA 305 v3 (reference/conformance-landscape.md §3.1)"
 pytestmark = pytest.mark.spec(CIA305)
@@ -99,7 +101,7 @@ NODE_ID_CASES = [(1, 0), (MAX_NODE_ID, 0), (UNCONFIGURED_NODE_ID, 0), (0, 1), (1
 
 
 @pytest.mark.parametrize(("node_id", "error"), NODE_ID_CASES, ids=[f"{n}->{e}" for n, e in NODE_ID_CASES])
-def test_configure_node_id_range(lss: LssDevice, node_id: int, error: int, evidence):
+def test_configure_node_id_range(lss: LssDevice, node_id: int, error: int, pytestconfig):
     """Configure node-ID: 1..127 and 255 (unconfigured) accepted (error 0), 0 and 128..254 refused (error 1).
     The value is only pending: the test configures the device's own node-ID again before leaving."""
     require_service(lss, "configure_node_id")
@@ -108,8 +110,8 @@ def test_configure_node_id_range(lss: LssDevice, node_id: int, error: int, evide
             != (error == 0):
         pytest.skip(f"not judged: the manual's node-ID range {manual_range.node_id_range} and CiA 305 disagree "
                     f"on node-ID {node_id} (quirk lss_node_id_range)")
-    if lss.auto_stored and error == 0 and node_id != lss.node_id:
-        evidence.note("the device stores a configured node-ID by itself: the test stores its own node-ID again")
+    if error == 0 and node_id != lss.node_id:
+        destructive_if_self_stored(lss, pytestconfig, "node_id")
     assert lss.select()
     answer = lss.master.configure_node_id(node_id)
     if answer is not None and answer.error == 0:
@@ -119,7 +121,7 @@ def test_configure_node_id_range(lss: LssDevice, node_id: int, error: int, evide
 
 
 @pytest.mark.parametrize("index", [*range(0, 11)], ids=[f"index {i}" for i in range(11)])
-def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence):
+def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence, pytestconfig):
     """Configure bit timing, table 0: the indices of the bit rates the profile lists (and 9, automatic
     detection, where the device has it) are accepted; the reserved index 5 and indices past 9 are refused
     with error 1 (CiA 305), so are the rates the profile does not list (our inference: a manual lists what
@@ -127,6 +129,8 @@ def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence):
     require_service(lss, "configure_bit_timing")
     bus = lss.dut.profile.bus
     expected_ok = index in bus.lss_bit_indices()
+    if expected_ok and index != lss.bit_index:
+        destructive_if_self_stored(lss, pytestconfig, "bit_timing")
     if expected_ok and lss.bit_index is None and "bit_timing" in lss.auto_stored:
         pytest.skip("the bit rate in use is unknown and the device stores a configured bit rate by itself")
     assert lss.select()
@@ -145,11 +149,12 @@ def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence):
 
 
 # -- the node-ID life cycle ----------------------------------------------------------------------------------
-def test_configured_node_id_pending_until_reset(lss: LssDevice, evidence):
+def test_configured_node_id_pending_until_reset(lss: LssDevice, evidence, pytestconfig):
     """A configured node-ID is pending: the device keeps answering at its node-ID (and inquire node-ID
     says so) until NMT reset communication, after which it boots with the new one (CiA 305 v3; a legacy
     device applies it only at power-on, quirk lss_only_in_states)."""
     require_service(lss, "configure_node_id")
+    destructive_if_self_stored(lss, pytestconfig, "node_id")
     new_id = lss.free_node_id()
     assert lss.select()
     expect_success(lss.master.configure_node_id(new_id), f"configure node-ID {new_id}")
@@ -244,8 +249,9 @@ def test_fastscan_finds_exact_identity(unconfigured: LssDevice, evidence):
     configuration state (inquire node-ID answers FFh)."""
     require_service(unconfigured, "fastscan")
     lss = unconfigured
-    steps = lss.master.steps
+    steps, start = lss.master.steps, time.perf_counter()
     found = lss.master.fastscan()
+    evidence.measure("fastscan time", time.perf_counter() - start, "s")
     evidence.measure("fastscan frames", lss.master.steps - steps, "frames")
     assert found == lss.address, f"fastscan found {found.describe() if found else 'nothing'}, the device is " \
                                  f"{lss.address.describe()}"

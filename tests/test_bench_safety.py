@@ -34,9 +34,12 @@ from encoder_conformance.exit_codes import RunExit
 #: seconds after the start of the run at which Ctrl-C arrives (the suites start about 1.5 s in)
 INTERRUPT_AT_S = [1.0, 2.0, 3.0, 4.5, 6.0, 7.5, 9.0]  # 10.5 s and 12 s came after the end of faster runs
 #: and as soon as a test reports its result (pytest -v prints the line at the end of a test), i.e. inside
-#: the next one: the factory-state preparation (1011h 'load' + reset), and the power cycle of a stored value
+#: the next one: the factory-state preparation (1011h 'load' + reset), the power cycle of a stored value,
+#: and the LSS unconfigured start-up (the WDGA stores node-ID 255 and is power-cycled to apply it)
 INTERRUPT_AFTER = ["test_object_dictionary.py::test_undeclared_subindex_aborts",
-                   "test_store_restore.py::test_stored_value_survives_reset_node"]
+                   "test_store_restore.py::test_stored_value_survives_reset_node",
+                   "test_lss.py::test_configured_device_not_identified_as_non_configured"]
+STORE_POWER_CYCLE = INTERRUPT_AFTER[1]
 MOMENTS: list[float | str] = [*INTERRUPT_AT_S, *INTERRUPT_AFTER]
 CTRL_C_LIMIT_S = 2.0  # the run's own clock, interrupt to verdict (run-outcome.json stopped_after_s)
 #: what this harness measures on top (process exit, its own wake-up beside a busy process): CI saw 2.08 s
@@ -179,7 +182,7 @@ def test_restore_command_finishes_after_a_hard_crash(tmp_path):
         before, stored_before = twin.read_everything(), twin.stored()
         run = twin.start_run(tmp_path / "report", "-v")
         seen: list[str] = []
-        assert wait_for_line(run, INTERRUPT_AFTER[-1], 120, seen), "".join(seen[-20:])
+        assert wait_for_line(run, STORE_POWER_CYCLE, 120, seen), "".join(seen[-20:])
         threading.Event().wait(0.05)
         run.kill()
         run.communicate(timeout=10)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -99,6 +100,9 @@ class Custody:
         self.snapshot: Snapshot | None = None
         self.record: RestoreRecord | None = None
         self.power: BenchPower | None = None  # the bench's power switch, once a test used it
+        #: put back first what a test changed outside the object dictionary (an LSS node-ID): each step
+        #: returns None or what it could not put back
+        self.first_steps: list[Callable[[], str | None]] = []
 
     # -- take --------------------------------------------------------------------------------------
     def take(self, profile_sha256: str) -> Snapshot:
@@ -215,16 +219,20 @@ class Custody:
             record.written.append(f"power switched on again ({self.power.description})")
             mark = dut.frames.mark()
             wake_if_silent(dut)
-            dut.wait_bootup(mark)
+            if not self.first_steps:  # else they wait for the device where it is (e.g. unconfigured: no boot-up)
+                dut.wait_bootup(mark)
+        for step in list(self.first_steps):
+            problem = step()
+            if problem:
+                record.fail(problem)
         dut.nmt("pre-operational")
         if not (dut.responds() or dut.responds()):
             raise DutLostError("no SDO answer after NMT enter pre-operational")
         keys = [e.key for e in snapshot.entries]
         now = read_values(dut, keys)
         record.left_changed = self._differences(now, lambda e: e.target_found())
-        if check_stored:
-            self._give_back_stored(record, deadline)
-            now = read_values(dut, keys)
+        if check_stored and self._give_back_stored(record, deadline, now):
+            now = read_values(dut, keys)  # a reset or writes since the first read
         targets = {e.key: e.target_found() for e in snapshot.entries}
         self._write(record, deadline, {k: v for k, v in targets.items() if v is not None and now.get(k) != v}, now)
         after = read_values(dut, keys)
@@ -232,22 +240,26 @@ class Custody:
             record.fail(f"not restored: {change.describe()}")
         self._back_to_found_state(record)
 
-    def _give_back_stored(self, record: RestoreRecord, deadline: Deadline) -> None:
-        """Reset, compare with what was stored, write and store what differs, reset and check.
+    def _give_back_stored(self, record: RestoreRecord, deadline: Deadline, now: dict[Key, bytes | None]) -> bool:
+        """Reset, compare with what was stored, write and store what differs, reset and check; True if it
+        reset the device or wrote to it (the values in use may then differ from ``now``).
 
         After a restore-defaults command the device's memory may have lost groups whose values
         equal their defaults (nothing shows it over the bus): then every group is stored again.
+        Where the device restarted since the tests last wrote to it (a power cycle), the values in use
+        ``now`` are what it stored: no reset and no second read.
         """
         dut = self.dut
         snapshot = self.snapshot
         assert snapshot is not None
         stored_keys = [e.key for e in snapshot.entries if e.stored is not None and is_stored(dut.profile.entry(*e.key))]
+        shows_stored = self.restarts.shows_stored
         self._reset(deadline)
-        loaded = read_values(dut, stored_keys)
+        loaded = {k: now.get(k) for k in stored_keys} if shows_stored else read_values(dut, stored_keys)
         record.stored_changed = self._differences(loaded, lambda e: e.target_stored(), stored_keys)
         defaults_restored = any(kind.startswith("restore defaults") for kind in self.watch.counts)
         if not record.stored_changed and not defaults_restored:
-            return
+            return not shows_stored
         targets = {k: snapshot.entry(k).target_stored() for k in stored_keys}  # type: ignore[union-attr]
         differing = {k: v for k, v in targets.items() if v is not None and loaded.get(k) != v}
         self._write(record, deadline, differing, loaded)
@@ -264,6 +276,7 @@ class Custody:
         reloaded = read_values(dut, stored_keys)
         for change in self._differences(reloaded, lambda e: e.target_stored(), stored_keys):
             record.fail(f"stored value not restored: {change.describe()}")
+        return True
 
     def _differences(self, values: dict[Key, bytes | None], target, keys: list[Key] | None = None) -> list[Change]:  # noqa: ANN001
         assert self.snapshot is not None

@@ -10,12 +10,13 @@ device that applies a node-ID only at power-on).
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import can
 
-from ..cia305 import BIT_TIMING_TABLE_0, UNCONFIGURED_NODE_ID, LssState
+from ..cia305 import BIT_TIMING_TABLE_0, MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand, LssState
 from ..profile import quirk_effects as fx
 from .device import DeviceUnderTest
 from .frames import Mark
@@ -38,6 +39,11 @@ class LssDevice:
     bit_index: int | None  # the table-0 index of the bit rate in use, where known
     power_cycle: Callable[[], None] | None = None  # a bench power switch, where there is one
     moved_to: set[int] = field(default_factory=set)  # node-IDs a test gave the device
+    made_unconfigured: bool = False
+    start: Mark | None = None  # before the test's first LSS frame
+
+    def __post_init__(self) -> None:
+        self.start = self.dut.frames.mark()
 
     @property
     def services(self) -> frozenset[str]:
@@ -67,6 +73,14 @@ class LssDevice:
         if "switch_selective" in self.services:
             return self.master.switch_selective(self.address)
         self.master.switch_global(LssState.CONFIGURATION)
+        return True
+
+    def _select_within(self, seconds: float) -> bool:
+        """Select the device, retrying while it may still be starting (after a power cycle)."""
+        deadline = time.monotonic() + seconds
+        while not self.select():
+            if time.monotonic() > deadline:
+                return False
         return True
 
     def leave(self) -> Mark:
@@ -101,9 +115,11 @@ class LssDevice:
         """Configure ``new_id`` and make it active; returns a mark before it becomes active.
         On a device that applies it only at power-on: store configuration and a power cycle."""
         assert self.select(), f"switch state selective to {self.address.describe()}: no answer (44h)"
-        expect_success(self.master.configure_node_id(new_id), f"configure node-ID {new_id}")
-        if new_id != UNCONFIGURED_NODE_ID:
+        if new_id == UNCONFIGURED_NODE_ID:
+            self.made_unconfigured = True
+        else:
             self.moved_to.add(new_id)
+        expect_success(self.master.configure_node_id(new_id), f"configure node-ID {new_id}")
         if self.applies_on_reset:
             self.leave()
             return self.reset_communication(active_id)
@@ -119,12 +135,21 @@ class LssDevice:
         self.power_cycle()
 
     # -- put back ----------------------------------------------------------------------------------
+    def _sent(self, command: int) -> bool:
+        """Did the test send this LSS request?"""
+        return bool(self.dut.frames.since(self.start, lambda m: not m.is_rx and m.arbitration_id == MASTER_COB_ID
+                                          and bool(m.data) and m.data[0] == command))
+
     def put_back(self) -> str | None:
-        """The device at its node-ID again, as found; None, or what could not be put back."""
+        """The device at its node-ID again, as found, with nothing else pending; None, or what could not be
+        put back. Costs a few frames where the test only configured values it never applied."""
         self.leave()
-        if self.answers_at(self.node_id, timeout=self.dut.sdo_timeout):
+        if not self._sent(LssCommand.CONFIGURE_NODE_ID) and not self._sent(LssCommand.CONFIGURE_BIT_TIMING):
             return None
-        if not self.select():
+        moved = bool(self.moved_to) or self.made_unconfigured
+        if not moved or self.answers_at(self.node_id, timeout=self.dut.sdo_silence_s):
+            return self._configure_as_found()
+        if not self._select_within(self.dut.profile.timing.bootup_max_ms / 1000):
             return f"the device does not answer at node-ID {self.node_id} nor to its LSS address"
         active = self.master.inquire_node_id() if "inquire_node_id" in self.services else None
         answer = self.master.configure_node_id(self.node_id)
@@ -140,6 +165,23 @@ class LssDevice:
         if self.wait_bootup_at(self.node_id, mark) is None and not self.answers_at(self.node_id):
             return f"after configure node-ID {self.node_id} the device does not answer at it"
         return None
+
+
+    def _configure_as_found(self) -> str | None:
+        """Pending node-ID and bit timing back to the ones in use (a later reset must not apply a test's)."""
+        if not self.select():
+            return f"the device does not answer to its LSS address {self.address.describe()}"
+        problems = []
+        if self._sent(LssCommand.CONFIGURE_NODE_ID):
+            answer = self.master.configure_node_id(self.node_id)
+            if answer is None or answer.error:
+                problems.append(f"configure node-ID {self.node_id}: {answer}")
+        if self._sent(LssCommand.CONFIGURE_BIT_TIMING) and self.bit_index is not None:
+            answer = self.master.configure_bit_timing(self.bit_index)
+            if answer is None or answer.error:
+                problems.append(f"configure bit timing {self.bit_index}: {answer}")
+        self.leave()
+        return "; ".join(problems) or None
 
 
 def expect_success(answer: LssAnswer | None, what: str) -> LssAnswer:

@@ -3,7 +3,8 @@
 Watches the tester's own frames (FrameLog listener), so every path counts: canopen's client, raw
 SDO frames, fixtures, the restore. A download to 1010h/1011h, to a manufacturer store object, or
 to an entry the device stores by itself (``persisted_by: auto``) may change the stored
-configuration: the restore then checks and puts back what is stored.
+configuration: the restore then checks and puts back what is stored. So do LSS store configuration
+(17h) and, on a device that stores them by itself, LSS configure node-ID / bit timing.
 """
 
 from __future__ import annotations
@@ -14,8 +15,10 @@ from collections import Counter
 import can
 
 from ..cia301 import RESTORE_DEFAULT_PARAMETERS, STORE_PARAMETERS
+from ..cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
+from ..cia305 import LssCommand
 from ..profile.model import DeviceProfile
-from ..profile.quirk_effects import ManufacturerStoreObject, StoreRebootsWithoutReply
+from ..profile.quirk_effects import LssConfigAutoStored, ManufacturerStoreObject, StoreRebootsWithoutReply
 
 #: SDO client command specifiers that start a download (CiA 301 §7.2.4.3): initiate, block initiate
 _DOWNLOAD_INITIATE = {1, 6}
@@ -38,12 +41,16 @@ class StoreWatch(can.Listener):
         self._request_id = 0x600 + node_id
         self._commands = store_command_objects(profile)
         self._auto = frozenset((i, s) for i, s, _, e in profile.iter_entries() if e.persisted_by == "auto")
+        self._lss_stores = _lss_stores(profile)
         self._lock = threading.Lock()
         self.counts: Counter[str] = Counter()
         self.by_restore: Counter[str] = Counter()
         self.restoring = False
 
     def on_message_received(self, msg: can.Message) -> None:
+        if not msg.is_rx and msg.arbitration_id == LSS_MASTER_COB_ID and msg.data and msg.data[0] in self._lss_stores:
+            self._count(self._lss_stores[msg.data[0]])
+            return
         if msg.is_rx or msg.arbitration_id != self._request_id or len(msg.data) < 4:
             return
         if msg.data[0] >> 5 not in _DOWNLOAD_INITIATE:
@@ -57,6 +64,9 @@ class StoreWatch(can.Listener):
             kind = "writes the device stores by itself"
         else:
             return
+        self._count(kind)
+
+    def _count(self, kind: str) -> None:
         with self._lock:
             (self.by_restore if self.restoring else self.counts)[kind] += 1
 
@@ -70,3 +80,15 @@ class StoreWatch(can.Listener):
     def total_by_restore(self) -> int:
         with self._lock:
             return sum(self.by_restore.values())
+
+
+def _lss_stores(profile: DeviceProfile) -> dict[int, str]:
+    """LSS command specifiers that store on this device -> how the report names them."""
+    stores = {int(LssCommand.STORE_CONFIGURATION): "LSS store configuration"}
+    auto = profile.params_of(LssConfigAutoStored)
+    if auto is not None:
+        if "node_id" in auto.auto_stored:
+            stores[int(LssCommand.CONFIGURE_NODE_ID)] = "LSS configure node-ID (stored by the device itself)"
+        if "bit_timing" in auto.auto_stored:
+            stores[int(LssCommand.CONFIGURE_BIT_TIMING)] = "LSS configure bit timing (stored by the device itself)"
+    return stores
