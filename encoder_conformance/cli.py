@@ -38,9 +38,13 @@ def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
 
 
 def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
-    from .sim.serve import serve
+    from .sim.serve import plan_nodes, serve
 
-    return serve(args.profile, args.listen, args.control, args.node_id, args.fault, args.nvm, args.ready_line)
+    try:
+        plan = plan_nodes(args.profile, args.node_id, args.copies, args.unconfigured)
+    except ValueError as exc:
+        args.parser.error(str(exc))
+    return serve(plan, args.listen, args.control, args.fault, args.nvm, args.ready_line)
 
 
 def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
@@ -198,6 +202,14 @@ class _Parser(argparse.ArgumentParser):
         self.exit(RunExit.USAGE_ERROR, f"{self.prog}: error: {message}\n")
 
 
+def _positive(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    value = int(text) if text.strip().isdigit() else 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive whole number")
+    return value
+
+
 def _bus_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--can-interface", help="python-can interface (pcan, kvaser, socketcan, remote ...)")
     parser.add_argument("--can-channel")
@@ -251,10 +263,15 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--listen", default="127.0.0.1:54701", help="HOST:PORT for python-can-remote clients")
     sim.add_argument("--control", default=None, help="HOST:PORT for the control channel (power cycle ...)")
     sim.add_argument("--node-id", type=int, action="append", default=[], help="node-id per profile")
+    sim.add_argument("--copies", type=_positive, default=1, metavar="N",
+                     help="N units of the profile with serial numbers base, base+1, ... (the profile's "
+                          "simulator.serial_number) and consecutive node-ids from --node-id or the profile's")
+    sim.add_argument("--unconfigured", action="store_true",
+                     help="the nodes wait unconfigured (node-id 255) for an LSS master (see 'lss')")
     sim.add_argument("--fault", action="append", default=[], help="inject a named fault (see 'faults')")
     sim.add_argument("--nvm", type=Path, help="file for the non-volatile memory (default: in memory)")
     sim.add_argument("--ready-line", action="store_true", help=argparse.SUPPRESS)
-    sim.set_defaults(func=_cmd_sim)
+    sim.set_defaults(func=_cmd_sim, parser=sim)
 
     profile = sub.add_parser("profile", help="validate, list, import from EDS, export to EDS")
     psub = profile.add_subparsers(dest="profile_command", required=True)
