@@ -1,6 +1,6 @@
-"""Command line: ``encoder-conformance run | restore | sim | sim-control | profile ... | faults | fault-matrix``.
+"""Command line: ``encoder-conformance run | restore | lss | sim | sim-control | profile | faults | fault-matrix``.
 
-Exit codes of ``run`` and ``restore`` follow exit_codes.RunExit; a usage error (bad option,
+Exit codes of ``run``, ``restore`` and ``lss`` follow exit_codes.RunExit; a usage error (bad option,
 unreadable profile) is 4 for every command.
 """
 
@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .errors import BusSetupError, ProfileError
 from .exit_codes import RunExit, interrupted_by
+from .lss_cli import add_lss_parser
 from .paths import DEFAULT_PROFILE, SUITES_DIR
 
 
@@ -48,17 +49,14 @@ def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
 
 
 def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
-    from .bus_config import resolve_bus_config
+    from .bus_config import resolve_bench_bus
     from .restore_command import RestoreRequest, restore_from_snapshot
 
     try:
-        bus = resolve_bus_config(args.can_interface, args.can_channel, args.can_bitrate)
+        bus = resolve_bench_bus(args.can_interface, args.can_channel, args.can_bitrate,
+                                "a built-in simulator has nothing to restore")
     except BusSetupError as exc:
         print(f"restore: {exc}", file=sys.stderr)
-        return RunExit.USAGE_ERROR
-    if bus.simulated:
-        print("restore: name the bus with --can-interface/--can-channel (or python-can's configuration); "
-              "a built-in simulator has nothing to restore", file=sys.stderr)
         return RunExit.USAGE_ERROR
     request = RestoreRequest(Path(args.snapshot), bus, args.node_id, args.timeout, args.force, args.power_on_cmd)
     return restore_from_snapshot(request)
@@ -210,11 +208,12 @@ def _positive(text: str) -> int:
     return value
 
 
-def _bus_arguments(parser: argparse.ArgumentParser) -> None:
+def _bus_arguments(parser: argparse.ArgumentParser, node_id: bool = True) -> None:
     parser.add_argument("--can-interface", help="python-can interface (pcan, kvaser, socketcan, remote ...)")
     parser.add_argument("--can-channel")
     parser.add_argument("--can-bitrate", type=int)
-    parser.add_argument("--node-id", type=int)
+    if node_id:
+        parser.add_argument("--node-id", type=int)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -252,6 +251,8 @@ def build_parser() -> argparse.ArgumentParser:
     restore.add_argument("--force", action="store_true",
                          help="restore even if the device's serial number differs from the snapshot's")
     restore.set_defaults(func=_cmd_restore)
+
+    add_lss_parser(sub, _Parser, _bus_arguments)
 
     sim_control = sub.add_parser("sim-control", help="switch a served simulator's power (a bench power switch)")
     sim_control.add_argument("--control", required=True, help="HOST:PORT of the simulator's control channel")
