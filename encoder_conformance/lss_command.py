@@ -106,7 +106,10 @@ def scan(options: LssOptions, as_json: bool = False) -> int:
         named = ", ".join(f"{part} 0x{value:08X}" for part, value in zip(ADDRESS_PARTS, known, strict=True)
                           if value is not None)
         scope = f"scanning only devices with {named}" if named else "it names no vendor-ID or product code"
+        if "fastscan" not in options.profile.capabilities.lss:
+            scope += "; it declares no LSS fastscan, so its devices may not answer a scan"
         _say(f"profile {options.profile.id}: {scope}")
+
     def work() -> int:
         with _session(options) as master:
             progress = _Progress()
@@ -234,21 +237,24 @@ def set_bitrate(options: LssOptions, target: Target, index: int, store: bool, ac
     def work() -> int:
         with _session(options) as master:
             _select(master, target, options.profile)
+            activated = False
             try:
                 _checked(LssCommand.CONFIGURE_BIT_TIMING, f"configure bit timing {rate} bit/s (table 0 index "
                          f"{index})", master.configure_bit_timing(index))
                 _store(master, store, "bit rate")
                 if activate_ms is not None:
                     master.activate_bit_timing(activate_ms)
+                    activated = True
             finally:
-                if activate_ms is None:
+                if not activated:  # after activate bit timing the bus changes rate: nothing more at this one
                     master.switch_global(LssState.WAITING)
-            if activate_ms is None:
+            if not activated:
                 print(f"{rate} bit/s becomes active with activate bit timing (--activate DELAY_MS) or, stored, "
                       "after a power cycle")
             else:
-                print(f"activate bit timing sent: every device in LSS configuration state runs at {rate} bit/s "
-                      f"after {activate_ms} ms; reopen the adapter at {rate} bit/s (--can-bitrate {rate})")
+                print(f"activate bit timing sent: the device runs at {rate} bit/s after {activate_ms} ms and is "
+                      f"still in LSS configuration state; reopen the adapter at {rate} bit/s (--can-bitrate "
+                      f"{rate}): any lss command then switches it back to waiting state")
         return RunExit.PASSED
 
     return _guarded(work)
