@@ -15,14 +15,16 @@ import sys
 import threading
 import uuid
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
+import can
 import pytest
 
 from encoder_conformance.bus_config import BusConfig
-from encoder_conformance.cia305 import UNCONFIGURED_NODE_ID, LssCommand
+from encoder_conformance.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand
 from encoder_conformance.cli import build_parser
+from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.dut.lss_find import error_text
 from encoder_conformance.dut.lss_master import LssAnswer
 from encoder_conformance.exit_codes import RunExit
@@ -128,6 +130,38 @@ def test_set_bitrate_configures_the_table_0_index_and_does_not_activate(bench, c
     assert "configure bit timing 250000 bit/s (table 0 index 3): done" in out
     assert "becomes active with activate bit timing" in out
     assert [bench.slave(node).pending_bit_index for node in bench.nodes] == [None, 3]
+
+
+@pytest.mark.parametrize("bench", [8], indirect=True)
+def test_scan_with_a_profile_confirms_vendor_and_product_in_one_step(bench, capsys):
+    """--profile: its vendor-ID and product code are known parts; devices of another product are not scanned."""
+    named = PROFILE.model_copy(update={"identity": PROFILE.identity.model_copy(
+        update={"vendor_id": VENDOR, "product_code": PRODUCT})})
+    assert scan(replace(bench.options, profile=named), as_json=True) == RunExit.PASSED
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["count"] == 8
+    assert f"scanning only devices with vendor 0x{VENDOR:08X}, product 0x{PRODUCT:08X}" in captured.err
+    other = named.model_copy(update={"identity": named.identity.model_copy(update={"product_code": PRODUCT + 1})})
+    assert scan(replace(bench.options, profile=other), as_json=True) == RunExit.COULD_NOT_TEST
+    assert json.loads(capsys.readouterr().out)["count"] == 0
+
+
+@pytest.mark.parametrize("bench", [1], indirect=True)
+def test_set_bitrate_activates_only_when_asked_and_then_says_nothing_more(bench, capsys):
+    """--activate: activate bit timing with the switch delay is the last LSS frame (the bus changes rate)."""
+    log = FrameLog()
+    listener = can.Bus(interface="virtual", channel=bench.options.bus.kwargs["channel"])
+    notifier = can.Notifier(listener, [log], timeout=0.02)
+    try:
+        mark = log.mark()
+        target = Target(BASE, VENDOR, PRODUCT, PROFILE.simulator.revision_number)
+        assert set_bitrate(bench.options, target, 2, store=False, activate_ms=300) == RunExit.PASSED
+        requests = log.since(mark, lambda m: m.arbitration_id == MASTER_COB_ID)
+    finally:
+        notifier.stop()
+        listener.shutdown()
+    assert bytes(requests[-1].data[:3]) == bytes([LssCommand.ACTIVATE_BIT_TIMING]) + (300).to_bytes(2, "little")
+    assert "runs at 500000 bit/s after 300 ms" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("bench", [0], indirect=True)
