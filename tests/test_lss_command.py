@@ -51,7 +51,8 @@ class Bench:
 
     def slave(self, node: SimulatedNode) -> LssSlave:
         """The node's LSS slave (to see what is pending in it)."""
-        return next(listener.__self__ for listener in node.hooks.lss)  # type: ignore[attr-defined]
+        assert node.lss is not None
+        return node.lss.slave
 
 
 @pytest.fixture
@@ -108,6 +109,18 @@ def test_scan_finds_eight_unconfigured_devices_in_under_five_seconds_and_changes
     assert _scanned(bench, capsys)["count"] == 8  # a second scan finds them all again
 
 
+@pytest.mark.parametrize("bench", [8], indirect=True)
+def test_set_node_id_gives_one_unconfigured_device_its_node_id(bench, capsys):
+    """Selected by its serial alone (found by a scan): it boots as the new node and leaves the scan."""
+    assert set_node_id(bench.options, Target(BASE + 3), 20, store=False) == RunExit.PASSED
+    out = capsys.readouterr().out
+    assert "configure node-ID 20: done" in out
+    assert "it booted as node 20" in out, out
+    assert bench.nodes[3].node_id == 20
+    result = _scanned(bench, capsys)
+    assert sorted(d["serial"] for d in result["devices"]) == [BASE + n for n in range(8) if n != 3]
+
+
 @pytest.mark.parametrize("bench", [(3, 10)], indirect=True)
 def test_set_node_id_of_a_configured_device_finds_its_revision_by_identify(bench, capsys):
     """Vendor and product given, the revision found by identify-remote-slave bisection; the new node-ID is
@@ -120,6 +133,17 @@ def test_set_node_id_of_a_configured_device_finds_its_revision_by_identify(bench
     assert "becomes active after NMT reset communication (it is node 11 until then)" in captured.out
     assert bench.slave(bench.nodes[1]).pending_node_id == 42
     assert [bench.slave(node).pending_node_id for node in (bench.nodes[0], bench.nodes[2])] == [None, None]
+    log = FrameLog()  # as the command says: NMT reset communication makes it node 42
+    tester = can.Bus(interface="virtual", channel=bench.options.bus.kwargs["channel"])
+    notifier = can.Notifier(tester, [log], timeout=0.02)
+    try:
+        mark = log.mark()
+        tester.send(can.Message(arbitration_id=0x000, data=[0x82, 11], is_extended_id=False))
+        assert log.wait_for(lambda m: m.arbitration_id == 0x700 + 42 and bytes(m.data) == b"\x00", 2.0, mark)
+    finally:
+        notifier.stop()
+        tester.shutdown()
+    assert bench.nodes[1].node_id == 42
 
 
 @pytest.mark.parametrize("bench", [2], indirect=True)
@@ -143,7 +167,9 @@ def test_scan_with_a_profile_confirms_vendor_and_product_in_one_step(bench, caps
     assert f"scanning only devices with vendor 0x{VENDOR:08X}, product 0x{PRODUCT:08X}" in captured.err
     other = named.model_copy(update={"identity": named.identity.model_copy(update={"product_code": PRODUCT + 1})})
     assert scan(replace(bench.options, profile=other), as_json=True) == RunExit.COULD_NOT_TEST
-    assert json.loads(capsys.readouterr().out)["count"] == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["count"] == 0
+    assert "more unconfigured devices answered, but no fastscan found them" in captured.err
 
 
 @pytest.mark.parametrize("bench", [1], indirect=True)
@@ -236,3 +262,18 @@ def test_cli_scan_finds_one_and_eight_devices_in_time(served):
     print(f"\nlss scan through python-can-remote: one device {timings[1]:.2f} s, eight {timings[8]:.2f} s")
     assert timings[1] < 1.0
     assert timings[8] < 5.0
+
+
+def test_cli_set_node_id_then_scan_no_longer_lists_the_device(served):
+    sim = served[8]
+    result = _lss(sim, "set-node-id", "--serial", str(BASE + 5), "7", "--store")
+    assert result.returncode == 0, result.stderr
+    assert "store configuration: done" in result.stdout
+    assert "it booted as node 7" in result.stdout
+    listing = _lss(sim, "scan")
+    assert listing.returncode == 0, listing.stderr
+    assert f"({BASE + 5})" not in listing.stdout
+    assert "7 unconfigured device(s)" in listing.stdout
+    invalid = _lss(sim, "set-bitrate", "--serial", str(BASE), "100k")
+    assert invalid.returncode == RunExit.USAGE_ERROR
+    assert "valid bit/s: 1000000, 800000, 500000, 250000, 125000, 50000, 20000, 10000" in invalid.stderr

@@ -4,6 +4,9 @@ A scan changes nothing in the devices: each fastscan leaves the slave it found i
 where it no longer takes part, so the next fastscan finds the next one; at the end one switch state
 global puts them all back in waiting state. Each fastscan first tries the previous device's vendor,
 product, revision and serial + 1 (one step each), which finds a batch of units in a few steps apiece.
+An answer later than the response window misleads a step (it counts for the next one); a fastscan or
+a bisection spoiled that way is noticed (nobody found although devices answered; the revision found
+does not answer) and repeated.
 """
 
 from __future__ import annotations
@@ -13,12 +16,15 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+import can
+
 from ..cia305 import (
     ERROR_MANUFACTURER,
     ERROR_NONE,
     ERROR_OUT_OF_RANGE,
     ERROR_STORE_ACCESS,
     IDENTIFY_RANGE_COMMANDS,
+    SLAVE_COB_ID,
     LssCommand,
     LssState,
 )
@@ -27,8 +33,13 @@ from .lss_master import LssAddress, LssAnswer, LssMaster
 #: a loop guard: more unconfigured devices than a network has node-IDs is a device that keeps answering
 MAX_DEVICES = 127
 FULL_RANGE = (0, 0xFFFFFFFF)
-#: fastscans that found nobody before a scan ends (a late answer can spoil one on a loaded bus or host)
-RETRIES = 1
+#: a fastscan whose reset was answered but that found nobody (an answer later than the window misled a step,
+#: or a known part matches none of the devices) is tried this often more before the scan gives up
+SPOILED_RETRIES = 3
+#: bisections tried before find_revision gives up (each is checked by identifying the revision found)
+BISECTIONS = 2
+#: after a fastscan that found nobody, answers are still looked for this many response windows
+LATE_WINDOWS = 2
 
 Progress = Callable[[int, LssAddress], None]
 
@@ -41,6 +52,7 @@ class ScanResult:
     seconds: float = 0.0
     frames: int = 0
     repeated: LssAddress | None = None  # found twice: it did not stay in configuration state (list incomplete)
+    unresolved: bool = False  # unconfigured devices answered that no fastscan could find (list incomplete)
 
 
 def scan_unconfigured(master: LssMaster, known: Sequence[int | None] = (None, None, None, None),
@@ -50,16 +62,21 @@ def scan_unconfigured(master: LssMaster, known: Sequence[int | None] = (None, No
     result = ScanResult()
     master.switch_global(LssState.WAITING)  # a device an earlier session left in configuration state takes part
     guess: tuple[int | None, ...] = (None, None, None, None)
-    misses = 0
+    spoiled = 0
     try:
         while len(result.devices) < MAX_DEVICES:
+            mark = master.frames.mark()
             address = master.fastscan(known, guess)
             if address is None:
-                misses += 1  # nobody left, or a scan spoiled by a late answer: one more try tells
-                if misses == RETRIES + 1:
+                # nobody answered at all, not even later than the window (a loaded host or link): none left
+                if master.frames.wait_for(_scan_answer, LATE_WINDOWS * master.response_s, mark) is None:
+                    break
+                spoiled += 1
+                if spoiled > SPOILED_RETRIES:
+                    result.unresolved = True
                     break
                 continue
-            misses = 0
+            spoiled = 0
             if address in result.devices:
                 result.repeated = address
                 break
@@ -73,6 +90,10 @@ def scan_unconfigured(master: LssMaster, known: Sequence[int | None] = (None, No
     result.seconds = time.perf_counter() - start
     result.frames = master.steps - steps
     return result
+
+
+def _scan_answer(msg: can.Message) -> bool:
+    return msg.is_rx and msg.arbitration_id == SLAVE_COB_ID and msg.data[:1] == bytes([LssCommand.IDENTIFY_SLAVE])
 
 
 def any_identified(master: LssMaster, low: LssAddress, high: LssAddress) -> bool:
@@ -97,13 +118,17 @@ def find_revision(master: LssMaster, vendor: int, product: int, serial: int,
 
     if not answered(low, high):
         return None
-    while low < high:
-        middle = (low + high) // 2
-        if answered(low, middle):
-            high = middle
-        else:
-            low = middle + 1
-    return low
+    for _attempt in range(BISECTIONS):
+        first, last = low, high
+        while first < last:
+            middle = (first + last) // 2
+            if answered(first, middle):
+                last = middle
+            else:
+                first = middle + 1
+        if answered(first, first):  # a late answer can have sent the bisection the wrong way
+            return first
+    return None
 
 
 #: what error 1 means for each configuration service (CiA 305)
