@@ -125,8 +125,8 @@ def scan(options: LssOptions, as_json: bool = False) -> int:
             print(f"{len(result.devices)} unconfigured device(s) in {result.seconds:.2f} s "
                   f"({result.frames} LSS frames)")
         if result.unresolved:
-            _say("lss: more unconfigured devices answered, but no fastscan found them: their vendor-ID or product "
-                 "code differs from --profile's, or their answers came later than --response-ms")
+            _say("lss: unconfigured devices answered that no fastscan could find: their vendor-ID or product code "
+                 "differs from --profile's, or their answers came later than --response-ms")
         if result.repeated is not None:
             _say(f"lss: {result.repeated.describe()} answered the scan twice: it does not stay in LSS configuration "
                  "state after fastscan (CiA 305), so the list may be incomplete")
