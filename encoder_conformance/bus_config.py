@@ -78,3 +78,12 @@ def resolve_bus_config(interface: str | None, channel: str | None, bitrate: int 
         if key not in sources:
             sources[key] = "can.rc" if key in can.rc else env.get(key, "python-can config file")
     return BusConfig(dict(resolved), sources)
+
+
+def resolve_bench_bus(interface: str | None, channel: str | None, bitrate: int | None, why: str) -> BusConfig:
+    """The real bus a bench command (restore, lss) works on; BusSetupError (a usage error) if none is named,
+    ``why`` saying what the built-in simulator would not do."""
+    bus = resolve_bus_config(interface, channel, bitrate)
+    if bus.simulated:
+        raise BusSetupError(f"name the bus with --can-interface/--can-channel (or python-can's configuration); {why}")
+    return bus

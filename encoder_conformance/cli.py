@@ -1,6 +1,6 @@
-"""Command line: ``encoder-conformance run | restore | sim | sim-control | profile ... | faults | fault-matrix``.
+"""Command line: ``encoder-conformance run | restore | lss | sim | sim-control | profile | faults | fault-matrix``.
 
-Exit codes of ``run`` and ``restore`` follow exit_codes.RunExit; a usage error (bad option,
+Exit codes of ``run``, ``restore`` and ``lss`` follow exit_codes.RunExit; a usage error (bad option,
 unreadable profile) is 4 for every command.
 """
 
@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .errors import BusSetupError, ProfileError
 from .exit_codes import RunExit, interrupted_by
+from .lss_cli import add_lss_parser
 from .paths import DEFAULT_PROFILE, SUITES_DIR
 
 
@@ -38,23 +39,24 @@ def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
 
 
 def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
-    from .sim.serve import serve
+    from .sim.serve import plan_nodes, serve
 
-    return serve(args.profile, args.listen, args.control, args.node_id, args.fault, args.nvm, args.ready_line)
+    try:
+        plan = plan_nodes(args.profile, args.node_id, args.copies, args.unconfigured)
+    except ValueError as exc:
+        args.parser.error(str(exc))
+    return serve(plan, args.listen, args.control, args.fault, args.nvm, args.ready_line)
 
 
 def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
-    from .bus_config import resolve_bus_config
+    from .bus_config import resolve_bench_bus
     from .restore_command import RestoreRequest, restore_from_snapshot
 
     try:
-        bus = resolve_bus_config(args.can_interface, args.can_channel, args.can_bitrate)
+        bus = resolve_bench_bus(args.can_interface, args.can_channel, args.can_bitrate,
+                                "a built-in simulator has nothing to restore")
     except BusSetupError as exc:
         print(f"restore: {exc}", file=sys.stderr)
-        return RunExit.USAGE_ERROR
-    if bus.simulated:
-        print("restore: name the bus with --can-interface/--can-channel (or python-can's configuration); "
-              "a built-in simulator has nothing to restore", file=sys.stderr)
         return RunExit.USAGE_ERROR
     request = RestoreRequest(Path(args.snapshot), bus, args.node_id, args.timeout, args.force, args.power_on_cmd)
     return restore_from_snapshot(request)
@@ -198,11 +200,20 @@ class _Parser(argparse.ArgumentParser):
         self.exit(RunExit.USAGE_ERROR, f"{self.prog}: error: {message}\n")
 
 
-def _bus_arguments(parser: argparse.ArgumentParser) -> None:
+def _positive(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    value = int(text) if text.strip().isdigit() else 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive whole number")
+    return value
+
+
+def _bus_arguments(parser: argparse.ArgumentParser, node_id: bool = True) -> None:
     parser.add_argument("--can-interface", help="python-can interface (pcan, kvaser, socketcan, remote ...)")
     parser.add_argument("--can-channel")
     parser.add_argument("--can-bitrate", type=int)
-    parser.add_argument("--node-id", type=int)
+    if node_id:
+        parser.add_argument("--node-id", type=int)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -241,6 +252,8 @@ def build_parser() -> argparse.ArgumentParser:
                          help="restore even if the device's serial number differs from the snapshot's")
     restore.set_defaults(func=_cmd_restore)
 
+    add_lss_parser(sub, _Parser, _bus_arguments)
+
     sim_control = sub.add_parser("sim-control", help="switch a served simulator's power (a bench power switch)")
     sim_control.add_argument("--control", required=True, help="HOST:PORT of the simulator's control channel")
     sim_control.add_argument("action", choices=["power-off", "power-on", "power-cycle"])
@@ -251,10 +264,15 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--listen", default="127.0.0.1:54701", help="HOST:PORT for python-can-remote clients")
     sim.add_argument("--control", default=None, help="HOST:PORT for the control channel (power cycle ...)")
     sim.add_argument("--node-id", type=int, action="append", default=[], help="node-id per profile")
+    sim.add_argument("--copies", type=_positive, default=1, metavar="N",
+                     help="N units of the profile with serial numbers base, base+1, ... (the profile's "
+                          "simulator.serial_number) and consecutive node-ids from --node-id or the profile's")
+    sim.add_argument("--unconfigured", action="store_true",
+                     help="the nodes wait unconfigured (node-id 255) for an LSS master (see 'lss')")
     sim.add_argument("--fault", action="append", default=[], help="inject a named fault (see 'faults')")
     sim.add_argument("--nvm", type=Path, help="file for the non-volatile memory (default: in memory)")
     sim.add_argument("--ready-line", action="store_true", help=argparse.SUPPRESS)
-    sim.set_defaults(func=_cmd_sim)
+    sim.set_defaults(func=_cmd_sim, parser=sim)
 
     profile = sub.add_parser("profile", help="validate, list, import from EDS, export to EDS")
     psub = profile.add_subparsers(dest="profile_command", required=True)

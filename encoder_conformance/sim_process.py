@@ -14,6 +14,7 @@ import os
 import subprocess
 import sys
 import threading
+from collections.abc import Sequence
 from dataclasses import dataclass
 from multiprocessing.connection import Client, Connection
 from pathlib import Path
@@ -56,9 +57,10 @@ def start_simulator(
     faults: list[str] | None = None,
     nvm_path: Path | None = None,
     log_path: Path | None = None,
+    extra_args: Sequence[str] = (),
 ) -> SimulatorProcess:
     """Launch ``encoder-conformance sim`` and wait until it reports READY."""
-    return launch_simulator(profile, node_id, faults, nvm_path, log_path).ready()
+    return launch_simulator(profile, node_id, faults, nvm_path, log_path, extra_args).ready()
 
 
 @dataclass
@@ -94,8 +96,10 @@ def launch_simulator(
     faults: list[str] | None = None,
     nvm_path: Path | None = None,
     log_path: Path | None = None,
+    extra_args: Sequence[str] = (),
 ) -> LaunchedSimulator:
-    """Start ``encoder-conformance sim`` in a process of its own; returns at once."""
+    """Start ``encoder-conformance sim`` in a process of its own; returns at once. ``extra_args`` go to ``sim``
+    (e.g. ``--copies 8 --unconfigured``)."""
     command = [sys.executable, "-m", "encoder_conformance", "sim", "--profile", profile,
                "--listen", "127.0.0.1:0", "--control", "127.0.0.1:0", "--ready-line"]
     if node_id is not None:
@@ -104,6 +108,7 @@ def launch_simulator(
         command += ["--fault", fault]
     if nvm_path is not None:
         command += ["--nvm", str(nvm_path)]
+    command += list(extra_args)
     stderr = open(log_path, "w", encoding="utf-8") if log_path else subprocess.DEVNULL  # noqa: SIM115
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     # a session of its own: the terminal's Ctrl-C reaches only the run, which gives the device back first

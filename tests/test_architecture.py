@@ -114,7 +114,8 @@ def test_only_the_simulator_fixture_imports_the_simulator(folder):
 def test_simulator_imports_nothing_of_the_tester_side():
     """sim/ stands behind the bus: it may use the profile and the CiA vocabulary, not the DUT layer,
     the plugin, the command line or the suites' helpers."""
-    tester_side = ("dut", "plugin", "cli", "fault_matrix", "checks", "parameters", "sim_process", "restore_command")
+    tester_side = ("dut", "plugin", "cli", "fault_matrix", "checks", "parameters", "sim_process", "restore_command",
+                   "lss_cli", "lss_command")
     offenders = {
         name: sorted(i for i in imports if i.split(".")[1] in tester_side)
         for name, imports in _library_graph().items()

@@ -157,10 +157,12 @@ class LssMaster:
             self.frames.quiet_period(lambda m: False, ECHO_S)  # the other slaves' copies land before the next step
         return True
 
-    def fastscan(self, known: Sequence[int | None] = (None, None, None, None)) -> LssAddress | None:
+    def fastscan(self, known: Sequence[int | None] = (None, None, None, None),
+                 guess: Sequence[int | None] = (None, None, None, None)) -> LssAddress | None:
         """CiA 305 fastscan: the address of one non-configured slave, which is then in configuration state;
         None when no slave answers. Parts given in ``known`` (e.g. vendor and product from the profile) are
-        confirmed in one step instead of 32."""
+        confirmed in one step instead of 32. A part in ``guess`` (e.g. the previous slave's) is tried in one
+        step first; if no slave has it, none moved on and that part is scanned bit by bit as usual."""
         self._several = False
         mark = self.request(LssCommand.FASTSCAN, struct.pack("<IBBB", 0, FASTSCAN_RESET_BIT, 0, 0))
         if self.answer(LssCommand.IDENTIFY_SLAVE, mark) is None:
@@ -169,6 +171,9 @@ class LssMaster:
         address = []
         for sub in range(4):
             value = known[sub]
+            if value is None and guess[sub] is not None and self._fastscan_step(guess[sub], 0, sub, (sub + 1) % 4):
+                address.append(guess[sub])
+                continue
             if value is None:
                 value = 0
                 for bit in range(31, -1, -1):

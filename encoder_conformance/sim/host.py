@@ -45,7 +45,11 @@ class SimulatorHost:
         nvm_path: Path | None = None,
         faults: FaultSet | None = None,
         power_on: bool = True,
+        serial_number: int | None = None,
     ) -> SimulatedNode:
+        """A node playing ``profile``; ``serial_number`` replaces the profile's ``simulator.serial_number``."""
+        if serial_number is not None:
+            profile = with_serial_number(profile, serial_number)
         node = SimulatedNode(profile, self.scheduler, self._send_from(None), node_id, nvm_path, faults)
         node._send_raw = self._send_from(node)
         self.nodes.append(node)
@@ -132,6 +136,20 @@ class SimulatorHost:
             self.bus.shutdown()
         except Exception as exc:  # pragma: no cover - shutdown must not raise
             print(f"bus shutdown: {exc}", file=sys.stderr)
+
+
+def with_serial_number(profile: DeviceProfile, serial: int) -> DeviceProfile:
+    """``profile`` as the unit with serial number ``serial``: 1018h sub 4 and 650Bh, and any
+    ``simulator.values`` entry that repeats the profile's own serial number (a value the profile
+    sets otherwise, e.g. FFFFFFFFh for "not reported", stays)."""
+    sim = profile.simulator
+    values = {key: serial if value == sim.serial_number and key.lower() in _SERIAL_KEYS else value
+              for key, value in sim.values.items()}
+    return profile.model_copy(update={"simulator": sim.model_copy(update={"serial_number": serial,
+                                                                          "values": values})})
+
+
+_SERIAL_KEYS = {"0x1018.4", "0x650b", "0x650b.0"}
 
 
 def sibling_spec(node: SimulatedNode) -> tuple[DeviceProfile, int] | None:

@@ -1,4 +1,9 @@
-"""Run simulated nodes as a process: serve the bus (python-can-remote) and the control channel."""
+"""Run simulated nodes as a process: serve the bus (python-can-remote) and the control channel.
+
+``plan_nodes`` says which nodes the bus gets: one per profile, or N copies of one profile that differ
+by serial number (base, base+1, ...) and have consecutive node-IDs, or wait unconfigured (node-ID 255)
+for an LSS master to give them one.
+"""
 
 from __future__ import annotations
 
@@ -9,24 +14,72 @@ import signal
 import sys
 import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
+from ..cia305 import MAX_NODE_ID, UNCONFIGURED_NODE_ID
 from ..profile.loader import load_profile
+from ..profile.model import DeviceProfile
+from ..profile.quirk_effects import SecondNode
 from .control import parse_address, serve_control
 from .faults import FaultSet
 from .host import SimulatorHost
 
 
+@dataclass(frozen=True)
+class NodePlan:
+    """One node to put on the bus: its profile, node-ID (None: the profile's) and serial number (None: the
+    profile's ``simulator.serial_number``)."""
+
+    profile: DeviceProfile
+    node_id: int | None
+    serial_number: int | None = None
+
+
+def plan_nodes(profiles: list[str], node_ids: list[int], copies: int = 1,
+               unconfigured: bool = False) -> list[NodePlan]:
+    """The nodes ``sim`` serves; ValueError says what is wrong with the combination (a usage error)."""
+    loaded = [load_profile(name).profile for name in profiles]
+    if unconfigured:
+        if node_ids:
+            raise ValueError("--unconfigured nodes have node-ID 255 until LSS gives them one: drop --node-id")
+        for profile in loaded:
+            missing = {"configure_node_id", "switch_selective"} - set(profile.capabilities.lss)
+            if missing:
+                raise ValueError(f"profile {profile.id} declares no LSS {' and '.join(sorted(missing))} "
+                                 "(capabilities.lss): an unconfigured copy could never be given a node-ID")
+    if copies == 1:
+        return [NodePlan(p, UNCONFIGURED_NODE_ID if unconfigured else (node_ids[i] if i < len(node_ids) else None))
+                for i, p in enumerate(loaded)]
+    if len(loaded) != 1:
+        raise ValueError("--copies serves copies of one profile: give --profile once")
+    profile = loaded[0]
+    if profile.params_of(SecondNode) is not None:
+        raise ValueError(f"profile {profile.id} puts a second node on the bus (quirk second_node): copies of it "
+                         "would take each other's node-IDs; serve one")
+    if copies > MAX_NODE_ID:
+        raise ValueError(f"--copies {copies}: a CANopen network has at most {MAX_NODE_ID} nodes")
+    if len(node_ids) > 1:
+        raise ValueError("--copies takes one --node-id: the first copy's (the others follow it)")
+    serials = [profile.simulator.serial_number + n for n in range(copies)]
+    if unconfigured:
+        return [NodePlan(profile, UNCONFIGURED_NODE_ID, serial) for serial in serials]
+    first = node_ids[0] if node_ids else profile.bus.node_id
+    if first + copies - 1 > MAX_NODE_ID:
+        raise ValueError(f"--copies {copies} from node-ID {first} needs node-IDs up to {first + copies - 1}, "
+                         f"beyond {MAX_NODE_ID}: start lower (--node-id) or serve fewer copies")
+    return [NodePlan(profile, first + n, serial) for n, serial in enumerate(serials)]
+
+
 def serve(
-    profiles: list[str],
+    plan: list[NodePlan],
     listen: str,
     control: str | None,
-    node_ids: list[int],
     faults: list[str],
     nvm: Path | None,
     ready_line: bool,
 ) -> int:
-    """Start the host, add one node per profile, print the endpoints, run until signalled."""
+    """Start the host, add the planned nodes, print the endpoints, run until signalled."""
     # Timing: the default 5 ms GIL switch interval delays the scheduler thread by up to 5 ms when
     # the receive/remote threads are busy; 0.5 ms keeps heartbeat jitter well below the CI
     # tolerance (reference/python-stack-measured.md §6: p99 4.9 ms -> 1.8 ms).
@@ -34,11 +87,9 @@ def serve(
     # python-can-remote reports a dropped client through logging only: into the simulator's log
     logging.basicConfig(level=logging.WARNING, stream=sys.stderr, format="%(asctime)s %(name)s: %(message)s")
     host = SimulatorHost(channel=f"sim-{time.monotonic_ns()}")
-    for i, name in enumerate(profiles):
-        loaded = load_profile(name)
-        node_id = node_ids[i] if i < len(node_ids) else None
+    for i, node in enumerate(plan):
         nvm_path = None if nvm is None else nvm.with_name(f"{nvm.stem}-{i}{nvm.suffix}") if i else nvm
-        host.add_node(loaded.profile, node_id, nvm_path, FaultSet(faults))
+        host.add_node(node.profile, node.node_id, nvm_path, FaultSet(faults), serial_number=node.serial_number)
     host.add_siblings()  # second_node quirk: the redundant interface's other node
     can_host, can_port = host.serve_remote(*parse_address(listen))
     control_address = serve_control(host, parse_address(control)) if control else None
@@ -46,12 +97,13 @@ def serve(
         "can": f"ws://{can_host}:{can_port}/",
         "control": control_address,
         "node_id": host.nodes[0].node_id,
-        "nodes": [node.describe() for node in host.nodes],
+        "nodes": [{**node.describe(), "serial_number": node.profile.simulator.serial_number}
+                  for node in host.nodes],
     }
     if ready_line:
         print("READY " + json.dumps(info), flush=True)
     else:
-        print(f"simulating {', '.join(profiles)} on {info['can']} (node-ids {[n.node_id for n in host.nodes]})")
+        print(f"simulating {_describe(host)} on {info['can']}")
         print(f"connect with: --can-interface remote --can-channel {info['can']}")
         if control_address:
             print(f"control channel on {control_address[0]}:{control_address[1]}")
@@ -68,3 +120,13 @@ def serve(
     sys.stderr.flush()
     # the web-socket server's threads make the interpreter's own shutdown take ~0.1 s, every run's end
     os._exit(0)
+
+
+def _describe(host: SimulatorHost) -> str:
+    """'cia406-c3-st x8 (serials 40600001..40600008, node-ids [255, ...])'."""
+    names = [node.profile.id for node in host.nodes]
+    serials = [node.profile.simulator.serial_number for node in host.nodes]
+    node_ids = [node.node_id for node in host.nodes]
+    if len(set(names)) == 1 and len(names) > 1:
+        return f"{names[0]} x{len(names)} (serials {serials[0]}..{serials[-1]}, node-ids {node_ids})"
+    return f"{', '.join(names)} (node-ids {node_ids})"
