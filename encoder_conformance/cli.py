@@ -58,7 +58,8 @@ def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
     except BusSetupError as exc:
         print(f"restore: {exc}", file=sys.stderr)
         return RunExit.USAGE_ERROR
-    request = RestoreRequest(Path(args.snapshot), bus, args.node_id, args.timeout, args.force, args.power_on_cmd)
+    request = RestoreRequest(Path(args.snapshot), bus, args.node_id, args.timeout, args.force, args.power_on_cmd,
+                             args.power_off_cmd)
     return restore_from_snapshot(request)
 
 
@@ -248,6 +249,8 @@ def build_parser() -> argparse.ArgumentParser:
     restore.add_argument("--timeout", type=float, default=60.0, help="seconds the restore may take (default 60)")
     restore.add_argument("--power-on-cmd", help="shell command that switches the device on first (a crash during "
                          "a power cycle leaves it off)")
+    restore.add_argument("--power-off-cmd", help="shell command that switches the device off: with --power-on-cmd, "
+                         "lets the restore power-cycle a device that applies an LSS node-ID only at power-on")
     restore.add_argument("--force", action="store_true",
                          help="restore even if the device's serial number differs from the snapshot's")
     restore.set_defaults(func=_cmd_restore)

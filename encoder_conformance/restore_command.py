@@ -7,6 +7,7 @@ writes back and stores what differs from the stored snapshot, then the values th
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,7 +17,9 @@ from .dut.custody import Custody, RestoreRecord
 from .dut.device import DeviceUnderTest, wake_if_silent
 from .dut.frames import FrameLog
 from .dut.identity import read_identity
-from .dut.power import PowerSwitchError, ShellPowerSwitch
+from .dut.lss_device import LssDevice
+from .dut.lss_master import LssAddress, LssMaster
+from .dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
 from .dut.snapshot import Snapshot
 from .dut.store_watch import StoreWatch
 from .errors import BusSetupError, DutLostError
@@ -32,6 +35,7 @@ class RestoreRequest:
     timeout_s: float
     force: bool
     power_on_command: str | None = None
+    power_off_command: str | None = None
 
 
 def restore_from_snapshot(request: RestoreRequest) -> int:
@@ -57,6 +61,12 @@ def restore_from_snapshot(request: RestoreRequest) -> int:
         node_id = request.node_id or snapshot.node_id
         dut = DeviceUnderTest(network, frames, loaded.profile, node_id)
         problem = _wrong_device(dut, snapshot, request.force)
+        if problem and problem.startswith("no answer") and loaded.profile.capabilities.lss:
+            recovered = _lss_recover(dut, snapshot, request)
+            if recovered is not None:
+                return _fail(f"{problem}; by LSS: {recovered}", RunExit.COULD_NOT_TEST)
+            print(f"node-ID {node_id} given back by LSS (the device did not answer at it)")
+            problem = _wrong_device(dut, snapshot, request.force)
         if problem:
             return _fail(problem, RunExit.COULD_NOT_TEST)
         watch = StoreWatch(loaded.profile, node_id)
@@ -85,6 +95,37 @@ def _wrong_device(dut: DeviceUnderTest, snapshot: Snapshot, force: bool) -> str 
         return (f"node {dut.node_id} is not the device of the snapshot: serial {serial}, the snapshot has "
                 f"{expected}. Connect that device, or give --force to write this snapshot onto another unit")
     return None
+
+
+def _lss_address(snapshot: Snapshot) -> LssAddress | None:
+    """The LSS address (1018h sub 1..4) the snapshot recorded, or None where a part is missing."""
+    keys = ("vendor-id (1018h.1)", "product code (1018h.2)", "revision (1018h.3)", "serial number (1018h.4)")
+    try:
+        parts = [int(snapshot.identity.get(key, "-").split()[0], 0) for key in keys]
+    except ValueError:
+        return None
+    return LssAddress(*parts)
+
+
+def _lss_recover(dut: DeviceUnderTest, snapshot: Snapshot, request: RestoreRequest) -> str | None:
+    """A run stopped while an LSS test had moved the device (or made it unconfigured): select it by the
+    snapshot's LSS address and give it its node-ID back; None, or why not."""
+    address = _lss_address(snapshot)
+    if address is None or "switch_selective" not in dut.profile.capabilities.lss:
+        return "the snapshot or the profile does not give the LSS address needed to select the device"
+    master = LssMaster(lambda cob_id, data: dut.network.send_message(cob_id, data), dut.frames,
+                       dut.profile.timing.lss_response_ms / 1000)
+    power: Callable[[], None] | None = None
+    if request.power_off_command and request.power_on_command:
+        switch = BenchPower(ShellPowerSwitch(request.power_off_command, request.power_on_command))
+
+        def cycle() -> None:
+            switch.cycle()
+            wake_if_silent(dut)  # a device that detects the bit rate waits for bus traffic
+
+        power = cycle
+    with dut.custody():
+        return LssDevice(dut, master, address, None, power).recover()
 
 
 def _print(record: RestoreRecord) -> None:

@@ -244,11 +244,17 @@ def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
             assert value == expected, f"{key}: 0x{value:X} after the node-ID was given, its default is 0x{expected:X}"
 
 
-def test_fastscan_finds_exact_identity(unconfigured: LssDevice, evidence):
+@pytest.fixture
+def scannable(lss: LssDevice, request: pytest.FixtureRequest) -> LssDevice:
+    """The device unconfigured, where it has fastscan (checked first: making it unconfigured costs time)."""
+    require_service(lss, "fastscan")
+    return request.getfixturevalue("unconfigured")
+
+
+def test_fastscan_finds_exact_identity(scannable: LssDevice, evidence):
     """Fastscan (no part known) finds the unconfigured device's exact LSS address, which is then in the
     configuration state (inquire node-ID answers FFh)."""
-    require_service(unconfigured, "fastscan")
-    lss = unconfigured
+    lss = scannable
     steps, start = lss.master.steps, time.perf_counter()
     found = lss.master.fastscan()
     evidence.measure("fastscan time", time.perf_counter() - start, "s")
@@ -259,22 +265,21 @@ def test_fastscan_finds_exact_identity(unconfigured: LssDevice, evidence):
         assert lss.master.inquire_node_id() == UNCONFIGURED_NODE_ID
 
 
-def test_fastscan_reset_restarts_a_partial_scan(unconfigured: LssDevice):
+def test_fastscan_reset_restarts_a_partial_scan(scannable: LssDevice):
     """BitChecked 80h restarts the scan: after the vendor-ID was confirmed, a reset and a full fastscan
     still find the device."""
-    require_service(unconfigured, "fastscan")
-    lss = unconfigured
+    lss = scannable
     lss.master.request(LssCommand.FASTSCAN, bytes(4) + bytes([FASTSCAN_RESET_BIT, 0, 0]))
     lss.master.request(LssCommand.FASTSCAN, lss.address.vendor.to_bytes(4, "little") + bytes([0, 0, 1]))
     assert lss.master.fastscan() == lss.address, "after a reset (BitChecked 80h) the fastscan did not find it"
 
 
-def test_fastscan_no_configuration_before_serial(unconfigured: LssDevice):
+def test_fastscan_no_configuration_before_serial(scannable: LssDevice):
     """The device enters the configuration state only after the serial number was confirmed: a master that
     confirms vendor-ID and product code and then sends LSSNext back to the vendor-ID does not select it
     (CANopenNode PR#647)."""
-    require_service(unconfigured, "fastscan", "inquire_node_id")
-    lss = unconfigured
+    require_service(scannable, "inquire_node_id")
+    lss = scannable
     lss.master.request(LssCommand.FASTSCAN, bytes(4) + bytes([FASTSCAN_RESET_BIT, 0, 0]))
     lss.master.request(LssCommand.FASTSCAN, lss.address.vendor.to_bytes(4, "little") + bytes([0, 0, 1]))
     mark = lss.master.request(LssCommand.FASTSCAN, lss.address.product.to_bytes(4, "little") + bytes([0, 1, 0]))

@@ -39,7 +39,7 @@ INTERRUPT_AT_S = [1.0, 2.0, 3.0, 4.5, 6.0, 7.5, 9.0]  # 10.5 s and 12 s came aft
 INTERRUPT_AFTER = ["test_object_dictionary.py::test_undeclared_subindex_aborts",
                    "test_store_restore.py::test_stored_value_survives_reset_node",
                    "test_lss.py::test_configured_device_not_identified_as_non_configured"]
-STORE_POWER_CYCLE = INTERRUPT_AFTER[1]
+STORE_POWER_CYCLE, LSS_UNCONFIGURED = INTERRUPT_AFTER[1:3]
 MOMENTS: list[float | str] = [*INTERRUPT_AT_S, *INTERRUPT_AFTER]
 CTRL_C_LIMIT_S = 2.0  # the run's own clock, interrupt to verdict (run-outcome.json stopped_after_s)
 #: what this harness measures on top (process exit, its own wake-up beside a busy process): CI saw 2.08 s
@@ -174,15 +174,17 @@ def test_ctrl_c_figures_printed(interrupted_runs, capsys):
     assert len(interrupted_runs) == len(MOMENTS)
 
 
-def test_restore_command_finishes_after_a_hard_crash(tmp_path):
-    """SIGKILL during the power cycle of the store/restore suite; 'restore --from' the snapshot (switching the
-    device on first) puts everything back."""
+@pytest.mark.parametrize("after", [STORE_POWER_CYCLE, LSS_UNCONFIGURED], ids=["store power cycle", "LSS node-ID 255"])
+def test_restore_command_finishes_after_a_hard_crash(tmp_path, after):
+    """SIGKILL during the power cycle of the store/restore suite, or while the LSS suite has made the device
+    unconfigured (node-ID 255 stored); 'restore --from' the snapshot (with the bench's power commands) gives
+    the node-ID back by LSS and puts everything back."""
     twin = start_twin(tmp_path / "twin", CUSTOMER_VALUES)
     try:
         before, stored_before = twin.read_everything(), twin.stored()
         run = twin.start_run(tmp_path / "report", "-v")
         seen: list[str] = []
-        assert wait_for_line(run, STORE_POWER_CYCLE, 120, seen), "".join(seen[-20:])
+        assert wait_for_line(run, after, 120, seen), "".join(seen[-20:])
         threading.Event().wait(0.05)
         run.kill()
         run.communicate(timeout=10)
@@ -190,7 +192,8 @@ def test_restore_command_finishes_after_a_hard_crash(tmp_path):
         assert snapshot.exists()
         restore = subprocess.run([sys.executable, "-m", "encoder_conformance", "restore", "--from", str(snapshot),
                                   "--can-interface", "remote", "--can-channel", twin.channel,
-                                  "--power-on-cmd", twin.power_command("power-on")],
+                                  "--power-on-cmd", twin.power_command("power-on"),
+                                  "--power-off-cmd", twin.power_command("power-off")],
                                  cwd=REPO, capture_output=True, text=True, timeout=120)
         assert restore.returncode == RunExit.PASSED, restore.stdout + restore.stderr
         assert "device restored as found" in restore.stdout

@@ -123,16 +123,18 @@ class LssDevice:
         if self.applies_on_reset:
             self.leave()
             return self.reset_communication(active_id)
-        self._store_and_power_cycle()
-        return self.dut.frames.mark()
+        return self._store_and_power_cycle()
 
-    def _store_and_power_cycle(self) -> None:
+    def _store_and_power_cycle(self) -> Mark:
+        """Store (unless the device stores by itself) and power-cycle; a mark before the power went off."""
         if "node_id" not in self.auto_stored:
             expect_success(self.master.store_configuration(), "store configuration")
         self.leave()
         if self.power_cycle is None:
             raise AssertionError("the device applies a node-ID only at power-on and there is no power switch")
+        mark = self.dut.frames.mark()
         self.power_cycle()
+        return mark
 
     # -- put back ----------------------------------------------------------------------------------
     def _sent(self, command: int) -> bool:
@@ -149,6 +151,11 @@ class LssDevice:
         moved = bool(self.moved_to) or self.made_unconfigured
         if not moved or self.answers_at(self.node_id, timeout=self.dut.sdo_silence_s):
             return self._configure_as_found()
+        return self.recover()
+
+    def recover(self) -> str | None:
+        """The device does not answer at its node-ID (moved, or unconfigured): select it by its LSS address,
+        configure its node-ID and apply it; None, or what could not be done."""
         if not self._select_within(self.dut.profile.timing.bootup_max_ms / 1000):
             return f"the device does not answer at node-ID {self.node_id} nor to its LSS address"
         active = self.master.inquire_node_id() if "inquire_node_id" in self.services else None
@@ -160,8 +167,10 @@ class LssDevice:
             for node_id in {active, *self.moved_to} - {None, UNCONFIGURED_NODE_ID}:
                 mark = self.reset_communication(node_id)  # type: ignore[arg-type]
         else:
-            self._store_and_power_cycle()
-            mark = self.dut.frames.mark()
+            try:
+                mark = self._store_and_power_cycle()
+            except AssertionError as exc:
+                return f"node-ID {self.node_id} configured and stored, not applied: {exc}; switch the device off and on"
         if self.wait_bootup_at(self.node_id, mark) is None and not self.answers_at(self.node_id):
             return f"after configure node-ID {self.node_id} the device does not answer at it"
         return None
@@ -180,6 +189,10 @@ class LssDevice:
             answer = self.master.configure_bit_timing(self.bit_index)
             if answer is None or answer.error:
                 problems.append(f"configure bit timing {self.bit_index}: {answer}")
+        if self._sent(LssCommand.STORE_CONFIGURATION):  # what the test stored must not wait for a power cycle
+            answer = self.master.store_configuration()
+            if answer is None or answer.error:
+                problems.append(f"store configuration: {answer}")
         self.leave()
         return "; ".join(problems) or None
 
