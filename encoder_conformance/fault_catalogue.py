@@ -111,6 +111,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "lss_bit_timing_refused": "configure bit timing refuses every index (error 1)",
             "lss_only_in_stopped": "LSS frames are obeyed only in NMT stopped",
             "lss_ignored_in_stopped": "LSS frames are ignored in NMT stopped",
+            "lss_activate_ignored": "activate bit timing does nothing: no silence, no switch to the configured rate",
             "lss_configuration_in_waiting": "configure, store and inquire are answered in the waiting state too",
             "lss_selective_ignores_serial": "switch state selective matches whatever serial number it is given",
             "lss_inquire_wrong_serial": "inquire serial number answers the serial number plus one",

@@ -15,13 +15,14 @@ import pytest
 
 from encoder_conformance.checks import documented_quirk
 from encoder_conformance.cia305 import (
+    AUTO_BIT_RATE_INDEX,
     FASTSCAN_RESET_BIT,
     MAX_NODE_ID,
     UNCONFIGURED_NODE_ID,
     LssCommand,
     LssState,
 )
-from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.lss_device import LssDevice, expect_success
 from encoder_conformance.dut.lss_master import LssAddress
 from encoder_conformance.plugin.options import settings_of
@@ -148,6 +149,45 @@ def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence, pyte
     raise AssertionError(observed)
 
 
+SWITCH_DELAY_MS = 100
+
+
+def _activate(lss: LssDevice, index: int) -> tuple[Mark, float]:
+    """Configure bit timing ``index`` and activate it with SWITCH_DELAY_MS; the mark before it and the delay."""
+    assert lss.select()
+    expect_success(lss.master.configure_bit_timing(index), f"configure bit timing {index}")
+    lss.leave()
+    return lss.master.activate_bit_timing(SWITCH_DELAY_MS), SWITCH_DELAY_MS / 1000
+
+
+def test_activate_bit_timing_silent_for_the_switch_delay(lss: LssDevice, heartbeat: int):
+    """Activate bit timing (the rate in use again): the device sends nothing for the switch delay before
+    and after the switch, then its heartbeat comes again."""
+    require_service(lss, "configure_bit_timing", "activate_bit_timing")
+    if lss.bit_index is None:
+        pytest.skip("the bit rate in use is unknown: activating a configured one could move the device off the bus")
+    mark, delay = _activate(lss, lss.bit_index)
+    silent = lss.dut.frames_from_node(mark, 2 * delay * 0.9)
+    assert not silent, f"frames within the 2 x {SWITCH_DELAY_MS} ms switch delay:\n{format_frames(silent)}"
+    assert lss.dut.wait_heartbeat(mark, 2 * delay + 3 * heartbeat / 1000) is not None, "no heartbeat after the switch"
+
+
+def test_activated_bit_rate_leaves_the_old_rate(lss: LssDevice, heartbeat: int, power_cycle, pytestconfig):
+    """Activate another bit rate: the device is no longer heard at the old one. The tester's interface cannot
+    follow a bit-rate change during a run, so the test stops there; a power cycle brings back the stored rate
+    (nothing was stored)."""
+    require_service(lss, "configure_bit_timing", "activate_bit_timing")
+    destructive_if_self_stored(lss, pytestconfig, "bit_timing")
+    others = sorted(lss.dut.profile.bus.lss_bit_indices() - {lss.bit_index, AUTO_BIT_RATE_INDEX})
+    if lss.bit_index is None or not others:
+        pytest.skip("the bit rate in use is unknown, or the device has no other bit rate")
+    mark, delay = _activate(lss, others[0])
+    heard = lss.dut.frames_from_node(mark, 2 * delay + 3 * heartbeat / 1000)
+    power_cycle()
+    assert not heard, (f"still heard at the old bit rate after activating table index {others[0]}:\n"
+                       f"{format_frames(heard[-5:])}")
+
+
 # -- the node-ID life cycle ----------------------------------------------------------------------------------
 def test_configured_node_id_pending_until_reset(lss: LssDevice, evidence, pytestconfig):
     """A configured node-ID is pending: the device keeps answering at its node-ID (and inquire node-ID
@@ -225,6 +265,12 @@ def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
         assert lss.master.identify_non_configured() == 1, "unconfigured, but no answer to identify non-configured"
     frames = lss.dut.frames.since(quiet, lambda m: m.is_rx and m.arbitration_id in (0x7FF, 0x77F, 0x6FF, 0x5FF))
     assert not frames, f"an unconfigured device sent frames as node 127 or 255:\n{format_frames(frames)}"
+    if lss.power_cycle is not None and (not lss.applies_on_reset or "node_id" in lss.auto_stored):
+        mark = lss.dut.frames.mark()  # node-ID 255 is stored: the delivery state of a device waiting for LSS
+        lss.power_cycle()
+        assert lss.wait_bootup_at(lss.node_id, mark) is None, "node-ID 255 stored, but a boot-up after power-on"
+        if "identify_non_configured" in lss.services:
+            assert lss.master.identify_non_configured() == 1, "after power-on not identified as non-configured"
     assert lss.select()
     mark = lss.dut.frames.mark()
     assert lss.master.configure_node_id(lss.node_id) is not None

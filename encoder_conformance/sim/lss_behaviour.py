@@ -4,14 +4,18 @@ Registers the slave for the LSS master's frames (7E5h, answered in the NMT state
 quirk ``lss_only_in_states``), tells the NMT slave which node-ID a (re)start takes (``node_id_after``),
 and starts an unconfigured node (node-ID 255) once it has a valid node-ID: when switched back to the
 waiting state (CiA 305) or at once (quirk ``unconfigured_node_id`` with ``bootup_after_valid_node_id``).
+Activate bit timing is modelled on the bus the twin sits on: silent for the switch delay, then at the
+pending bit rate, silent again; at a rate other than the bus's the node hears nothing and is not heard
+(``hears``/``may_send``) until a power-on brings back the stored rate.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 
 from ..cia301 import NmtState
-from ..cia305 import SLAVE_COB_ID
+from ..cia305 import AUTO_BIT_RATE_INDEX, SLAVE_COB_ID
 from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile, resolve_node_id_expression
 from .faults import FaultSet, assemble, breaks
@@ -45,6 +49,12 @@ class LssBehaviour:
         only_in = profile.params_of(fx.LssOnlyInStates)
         self._states = None if only_in is None else frozenset(_STATES[name] for name in only_in.states)
         self._unconfigured = profile.params_of(fx.UnconfiguredNodeId)
+        rate = profile.bus.bitrate
+        table = profile.bus.lss_table()
+        self._bus_index = next((i for i, r in table.items() if r == rate), None)  # None: the node follows any rate
+        self._rate_index = self._bus_index
+        self._switch: tuple[float, int | None] | None = None  # (when, to which index)
+        self._silent_until = 0.0
         self.slave = assemble(LssSlave, faults)(
             frozenset(profile.capabilities.lss), address, lambda: nmt.node_id,
             lambda data: send(SLAVE_COB_ID, data), config=self.config, events=self, allowed=self.allowed,
@@ -53,6 +63,34 @@ class LssBehaviour:
 
     def register(self, hooks: NodeHooks) -> None:
         hooks.lss.append(self.slave.on_frame)
+        hooks.reload.append(self._power_on)
+
+    # -- the bit rate on the bus ---------------------------------------------------------------------
+    def _power_on(self, event: ReloadEvent) -> None:
+        if event.name == "power_on":
+            self._switch, self._silent_until = None, 0.0
+            stored = self.config.nvm.get(self.config.bit_index_key)
+            self._rate_index = stored if isinstance(stored, int) and self._bus_index is not None else self._bus_index
+
+    def activate_bit_timing(self, switch_delay_s: float) -> None:
+        now = time.monotonic()
+        self._switch = (now + switch_delay_s, self.config.pending_bit_index)
+        self._silent_until = now + 2 * switch_delay_s
+
+    def _on_bus_rate(self) -> bool:
+        if self._switch is not None and time.monotonic() >= self._switch[0]:
+            if self._switch[1] is not None:
+                self._rate_index = self._switch[1]
+            self._switch = None
+        return self._bus_index is None or self._rate_index in (self._bus_index, AUTO_BIT_RATE_INDEX)
+
+    def hears(self) -> bool:
+        """Frames on the bus reach the node (it runs at the bus's bit rate)."""
+        return self._on_bus_rate()
+
+    def may_send(self) -> bool:
+        """The node's frames reach the bus: at its bit rate, and not within an activate bit timing delay."""
+        return self._on_bus_rate() and time.monotonic() >= self._silent_until
 
     def allowed(self) -> bool:
         """LSS frames are obeyed in this NMT state (always while waiting for a node-ID)."""

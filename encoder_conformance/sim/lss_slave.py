@@ -44,12 +44,18 @@ class LssEvents(Protocol):
     def left_configuration(self) -> None:
         """Switched from the configuration state to the waiting state."""
 
+    def activate_bit_timing(self, switch_delay_s: float) -> None:
+        """Activate bit timing: silent for the delay, the pending bit rate, silent for the delay again."""
+
 
 class _NoEvents:
     def configured(self, what: str) -> None:
         pass
 
     def left_configuration(self) -> None:
+        pass
+
+    def activate_bit_timing(self, switch_delay_s: float) -> None:
         pass
 
 
@@ -103,7 +109,7 @@ class LssSlave:
             LssCommand.SWITCH_STATE_GLOBAL: ("switch_global", self._switch_global),
             LssCommand.CONFIGURE_NODE_ID: ("configure_node_id", self._configure_node_id),
             LssCommand.CONFIGURE_BIT_TIMING: ("configure_bit_timing", self._configure_bit_timing),
-            LssCommand.ACTIVATE_BIT_TIMING: ("activate_bit_timing", lambda data: None),
+            LssCommand.ACTIVATE_BIT_TIMING: ("activate_bit_timing", self._activate_bit_timing),
             LssCommand.STORE_CONFIGURATION: ("store_configuration", self._store_configuration),
             LssCommand.INQUIRE_NODE_ID: ("inquire_node_id", self._inquire_node_id),
             LssCommand.IDENTIFY_NON_CONFIGURED: ("identify_non_configured", self._identify_non_configured),
@@ -147,6 +153,10 @@ class LssSlave:
         if self._configured(LssCommand.CONFIGURE_NODE_ID, self.node_id_valid(data[1])):
             self.config.configure_node_id(data[1])
             self.events.configured("node_id")
+
+    def _activate_bit_timing(self, data: bytes) -> None:
+        """Addressed to every slave, in any LSS state (CiA 305): the delay is bytes 1-2 in ms."""
+        self.events.activate_bit_timing(struct.unpack_from("<H", data, 1)[0] / 1000)
 
     def _configure_bit_timing(self, data: bytes) -> None:
         if self._configured(LssCommand.CONFIGURE_BIT_TIMING, self.bit_timing_valid(data[1], data[2])):
@@ -330,3 +340,11 @@ class FastscanResetIgnored(LssSlave):
 class BitTimingRefused(LssSlave):
     def bit_timing_valid(self, table: int, index: int) -> bool:
         return False
+
+
+@breaks(LssSlave, "lss_activate_ignored")
+class ActivateIgnored(LssSlave):
+    """Activate bit timing does nothing: no silence, no switch to the configured bit rate."""
+
+    def _activate_bit_timing(self, data: bytes) -> None:
+        pass

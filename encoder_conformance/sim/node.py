@@ -174,7 +174,7 @@ class SimulatedNode:
         self.send(cob_id, data)
 
     def send(self, cob_id: int, data: bytes, extended: bool = False) -> None:
-        if self.state is None:
+        if self.state is None or (self.lss is not None and not self.lss.may_send()):
             return
         self._send_raw(cob_id, data, extended)
 
@@ -227,7 +227,7 @@ class SimulatedNode:
     # -- frame dispatch ------------------------------------------------------------------
     def on_frame(self, msg: can.Message) -> None:
         with self.lock:
-            if self.state is None or msg.is_error_frame:
+            if self.state is None or msg.is_error_frame or (self.lss is not None and not self.lss.hears()):
                 return
             if self.nmt.bus_traffic_seen():
                 return  # bit rate detected from this frame
