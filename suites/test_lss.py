@@ -77,17 +77,24 @@ def test_configuration_services_not_answered_in_waiting_state(lss: LssDevice, se
 
 
 @pytest.mark.parametrize("state", list(NMT_STATES))
-def test_lss_in_nmt_state(lss: LssDevice, state: str, back_to_preoperational, evidence):
+def test_lss_in_nmt_state(lss: LssDevice, state: str, evidence, request: pytest.FixtureRequest):
     """CiA 305: LSS works in every NMT state; a device whose manual allows it only in some
     (quirk lss_only_in_states) must ignore it in the others."""
     require_service(lss, "inquire_node_id")
-    command, _ = NMT_STATES[state]
-    lss.dut.nmt(command)
+    command, code = NMT_STATES[state]
+    beats = lss.dut.profile.capabilities.heartbeat_producer
+    period = request.getfixturevalue("heartbeat") / 1000 if beats else 0.0  # set up while SDO still works,
+    request.getfixturevalue("back_to_preoperational")  # and put back after the device is pre-operational again
+    mark = lss.dut.nmt(command)
     quirk = lss.dut.profile.params_of(fx.LssOnlyInStates)
     allowed = quirk is None or state in quirk.states
     if quirk is not None:
         documented_quirk(lss.dut, fx.LssOnlyInStates, evidence, "")
-    lss.dut.frames.quiet_period(lambda m: False, lss.dut.profile.timing.nmt_settle_ms / 1000)
+    settle = lss.dut.profile.timing.nmt_settle_ms / 1000
+    if beats:  # the state is reached when the heartbeat says so
+        lss.dut.wait_heartbeat(mark, settle + 2 * period, state=code)
+    else:
+        lss.dut.frames.quiet_period(lambda m: False, settle)  # nothing shows the state: the profile's settle time
     lss.select()
     answer = lss.master.inquire_node_id()
     lss.leave()
