@@ -311,11 +311,15 @@ def scannable(lss: LssDevice, request: pytest.FixtureRequest) -> LssDevice:
 
 def test_fastscan_finds_exact_identity(scannable: LssDevice, evidence):
     """Fastscan (no part known) finds the unconfigured device's exact LSS address, which is then in the
-    configuration state (inquire node-ID answers FFh)."""
+    configuration state (inquire node-ID answers FFh). Each step waits the window learned from the device's
+    own answers (3 x the slowest, at least 10 ms, at most timing.lss_response_ms), and the whole scan again
+    with the profile's window if that found nothing."""
     lss = scannable
+    window = lss.master.learned_window()
     steps, start = lss.master.steps, time.perf_counter()
-    found = lss.master.fastscan()
+    found = lss.master.fastscan_learned()
     evidence.measure("fastscan time", time.perf_counter() - start, "s")
+    evidence.measure("fastscan step window", window * 1000, "ms", None, lss.dut.profile.timing.lss_response_ms)
     evidence.measure("fastscan frames", lss.master.steps - steps, "frames")
     assert found == lss.address, f"fastscan found {found.describe() if found else 'nothing'}, the device is " \
                                  f"{lss.address.describe()}"
@@ -330,7 +334,8 @@ def test_fastscan_reset_restarts_a_partial_scan(scannable: LssDevice):
     lss.master.request(LssCommand.FASTSCAN, bytes(4) + bytes([FASTSCAN_RESET_BIT, 0, 0]))
     lss.master.request(LssCommand.FASTSCAN, lss.address.vendor.to_bytes(4, "little") + bytes([0, 0, 1]))
     known = (*lss.address.parts()[:3], None)  # vendor-ID confirmed again first: a scan that was not restarted fails
-    assert lss.master.fastscan(known) == lss.address, "after a reset (BitChecked 80h) the fastscan did not find it"
+    found = lss.master.fastscan_learned(known)
+    assert found == lss.address, "after a reset (BitChecked 80h) the fastscan did not find it"
 
 
 def test_fastscan_no_configuration_before_serial(scannable: LssDevice):

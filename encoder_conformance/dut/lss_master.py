@@ -9,6 +9,7 @@ and returns as soon as it is there; only a step nobody answers costs the full re
 from __future__ import annotations
 
 import struct
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -27,6 +28,8 @@ from ..cia305 import (
 )
 from .frames import FrameLog, Mark
 
+#: the shortest response window a learned one may be (``LssMaster.learned_window``)
+WINDOW_FLOOR_S = 0.01
 #: after an answer, how long other slaves' copies of it may still arrive (on a real bus identical
 #: answers merge into one frame; a simulated bus delivers each)
 ECHO_S = 0.003
@@ -67,6 +70,7 @@ class LssMaster:
         self.frames = frames
         self.response_s = response_s
         self.steps = 0  # frames sent (fastscan cost, for the report)
+        self.latencies: list[float] = []  # seconds each answer took
         self._several = False  # more than one slave answered the fastscan reset: wait for their copies
 
     # -- the exchange ------------------------------------------------------------------------------
@@ -78,8 +82,21 @@ class LssMaster:
         return mark
 
     def answer(self, command: int, mark: Mark, timeout: float | None = None) -> can.Message | None:
-        """The first slave frame with ``command`` after ``mark``, within the response window."""
-        return self.frames.wait_for(self._is_answer(command), self.response_s if timeout is None else timeout, mark)
+        """The first slave frame with ``command`` after ``mark``, within the response window. How long an
+        answer took (on the host's clock, from the wait's start) is kept in ``latencies``."""
+        start = time.perf_counter()
+        found = self.frames.wait_for(self._is_answer(command), self.response_s if timeout is None else timeout, mark)
+        if found is not None:
+            self.latencies.append(time.perf_counter() - start)
+        return found
+
+    def learned_window(self, floor_s: float = WINDOW_FLOOR_S) -> float:
+        """A response window from the answers seen so far: three times the slowest of the last 20, at least
+        ``floor_s``, at most the profile's window (which it is before any answer)."""
+        recent = self.latencies[-20:]
+        if not recent:
+            return self.response_s
+        return min(self.response_s, max(floor_s, 3 * max(recent)))
 
     @staticmethod
     def _is_answer(command: int) -> Callable[[can.Message], bool]:
@@ -156,6 +173,20 @@ class LssMaster:
         if self._several:
             self.frames.quiet_period(lambda m: False, ECHO_S)  # the other slaves' copies land before the next step
         return True
+
+    def fastscan_learned(self, known: Sequence[int | None] = (None, None, None, None)) -> LssAddress | None:
+        """Fastscan whose steps wait the window learned from this slave's answers (``learned_window``); if that
+        finds nobody (a step that waited too briefly makes the confirm fail: a wrong address is never
+        returned), once more with the full window."""
+        saved, learned = self.response_s, self.learned_window()
+        if learned >= saved:
+            return self.fastscan(known)
+        self.response_s = learned
+        try:
+            found = self.fastscan(known)
+        finally:
+            self.response_s = saved
+        return found if found is not None else self.fastscan(known)
 
     def fastscan(self, known: Sequence[int | None] = (None, None, None, None),
                  guess: Sequence[int | None] = (None, None, None, None)) -> LssAddress | None:
