@@ -111,9 +111,9 @@ class LssDevice:
         """NMT reset communication addressed to ``node_id`` (the device's active node-ID)."""
         return self.dut.nmt("reset-communication", node_id=node_id)
 
-    def apply_node_id(self, new_id: int, active_id: int) -> Mark:
-        """Configure ``new_id`` and make it active; returns a mark before it becomes active.
-        On a device that applies it only at power-on: store configuration and a power cycle."""
+    def apply_node_id(self, new_id: int) -> Mark:
+        """Configure ``new_id`` instead of the node-ID in use and make it active; returns a mark before it
+        becomes active. On a device that applies it only at power-on: store configuration and a power cycle."""
         assert self.select(), f"switch state selective to {self.address.describe()}: no answer (44h)"
         if new_id == UNCONFIGURED_NODE_ID:
             self.made_unconfigured = True
@@ -122,7 +122,7 @@ class LssDevice:
         expect_success(self.master.configure_node_id(new_id), f"configure node-ID {new_id}")
         if self.applies_on_reset:
             self.leave()
-            return self.reset_communication(active_id)
+            return self.reset_communication(self.node_id)
         return self._store_and_power_cycle()
 
     def _store_and_power_cycle(self) -> Mark:
@@ -159,9 +159,9 @@ class LssDevice:
         if not self._select_within(self.dut.profile.timing.bootup_max_ms / 1000):
             return f"the device does not answer at node-ID {self.node_id} nor to its LSS address"
         active = self.master.inquire_node_id() if "inquire_node_id" in self.services else None
-        answer = self.master.configure_node_id(self.node_id)
-        if answer is None or answer.error != 0:
-            return f"configure node-ID {self.node_id} to put the device back: answer {answer}"
+        problem = failure(self.master.configure_node_id(self.node_id), f"configure node-ID {self.node_id}")
+        if problem:
+            return f"{problem} (to put the device back)"
         if self.applies_on_reset:
             mark = self.leave()  # an unconfigured device starts now
             for node_id in {active, *self.moved_to} - {None, UNCONFIGURED_NODE_ID}:
@@ -175,35 +175,37 @@ class LssDevice:
             return f"after configure node-ID {self.node_id} the device does not answer at it"
         return None
 
-
     def _configure_as_found(self) -> str | None:
         """Pending node-ID and bit timing back to the ones in use (a later reset must not apply a test's)."""
         if not self.select():
             return f"the device does not answer to its LSS address {self.address.describe()}"
         problems = []
         if self._sent(LssCommand.CONFIGURE_NODE_ID):
-            answer = self.master.configure_node_id(self.node_id)
-            if answer is None or answer.error:
-                problems.append(f"configure node-ID {self.node_id}: {answer}")
+            problems.append(failure(self.master.configure_node_id(self.node_id), f"configure node-ID {self.node_id}"))
         if self._sent(LssCommand.CONFIGURE_BIT_TIMING) and self.bit_index is not None:
-            answer = self.master.configure_bit_timing(self.bit_index)
-            if answer is None or answer.error:
-                problems.append(f"configure bit timing {self.bit_index}: {answer}")
+            problems.append(failure(self.master.configure_bit_timing(self.bit_index),
+                                    f"configure bit timing {self.bit_index}"))
         if self._sent(LssCommand.STORE_CONFIGURATION):  # what the test stored must not wait for a power cycle
-            answer = self.master.store_configuration()
-            if answer is None or answer.error:
-                problems.append(f"store configuration: {answer}")
+            problems.append(failure(self.master.store_configuration(), "store configuration"))
         self.leave()
-        return "; ".join(problems) or None
+        return "; ".join(p for p in problems if p) or None
+
+
+def failure(answer: LssAnswer | None, what: str) -> str | None:
+    """None for an LSS answer with error 0, else what went wrong with ``what``."""
+    if answer is None:
+        return f"{what}: no answer"
+    if answer.error != 0:
+        return f"{what}: error {answer.error} (specific {answer.specific})"
+    return None
 
 
 def expect_success(answer: LssAnswer | None, what: str) -> LssAnswer:
     """An LSS answer with error 0, else AssertionError naming ``what`` and the answer."""
-    if answer is None:
-        raise AssertionError(f"{what}: no answer")
-    if answer.error != 0:
-        raise AssertionError(f"{what}: error {answer.error} (specific {answer.specific})")
-    return answer
+    problem = failure(answer, what)
+    if problem:
+        raise AssertionError(problem)
+    return answer  # type: ignore[return-value]
 
 
 def _from(msg: can.Message, cob_id: int) -> bool:

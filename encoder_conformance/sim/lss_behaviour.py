@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable
 
 from ..cia301 import NmtState
-from ..cia305 import AUTO_BIT_RATE_INDEX, SLAVE_COB_ID
+from ..cia305 import AUTO_BIT_RATE_INDEX, MAX_NODE_ID, SLAVE_COB_ID
 from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile, resolve_node_id_expression
 from .faults import FaultSet, assemble, breaks
@@ -104,11 +104,9 @@ class LssBehaviour:
     def configured(self, what: str) -> None:
         if what != "node_id":
             return
-        if self._nmt.waiting_for_node_id:
-            if self._unconfigured is not None and self._unconfigured.bootup_after_valid_node_id:
-                self._start()
-        elif self.config.active_node_id not in (None, self._nmt.node_id):
-            self._nmt.node_id = self.config.active_node_id  # only a fault makes it active at once
+        if self._nmt.waiting_for_node_id and self._unconfigured is not None \
+                and self._unconfigured.bootup_after_valid_node_id:
+            self._start()
 
     def left_configuration(self) -> None:
         if self._nmt.waiting_for_node_id:
@@ -152,3 +150,15 @@ class OnlyInStopped(LssBehaviour):
 class IgnoredInStopped(LssBehaviour):
     def allowed(self) -> bool:
         return self._nmt.state is not NmtState.STOPPED and super().allowed()
+
+
+@breaks(LssBehaviour, "lss_node_id_active_immediately")
+class NodeIdActiveImmediately(LssBehaviour):
+    """A configured node-ID (1..127) takes effect at once, not at the next reset communication."""
+
+    def configured(self, what: str) -> None:
+        super().configured(what)
+        pending = self.config.pending_node_id
+        if what == "node_id" and pending is not None and 1 <= pending <= MAX_NODE_ID \
+                and not self._nmt.waiting_for_node_id:
+            self.config.active_node_id = self._nmt.node_id = pending

@@ -121,16 +121,6 @@ class LssConfiguration:
         return None
 
 
-@breaks(LssConfiguration, "lss_node_id_active_immediately")
-class NodeIdActiveImmediately(LssConfiguration):
-    """The configured node-ID takes effect at once (the node is told through ``configure_node_id``)."""
-
-    def configure_node_id(self, node_id: int) -> None:
-        super().configure_node_id(node_id)
-        if 1 <= node_id <= MAX_NODE_ID:
-            self.active_node_id = node_id
-
-
 @breaks(LssConfiguration, "lss_store_not_persisted")
 class StoreNotPersisted(LssConfiguration):
     """Store configuration answers success and keeps nothing."""

@@ -140,11 +140,11 @@ class SimulatedNode:
             self.tpdo,
             self._built(fx.StoreObjectReadsBack, _ReadsBack),
             self.sdo_channel,
-            self._lss_slave(),
+            self._lss(),
         ]
         return [b for b in optional if b is not None]
 
-    def _lss_slave(self) -> LssBehaviour | None:
+    def _lss(self) -> LssBehaviour | None:
         """The LSS slave, where the profile declares LSS services (capabilities.lss)."""
         if not self.profile.capabilities.lss:
             return None
