@@ -8,7 +8,7 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 
 Adding an effect: write its model here (the docstring says what the device does, each field
 what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 29 effects, one small model
+This module is over 400 lines because it is the catalogue of the 31 effects, one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -444,6 +444,27 @@ class LssNodeIdRange(EffectParams):
     node_id_range: tuple[int, int] = Field(description="lowest and highest node-ID the manual allows")
 
 
+class CamLowBelowHigh(EffectParams):
+    """A CAM low limit (6310h..6317h) is accepted only below the same cam's high limit (6320h..6327h)
+    as it stands when the low limit is written, so the high limit must be written first; a low limit
+    at or above it is refused. A window whose low limit lies above its high limit cannot be set."""
+
+    effect = "cam_low_below_high"
+    abort_code: int = Field(default=SdoAbortCode.MAX_BELOW_MIN,
+                            description="the abort sent for a low limit at or above the high limit")
+    low: Documentation = _doc("the low-limit objects")
+    high: Documentation = _doc("the high-limit objects")
+
+
+class SpeedScalingObject(EffectParams):
+    """The speed value (6030h) is increments per second multiplied by a manufacturer factor
+    ``scaling_object`` sub 1 / sub 2 (default 1/1)."""
+
+    effect = "speed_scaling_object"
+    index: ObjectIndex = Field(default=0x6030, description="the speed object")
+    scaling_object: ObjectIndex = Field(description="the object whose sub 1 / sub 2 multiply the speed")
+
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -453,6 +474,6 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         StoreAutomatic, PositionFrozenDuringExecution, SecondNode, ManufacturerEncoderObjects,
         LimitSwitchFlags, FixedTpdoMapping, GuardingHeartbeatExclusive, RestoreExcludes, NmtAutostartObject,
         ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
-        UnconfiguredNodeId, LssNodeIdRange,
+        UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
     )
 }

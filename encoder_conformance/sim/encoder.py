@@ -1,59 +1,29 @@
-"""The measuring function of a simulated encoder: shaft angle -> the values the OD and TPDOs show.
+"""The measuring function of a simulated encoder: its objects in, the reference model's values out.
 
-CiA 406 objects (6000h..6004h, 6509h) by default; the quirk effects that change them are
-applied here: ``manufacturer_encoder_objects`` (the same function in manufacturer objects),
-``signed_position_range``, ``limit_switch_flags`` and ``position_frozen_during_execution``.
+Every value (position, CAM state, work-area state, speed, preset offset) is computed by
+``encoder_model`` from the settings in the twin's object store, read the way the suites read them
+from a device. What stays here is the twin's own part: the shaft, the preset offset of devices
+without 6509h (kept in NVM), SIKO's position freeze while a write executes
+(``position_frozen_during_execution``) and the CAM history along the shaft's moves.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
+from ..encoder_model import objects as od
+from ..encoder_model.reference import EncoderReference
+from ..encoder_model.settings import EncoderDescription, EncoderSettings, read_settings
+from ..profile import datatypes
 from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
-from .limit_switch import LimitSwitchFlags
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
-from .position import (
-    EncoderGeometry,
-    Scaling,
-    position_span,
-    position_value,
-    signed_half_range,
-    unshifted_position,
-)
 from .scheduler import DeadlineScheduler, JobHandle
 from .shaft import Shaft
 
 #: NVM slot (index 0 is no object) for the preset offset of devices without 6509h
 OFFSET_KEY: Key = (0x0000, 0)
-
-
-@dataclass(frozen=True)
-class EncoderObjects:
-    """Where the CiA 406 roles live on this device (quirk effect ``manufacturer_encoder_objects``)."""
-
-    operating: int = 0x6000
-    units_per_rev: int = 0x6001
-    total_range: int = 0x6002
-    preset: int = 0x6003
-    position: int = 0x6004
-    scaling_bit: int | None = 2  # None: the scaling objects always apply
-
-    @classmethod
-    def of(cls, profile: DeviceProfile) -> EncoderObjects:
-        params = profile.params_of(fx.ManufacturerEncoderObjects)
-        if params is None:
-            return cls()
-        role = {cia: own for own, cia in params.equivalents.items()}
-        return cls(
-            operating=role.get(0x6000, 0x6000),
-            units_per_rev=role.get(0x6001, 0x6001),
-            total_range=role.get(0x6002, 0x6002),
-            preset=role.get(0x6003, 0x6003),
-            position=role.get(0x6004, 0x6004),
-            scaling_bit=params.scaling_bit,
-        )
 
 
 @dataclass(frozen=True)
@@ -80,92 +50,84 @@ class FreezeRule:
 
 
 class EncoderFunction:
-    """Position, speed and preset of one simulated encoder."""
+    """Position, preset, CAM, work area and speed of one simulated encoder."""
 
     def __init__(self, profile: DeviceProfile, store: ObjectStore, shaft: Shaft, scheduler: DeadlineScheduler) -> None:
         self.profile = profile
         self.store = store
         self.shaft = shaft
         self.scheduler = scheduler
-        self.objects = EncoderObjects.of(profile)
-        self.signed = profile.has_effect(fx.SignedPositionRange) and profile.capabilities.multiturn
-        flags = profile.params_of(fx.LimitSwitchFlags)
-        self.flags = None if flags is None else LimitSwitchFlags.from_params(flags)
+        self.description = EncoderDescription.of(profile)
+        self.objects = self.description.objects
         freeze = profile.params_of(fx.PositionFrozenDuringExecution)
         self.freeze_rule = None if freeze is None else FreezeRule.from_params(freeze)
         self._offset = 0  # preset offset when the profile has no 6509h
+        self.reference = EncoderReference(self.settings(), self.description.cam_rules)
         self._frozen: int | None = None
         self._thaw_job: JobHandle | None = None
+        shaft.listeners.append(self.follow_shaft)
 
+    # -- reading the settings from the object store -----------------------------------------
     def read_int(self, index: int, sub: int = 0) -> int | None:
+        """An integer entry as its data type gives it (SIGNED types negative), None where absent."""
         key = (index, sub)
         if not self.store.has(key):
             return None
         value = self.store.get(key)
-        return value if isinstance(value, int) else None
-
-    def _default_int(self, index: int) -> int | None:
-        if not self.store.has((index, 0)):
+        if not isinstance(value, int):
             return None
-        value = self.store.default_of((index, 0), 0)
-        return value if isinstance(value, int) else None
+        entry = self.store.entries[key]
+        size = datatypes.size_bytes(entry.type)
+        if size and datatypes.is_signed(entry.type) and value >= 1 << (8 * size - 1):
+            return value - (1 << (8 * size))
+        return value
 
-    # -- geometry and scaling --------------------------------------------------------------
-    def geometry(self) -> EncoderGeometry:
-        """Physical resolution: 6501h/6502h, else (relocated objects) the type-label defaults."""
-        relocated = self.objects.position != 0x6004
-        label_steps = self._default_int(self.objects.units_per_rev) if relocated else None
-        steps = (self.read_int(0x6501) or int(self.profile.simulator.values.get("steps_per_rev", 0))
-                 or label_steps or 4096)
-        revolutions = 1
-        if self.profile.capabilities.multiturn:
-            total = self._default_int(self.objects.total_range) if relocated else None
-            revolutions = self.read_int(0x6502) or (total // steps if total else 0) or 1
-        return EncoderGeometry(steps, revolutions)
+    def settings(self) -> EncoderSettings:
+        has_offset_object = self.store.has((od.OFFSET, 0))
+        settings = read_settings(self.description, self.read_int, None if has_offset_object else self._offset)
+        if has_offset_object and settings.span:  # 6509h may read negative (SIGNED32); the arithmetic wants 0..span-1
+            offset = settings.scaling.offset % settings.span
+            settings = replace(settings, scaling=replace(settings.scaling, offset=offset))
+        return settings
 
-    def scaling(self) -> Scaling:
-        objects = self.objects
-        params = self.read_int(objects.operating) or 0
-        if objects.scaling_bit is None:
-            enabled = True
-        else:
-            enabled = bool(params >> objects.scaling_bit & 1) and self.profile.capabilities.scaling
-        return Scaling(
-            ccw=bool(params & 0x01),
-            enabled=enabled,
-            units_per_rev=self.read_int(objects.units_per_rev) or 0,
-            total_range=self.read_int(objects.total_range) or 0,
-            offset=self._preset_offset(),
-        )
-
-    def _preset_offset(self) -> int:
-        if self.store.has((0x6509, 0)):
-            value = self.read_int(0x6509) or 0
-            return value - (1 << 32) if value >= 1 << 31 else value
-        return self._offset
+    def _current(self) -> EncoderReference:
+        """The reference with the settings as they are now (the CAM history kept)."""
+        self.reference.settings = self.settings()
+        return self.reference
 
     # -- values ------------------------------------------------------------------------------
     def position(self) -> int:
         """The position value (frozen while a write is processed, if the profile says so)."""
-        return self._frozen if self._frozen is not None else self._live_position()
+        return self._frozen if self._frozen is not None else self._current().position(self.shaft.turns())
 
-    def _live_position(self) -> int:
-        geometry, scaling = self.geometry(), self.scaling()
-        value = position_value(self.shaft.turns(), geometry, scaling)
-        return signed_half_range(value, position_span(geometry, scaling)) if self.signed else value
+    def follow_shaft(self) -> None:
+        """The shaft moved: the CAM history sees the position it reached."""
+        if self.description.cam_channels:
+            self._cam_state(1)
+
+    def _cam_state(self, channel: int) -> int:
+        """6300h sub ``channel``; every channel's history follows the position."""
+        reference, position = self._current(), self.position()
+        channels = range(1, len(reference.settings.cam_channels) + 1)
+        states = [reference.cam_state(position, number) for number in channels]
+        return states[channel - 1]
 
     def value(self, key: Key, channel: str) -> int | None:
-        """Computed values (position, speed, mirrors) as ``channel`` (sdo, tpdo) shows them; None otherwise."""
+        """Computed values (position, speed, CAM and area state, mirrors) as ``channel`` (sdo, tpdo) shows them."""
+        index, sub = key
         if key in ((self.objects.position, 0), (0x6008, 0)):
             position = self.position()
-            flags = self.flags
-            if flags is not None and key[0] == flags.value_object and channel in flags.channels:
+            flags = self.description.flags
+            if flags is not None and index == flags.value_object and channel in flags.channels:
                 return flags.apply(position, self.read_int)
             return position
-        if key == (0x6030, 1):
-            units = self.scaling().units_per_rev or self.geometry().steps_per_rev
-            return max(-32768, min(32767, round(self.shaft.speed * units)))
-        if key == (0x6500, 0) and self.store.has((0x6000, 0)):
+        if index == od.SPEED and sub >= 1 and self.description.speed:
+            return self._current().speed(self.shaft.speed)
+        if index == od.CAM_STATE and 1 <= sub <= self.description.cam_channels:
+            return self._cam_state(sub)
+        if index == od.AREA_STATE and sub == 1 and self.description.work_area:
+            return self._current().area_state(self.position())
+        if key == (od.OPERATING_STATUS, 0) and self.store.has((0x6000, 0)):
             value = self.store.get((0x6000, 0))
             return value if isinstance(value, int) else None
         return None
@@ -181,7 +143,14 @@ class EncoderFunction:
                 self._thaw_job.cancel()
             self._thaw_job = self.scheduler.call_later(duration, self.thaw)
         if key == (self.objects.preset, 0) and isinstance(value, int):
-            self._preset(value)
+            self._preset(self._signed_preset(value))
+
+    def _signed_preset(self, value: int) -> int:
+        entry = self.store.entries.get((self.objects.preset, 0))
+        size = datatypes.size_bytes(entry.type) if entry is not None else None
+        if entry is not None and size and datatypes.is_signed(entry.type) and value >= 1 << (8 * size - 1):
+            return value - (1 << (8 * size))
+        return value
 
     def thaw(self) -> None:
         """End a freeze: the position follows the shaft again."""
@@ -191,23 +160,21 @@ class EncoderFunction:
         self._frozen = None
 
     def _preset(self, preset: int) -> None:
-        geometry, scaling = self.geometry(), self.scaling()
-        before = unshifted_position(self.shaft.turns(), geometry, scaling)
-        span = position_span(geometry, scaling)
-        offset = (preset - before) % span if span else preset - before
-        if self.store.has((0x6509, 0)):
-            self.store.set((0x6509, 0), offset)
+        offset = self._current().offset_for_preset(preset, self.shaft.turns())
+        if self.store.has((od.OFFSET, 0)):
+            self.store.set((od.OFFSET, 0), offset)
         else:
             self._offset = offset
 
     # -- persistence of the internal preset offset (devices without 6509h) -------------------
     def reload(self, nvm: NonVolatileMemory) -> None:
         self.thaw()
+        self.reference.forget_cam_history()
         stored = nvm.get(OFFSET_KEY)
         self._offset = stored if isinstance(stored, int) else 0
 
     def persist(self, nvm: NonVolatileMemory) -> None:
-        if not self.store.has((0x6509, 0)):
+        if not self.store.has((od.OFFSET, 0)):
             nvm.put_many({OFFSET_KEY: self._offset})
 
     def forget(self, nvm: NonVolatileMemory) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 
 
 class Shaft:
@@ -14,6 +15,12 @@ class Shaft:
         self._turns = turns
         self._speed = 0.0
         self._since = time.monotonic()
+        #: called after every move the control API makes (the CAM history follows the shaft)
+        self.listeners: list[Callable[[], None]] = []
+
+    def _moved(self) -> None:
+        for listener in self.listeners:
+            listener()
 
     def turns(self) -> float:
         with self._lock:
@@ -32,11 +39,13 @@ class Shaft:
         with self._lock:
             self._settle()
             self._turns += revolutions
+        self._moved()
 
     def set_turns(self, revolutions: float) -> None:
         with self._lock:
             self._settle()
             self._turns = revolutions
+        self._moved()
 
     def set_speed(self, revolutions_per_second: float) -> None:
         with self._lock:
