@@ -1,0 +1,95 @@
+"""The encoder function of the device under test over SDO: its settings, position and offset, typed.
+
+Values are decoded with the profile's data type of each entry (SIGNED types negative), so the
+settings read here are the same inputs the reference model gets from the twin's object store
+(``encoder_model.settings.read_settings``).
+"""
+
+from __future__ import annotations
+
+import time
+
+from ..encoder_model import objects as od
+from ..encoder_model.reference import EncoderReference
+from ..encoder_model.settings import EncoderDescription, EncoderSettings, read_settings
+from ..profile import datatypes
+from ..profile import quirk_effects as fx
+from .device import DeviceUnderTest
+
+
+class EncoderAccess:
+    """Typed reads and writes of the encoder objects of one device."""
+
+    def __init__(self, dut: DeviceUnderTest) -> None:
+        self.dut = dut
+        self.description = EncoderDescription.of(dut.profile)
+        self.objects = self.description.objects
+
+    # -- typed entries ---------------------------------------------------------------------------
+    def _type(self, index: int, sub: int) -> str | None:
+        entry = self.dut.profile.entry(index, sub)
+        return None if entry is None else entry.type
+
+    def read_int(self, index: int, sub: int = 0) -> int | None:
+        """The entry decoded with its profile data type; None where the profile does not declare it."""
+        type_name = self._type(index, sub)
+        if type_name is None:
+            return None
+        data = self.dut.read(index, sub)
+        return int.from_bytes(data, "little", signed=datatypes.is_signed(type_name))
+
+    def encode(self, index: int, sub: int, value: int) -> bytes:
+        """``value`` as the entry's data type carries it (two's complement for SIGNED types)."""
+        type_name = self._type(index, sub)
+        if type_name is None:
+            raise KeyError(f"{index:04X}h.{sub:02X} is not in profile {self.dut.profile.id}")
+        size = datatypes.size_bytes(type_name) or 4
+        return (value % (1 << 8 * size)).to_bytes(size, "little")
+
+    def write_int(self, index: int, sub: int, value: int) -> None:
+        self.dut.write(index, sub, self.encode(index, sub, value))
+
+    # -- the encoder function -----------------------------------------------------------------------
+    def settings(self, offset: int | None = None) -> EncoderSettings:
+        """Everything the position, CAM and work-area values depend on, as the device shows it now."""
+        return read_settings(self.description, self.read_int, offset)
+
+    def reference(self) -> EncoderReference:
+        """A reference model with the device's current settings (no CAM history)."""
+        return EncoderReference(self.settings(), self.description.cam_rules)
+
+    @property
+    def has_offset_object(self) -> bool:
+        return not self.objects.relocated and self.dut.profile.entry(od.OFFSET, 0) is not None
+
+    def offset(self) -> int | None:
+        """6509h, where the device has it."""
+        return self.read_int(od.OFFSET, 0) if self.has_offset_object else None
+
+    def position(self) -> int:
+        """The position value read by SDO (limit-switch flag bits removed where the profile declares them)."""
+        value = self.read_int(self.objects.position, 0)
+        assert value is not None, f"{self.objects.position:04X}h (position) is not in the profile"
+        flags = self.description.flags
+        if flags is not None and self.objects.position == flags.value_object and "sdo" in flags.channels:
+            value &= flags.position_mask
+        return value
+
+    def preset(self, value: int) -> None:
+        """Write the preset object (6003h, or the manufacturer's)."""
+        self.write_int(self.objects.preset, 0, value)
+
+    def settle_s(self) -> float:
+        """How long the position may lag a write (quirk ``position_frozen_during_execution``), else 0."""
+        freeze = self.dut.profile.params_of(fx.PositionFrozenDuringExecution)
+        if freeze is None:
+            return 0.0
+        return max([freeze.duration_ms, *freeze.durations_ms.values()]) / 1000
+
+    def position_when(self, wanted: int, timeout: float | None = None) -> int:
+        """The position, read again until it equals ``wanted`` or the settle time is over (the last read)."""
+        deadline = time.monotonic() + (self.settle_s() if timeout is None else timeout)
+        while True:
+            value = self.position()
+            if value == wanted or time.monotonic() >= deadline:
+                return value
