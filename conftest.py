@@ -16,7 +16,7 @@ from encoder_conformance.plugin import lifecycle, reporting, selection, verdicts
 from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence",
-                  "fixtures.lss"]
+                  "fixtures.lss", "fixtures.encoder"]
 
 settings.register_profile(
     "ci", max_examples=50, deadline=None, derandomize=True, database=None, print_blob=True,
