@@ -60,10 +60,14 @@ class EncoderAccess:
 
     @property
     def has_offset_object(self) -> bool:
-        return not self.objects.relocated and self.dut.profile.entry(od.OFFSET, 0) is not None
+        """The device shows CiA 406's offset (6509h = preset - position before it); not where a quirk
+        says its 6509h means something else (``offset_is_zeroing_point``)."""
+        profile = self.dut.profile
+        return (not self.objects.relocated and profile.entry(od.OFFSET, 0) is not None
+                and not profile.has_effect(fx.OffsetIsZeroingPoint))
 
     def offset(self) -> int | None:
-        """6509h, where the device has it."""
+        """6509h, where the device has it with CiA 406's meaning."""
         return self.read_int(od.OFFSET, 0) if self.has_offset_object else None
 
     def position(self) -> int:

@@ -8,7 +8,7 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 
 Adding an effect: write its model here (the docstring says what the device does, each field
 what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 31 effects, one small model
+This module is over 400 lines because it is the catalogue of the 32 effects, one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -465,6 +465,15 @@ class SpeedScalingObject(EffectParams):
     scaling_object: ObjectIndex = Field(description="the object whose sub 1 / sub 2 multiply the speed")
 
 
+class OffsetIsZeroingPoint(EffectParams):
+    """The offset value (6509h) is the device's own zeroing point (the encoder value at which the
+    position reads the preset, in its own units), not CiA 406's preset minus position: the suites do
+    not judge it against the preset, and the run gives the reference point back by the position."""
+
+    effect = "offset_is_zeroing_point"
+    formula: Documentation = _doc("the manual's formula for the offset value")
+
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -475,5 +484,6 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         LimitSwitchFlags, FixedTpdoMapping, GuardingHeartbeatExclusive, RestoreExcludes, NmtAutostartObject,
         ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
         UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
+        OffsetIsZeroingPoint,
     )
 }
