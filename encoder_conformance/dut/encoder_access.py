@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 
 from ..encoder_model import objects as od
+from ..encoder_model.freeze import FreezeRule
 from ..encoder_model.reference import EncoderReference
 from ..encoder_model.settings import EncoderDescription, EncoderSettings, read_settings
 from ..profile import datatypes
@@ -24,6 +25,8 @@ class EncoderAccess:
         self.dut = dut
         self.description = EncoderDescription.of(dut.profile)
         self.objects = self.description.objects
+        self.freeze = FreezeRule.of(dut.profile)
+        self._busy_until = 0.0  # the device executes a write until then (its position is frozen)
 
     # -- typed entries ---------------------------------------------------------------------------
     def _type(self, index: int, sub: int) -> str | None:
@@ -48,6 +51,18 @@ class EncoderAccess:
 
     def write_int(self, index: int, sub: int, value: int) -> None:
         self.dut.write(index, sub, self.encode(index, sub, value))
+        self.written(index, value)
+
+    def written(self, index: int, value: int) -> None:
+        """A write reached the device: where its manual says it executes it afterwards, note until when."""
+        if self.freeze is not None:
+            self._busy_until = max(self._busy_until, time.monotonic() + self.freeze.duration_s(index, value))
+
+    def wait_until_executed(self) -> None:
+        """Wait out the execution time the manual gives for the last write (its position is frozen meanwhile)."""
+        remaining = self._busy_until - time.monotonic()
+        if remaining > 0:
+            time.sleep(remaining)
 
     # -- the encoder function -----------------------------------------------------------------------
     def settings(self, offset: int | None = None) -> EncoderSettings:
@@ -71,7 +86,9 @@ class EncoderAccess:
         return self.read_int(od.OFFSET, 0) if self.has_offset_object else None
 
     def position(self) -> int:
-        """The position value read by SDO (limit-switch flag bits removed where the profile declares them)."""
+        """The position value read by SDO (limit-switch flag bits removed where the profile declares them),
+        once the device executed the writes before it."""
+        self.wait_until_executed()
         value = self.read_int(self.objects.position, 0)
         assert value is not None, f"{self.objects.position:04X}h (position) is not in the profile"
         flags = self.description.flags
@@ -80,19 +97,31 @@ class EncoderAccess:
         return value
 
     def preset(self, value: int) -> None:
-        """Write the preset object (6003h, or the manufacturer's)."""
-        self.write_int(self.objects.preset, 0, value)
+        """Write the preset object (6003h, or the manufacturer's). Where the device takes a preset only with
+        the scaling bit set (quirk ``writes_need_scaling_bit``), the bit is set for the write and put back."""
+        bit = self._scaling_bit_needed_for_preset()
+        if bit is None:
+            self.write_int(self.objects.preset, 0, value)
+            return
+        operating = self.read_int(self.objects.operating, 0) or 0
+        self.write_int(self.objects.operating, 0, operating | bit)
+        try:
+            self.write_int(self.objects.preset, 0, value)
+        finally:
+            self.write_int(self.objects.operating, 0, operating)
 
-    def settle_s(self) -> float:
-        """How long the position may lag a write (quirk ``position_frozen_during_execution``), else 0."""
-        freeze = self.dut.profile.params_of(fx.PositionFrozenDuringExecution)
-        if freeze is None:
-            return 0.0
-        return max([freeze.duration_ms, *freeze.durations_ms.values()]) / 1000
+    def _scaling_bit_needed_for_preset(self) -> int | None:
+        """The scaling bit mask where it is clear now and the preset needs it, else None."""
+        found = self.dut.profile.quirk_objects(fx.WritesNeedScalingBit)
+        if found is None or self.objects.preset not in found[1] or self.objects.scaling_bit is None:
+            return None
+        bit = 1 << self.objects.scaling_bit
+        return None if (self.read_int(self.objects.operating, 0) or 0) & bit else bit
 
-    def position_when(self, wanted: int, timeout: float | None = None) -> int:
-        """The position, read again until it equals ``wanted`` or the settle time is over (the last read)."""
-        deadline = time.monotonic() + (self.settle_s() if timeout is None else timeout)
+    def position_when(self, wanted: int, timeout: float = 0.0) -> int:
+        """The position once the device executed its writes, read again until it equals ``wanted`` or
+        ``timeout`` is over (returns the last read)."""
+        deadline = time.monotonic() + timeout
         while True:
             value = self.position()
             if value == wanted or time.monotonic() >= deadline:

@@ -48,6 +48,7 @@ class EncoderDescription:
     flags: LimitSwitchFlags | None
     label_steps_per_rev: int | None  # simulator value / type-label default where 6501h is absent
     label_total_range: int | None
+    physical_revolutions: int | None  # quirk physical_revolutions: more than 6502h shows
 
     @classmethod
     def of(cls, profile: DeviceProfile) -> EncoderDescription:
@@ -56,6 +57,7 @@ class EncoderDescription:
         refuses_wrap = profile.params_of(fx.CamLowBelowHigh) is not None
         speed = profile.params_of(fx.SpeedScalingObject)
         flags = profile.params_of(fx.LimitSwitchFlags)
+        revolutions = profile.params_of(fx.PhysicalRevolutions)
         values = profile.simulator.values
         steps = values.get("steps_per_rev")
         label_steps = _default_int(profile, objects.units_per_rev) if objects.relocated else None
@@ -75,6 +77,7 @@ class EncoderDescription:
             flags=None if flags is None else LimitSwitchFlags.from_params(flags),
             label_steps_per_rev=int(steps) if isinstance(steps, int) and steps else label_steps,
             label_total_range=_default_int(profile, objects.total_range) if objects.relocated else None,
+            physical_revolutions=None if revolutions is None else revolutions.revolutions,
         )
 
 
@@ -112,7 +115,9 @@ def read_geometry(description: EncoderDescription, read: Reader) -> EncoderGeome
     steps = (None if description.objects.relocated else read(od.SINGLE_TURN_RESOLUTION, 0)) \
         or description.label_steps_per_rev or DEFAULT_STEPS_PER_REV
     revolutions = 1
-    if description.multiturn:
+    if description.multiturn and description.physical_revolutions:
+        revolutions = description.physical_revolutions
+    elif description.multiturn:
         total = description.label_total_range
         revolutions = (None if description.objects.relocated else read(od.REVOLUTIONS, 0)) \
             or (total // steps if total else 0) or 1

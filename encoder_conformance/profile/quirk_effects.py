@@ -8,7 +8,7 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 
 Adding an effect: write its model here (the docstring says what the device does, each field
 what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 32 effects, one small model
+This module is over 400 lines because it is the catalogue of the 33 effects, one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -474,6 +474,16 @@ class OffsetIsZeroingPoint(EffectParams):
     formula: Documentation = _doc("the manual's formula for the offset value")
 
 
+class PhysicalRevolutions(EffectParams):
+    """The sensor distinguishes more revolutions than 6502h shows: the position arithmetic (and the
+    twin) uses ``revolutions`` as the physical range, so that every total measuring range the
+    device allows divides it."""
+
+    effect = "physical_revolutions"
+    revolutions: int = Field(gt=0, description="revolutions the sensor distinguishes")
+    shown: Documentation = _doc("what 6502h reads instead")
+
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -484,6 +494,6 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         LimitSwitchFlags, FixedTpdoMapping, GuardingHeartbeatExclusive, RestoreExcludes, NmtAutostartObject,
         ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
         UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
-        OffsetIsZeroingPoint,
+        OffsetIsZeroingPoint, PhysicalRevolutions,
     )
 }

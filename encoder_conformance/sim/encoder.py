@@ -9,13 +9,13 @@ without 6509h (kept in NVM), SIKO's position freeze while a write executes
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 from ..encoder_model import objects as od
+from ..encoder_model.freeze import FreezeRule
 from ..encoder_model.reference import EncoderReference
 from ..encoder_model.settings import EncoderDescription, EncoderSettings, read_settings
 from ..profile import datatypes
-from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
@@ -24,29 +24,6 @@ from .shaft import Shaft
 
 #: NVM slot (index 0 is no object) for the preset offset of devices without 6509h
 OFFSET_KEY: Key = (0x0000, 0)
-
-
-@dataclass(frozen=True)
-class FreezeRule:
-    """How long the position stays frozen after a write (quirk ``position_frozen_during_execution``)."""
-
-    objects: frozenset[int]
-    duration_ms: float
-    durations_ms: dict[str, float]
-
-    @classmethod
-    def from_params(cls, params: fx.PositionFrozenDuringExecution) -> FreezeRule:
-        durations = {k.lower(): v for k, v in params.durations_ms.items()}
-        return cls(params.indices, params.duration_ms, durations)
-
-    def duration_s(self, index: int, value: object) -> float:
-        """0 when a write to ``index`` does not freeze the position."""
-        if index not in self.objects:
-            return 0.0
-        name = f"0x{index:04x}"
-        if isinstance(value, int) and value & 0x04 and f"{name}.scaling_bit_set" in self.durations_ms:
-            return self.durations_ms[f"{name}.scaling_bit_set"] / 1000
-        return self.durations_ms.get(name, self.duration_ms) / 1000
 
 
 class EncoderFunction:
@@ -59,8 +36,7 @@ class EncoderFunction:
         self.scheduler = scheduler
         self.description = EncoderDescription.of(profile)
         self.objects = self.description.objects
-        freeze = profile.params_of(fx.PositionFrozenDuringExecution)
-        self.freeze_rule = None if freeze is None else FreezeRule.from_params(freeze)
+        self.freeze_rule = FreezeRule.of(profile)
         self._offset = 0  # preset offset when the profile has no 6509h
         self.reference = EncoderReference(self.settings(), self.description.cam_rules)
         self._frozen: int | None = None

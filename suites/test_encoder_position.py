@@ -1,0 +1,358 @@
+"""The encoder's position function (CiA 406 6000h-6004h, 6030h, 6500h, 6509h) against the reference model.
+
+Every expectation comes from ``encoder_conformance.encoder_model`` fed with the settings read from
+the device, so what the twin computes and what the suite expects are one definition. The preset
+moves the position where a check needs it (any bench); checks of counting direction, scaling,
+the wrap and speed need real rotation and skip on a bench without a shaft drive. Settings, the
+reference point (by presetting) and the shaft are put back after each test (fixture ``encoder``).
+"""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from encoder_conformance.checks import documented_quirk
+from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.encoder_model import objects as od
+from encoder_conformance.encoder_model.position import position_limits, units_per_rev, unsigned_in_span
+from encoder_conformance.profile import quirk_effects as fx
+
+pytestmark = [pytest.mark.spec("CiA 406 §6 (6000h-6004h, 6500h, 6509h)"), pytest.mark.requires("encoder")]
+
+#: units the direction and wrap checks turn the shaft by
+STEP_UNITS = 10
+#: how long a device may integrate its speed value before it shows a new shaft speed (WDGA 2105h sub 2:
+#: 1000 ms by default); our inference for devices that do not say
+SPEED_SETTLE_S = 2.5
+
+
+def _signed_distance(before: int, after: int, span: int) -> int:
+    """The shortest way from ``before`` to ``after`` on a range that wraps at ``span``."""
+    distance = unsigned_in_span(after - before, span)
+    return distance - span if distance > span // 2 else distance
+
+
+def _allow_preset(encoder) -> None:
+    """Where the preset is writable only with the scaling bit set (quirk writes_need_scaling_bit), set it."""
+    found = encoder.access.dut.profile.quirk_objects(fx.WritesNeedScalingBit)
+    objects = encoder.access.objects
+    if found is None or objects.preset not in found[1] or objects.scaling_bit is None:
+        return
+    operating = encoder.access.read_int(objects.operating) or 0
+    if not operating >> objects.scaling_bit & 1:
+        encoder.write(objects.operating, 0, operating | 1 << objects.scaling_bit)
+
+
+def _set_code_sequence(encoder, ccw: bool) -> None:
+    operating_index = encoder.access.objects.operating
+    operating = encoder.access.read_int(operating_index) or 0
+    wanted = operating | 1 if ccw else operating & ~1
+    if wanted != operating:
+        encoder.write(operating_index, 0, wanted)
+
+
+def _rests_on_preset_clause(encoder, evidence) -> None:
+    if encoder.access.objects.relocated:
+        evidence.rests_on("manual", f"the manual's preset object {encoder.access.objects.preset:04X}h "
+                                    "(quirk manufacturer_encoder_objects)")
+    else:
+        evidence.rests_on("cia", "CiA 406 6003h (preset value) and 6509h (offset value)")
+
+
+def test_position_within_measuring_range(encoder, evidence):
+    """The position value lies in the measuring range the settings give (0 .. TMR - 1, or the signed halves)."""
+    settings = encoder.access.settings()
+    low, high = settings.limits()
+    position = encoder.access.position()
+    evidence.measure("position value", position, "units", low, high)
+    assert low <= position <= high, (
+        f"position {position} outside the measuring range {low} .. {high} (span {settings.span}, "
+        f"scaling {'on' if settings.scaling.enabled else 'off'})")
+
+
+@pytest.mark.destructive
+@pytest.mark.requires("preset")
+@pytest.mark.parametrize("ccw", [False, True], ids=["cw", "ccw"])
+@pytest.mark.parametrize("where", ["zero", "middle", "top", "bottom"])
+def test_preset_sets_position_and_offset(encoder, evidence, where: str, ccw: bool):
+    """Writing the preset makes the position read it at once, and 6509h becomes preset minus the position
+    before it (modulo the range): at zero, mid-range and both range edges, in both code sequences."""
+    _rests_on_preset_clause(encoder, evidence)
+    _allow_preset(encoder)
+    _set_code_sequence(encoder, ccw)
+    access = encoder.access
+    settings = access.settings()
+    low, high = position_limits(settings.span, settings.signed)
+    target = {"zero": 0, "middle": settings.shown(settings.span // 3), "top": high, "bottom": low}[where]
+    if where == "bottom" and low == 0:
+        pytest.skip("not applicable: the range starts at 0 (the 'zero' case)")
+    before, offset_before = access.position(), access.offset()
+    reached = encoder.preset(target)
+    evidence.note(f"span {settings.span}, code sequence {'CCW' if ccw else 'CW'}: position {before} -> preset "
+                  f"{target} -> {reached}")
+    assert reached == target, f"preset {target}: the position reads {reached} (it read {before} before)"
+    if offset_before is None:
+        if access.dut.profile.has_effect(fx.OffsetIsZeroingPoint):
+            documented_quirk(access.dut, fx.OffsetIsZeroingPoint, evidence, "6509h = preset - position")
+        return
+    unshifted = unsigned_in_span(before - offset_before, settings.span)
+    expected = unsigned_in_span(target - unshifted, settings.span)
+    offset = access.offset()
+    assert offset is not None, "6509h could not be read after the preset"
+    assert unsigned_in_span(offset - expected, settings.span) == 0, (
+        f"6509h = {offset} after preset {target}; the position was {before} with offset {offset_before}, so "
+        f"the offset must be {expected} (modulo {settings.span})")
+
+
+@pytest.mark.destructive
+@pytest.mark.requires("preset")
+def test_preset_is_kept_while_the_shaft_turns(encoder, evidence):
+    """After a preset the position follows the shaft from the preset value (the offset is applied, not a one-off)."""
+    _rests_on_preset_clause(encoder, evidence)
+    shaft = encoder.rotation()
+    _allow_preset(encoder)
+    settings = encoder.access.settings()
+    target = settings.shown(settings.span // 2)
+    encoder.preset(target)
+    per_rev = units_per_rev(settings.geometry, settings.scaling)
+    shaft.turn_by(STEP_UNITS / per_rev * (-1 if settings.scaling.ccw else 1))
+    observed = encoder.access.position()
+    expected = settings.shown(unsigned_in_span(target + STEP_UNITS, settings.span))
+    assert observed == expected, (
+        f"preset {target}, then {STEP_UNITS} units counting up: the position reads {observed}, the model {expected}")
+
+
+@pytest.mark.destructive
+@pytest.mark.requires("preset")
+def test_position_wraps_at_the_total_measuring_range(encoder, evidence):
+    """Counting up across the end of the range continues at its start (multi-turn wrap at TMR; singleturn at
+    one revolution): preset just below the end, turn a few units up, compare with the model."""
+    _rests_on_preset_clause(encoder, evidence)
+    shaft = encoder.rotation()
+    _allow_preset(encoder)
+    settings = encoder.access.settings()
+    low, high = settings.limits()
+    start = settings.shown(unsigned_in_span(high - 1, settings.span))
+    encoder.preset(start)
+    per_rev = units_per_rev(settings.geometry, settings.scaling)
+    shaft.turn_by(4 / per_rev * (-1 if settings.scaling.ccw else 1))
+    observed = encoder.access.position()
+    expected = settings.shown(unsigned_in_span(start + 4, settings.span))
+    evidence.note(f"range {low} .. {high}: preset {start}, 4 units up -> {observed}")
+    assert observed == expected, (
+        f"from {start} four units up must wrap to {expected} (range {low} .. {high}); observed {observed}")
+
+
+@pytest.mark.destructive
+@pytest.mark.parametrize("ccw", [False, True], ids=["cw", "ccw"])
+def test_code_sequence_sets_the_counting_direction(encoder, evidence, ccw: bool):
+    """6000h bit 0: turning the shaft clockwise counts up with bit 0 = 0 and down with bit 0 = 1."""
+    objects = encoder.access.objects
+    if objects.relocated:
+        evidence.rests_on("manual", f"code sequence bit 0 of {objects.operating:04X}h (quirk "
+                                    "manufacturer_encoder_objects)")
+    else:
+        evidence.rests_on("cia", "CiA 406 6000h bit 0 (code sequence)")
+    if encoder.access.dut.profile.entry(objects.operating, 0) is None:
+        pytest.skip(f"not applicable: the profile has no operating parameters object {objects.operating:04X}h")
+    shaft = encoder.rotation()
+    _set_code_sequence(encoder, ccw)
+    settings = encoder.access.settings()
+    per_rev = units_per_rev(settings.geometry, settings.scaling)
+    before = encoder.access.position()
+    shaft.turn_by(STEP_UNITS / per_rev)  # clockwise
+    after = encoder.access.position()
+    moved = _signed_distance(before, after, settings.span)
+    expected = -STEP_UNITS if ccw else STEP_UNITS
+    evidence.note(f"code sequence {'CCW' if ccw else 'CW'}: {before} -> {after} for {STEP_UNITS} units clockwise")
+    assert moved == expected, (
+        f"code sequence bit 0 = {int(ccw)}: a clockwise turn of {STEP_UNITS} units moved the position by {moved}, "
+        f"expected {expected}")
+
+
+def _scaled_setting(encoder) -> tuple[int, int]:
+    """(MUR, TMR) other than the physical resolution: a quarter of the steps, the same number of revolutions."""
+    settings = encoder.access.settings()
+    mur = max(1, settings.geometry.steps_per_rev // 4)
+    return mur, mur * settings.geometry.revolutions
+
+
+@pytest.mark.destructive
+@pytest.mark.requires("scaling")
+def test_scaling_sets_units_per_revolution(encoder, evidence):
+    """A quarter revolution moves the position by a quarter of the physical steps 6501h with scaling off (where
+    6000h has the scaling bit), and by a quarter of 6001h with scaling on."""
+    objects = encoder.access.objects
+    evidence.rests_on("cia" if not objects.relocated else "manual",
+                      "CiA 406 6000h bit 2, 6001h, 6002h" if not objects.relocated
+                      else f"the manual's scaling objects {objects.units_per_rev:04X}h/{objects.total_range:04X}h")
+    shaft = encoder.rotation()
+    access = encoder.access
+    if objects.scaling_bit is not None:  # scaling off first: the settings are put back with the bit still set
+        operating = access.read_int(objects.operating) or 0
+        if operating >> objects.scaling_bit & 1:
+            encoder.write(objects.operating, 0, operating & ~(1 << objects.scaling_bit))
+        _quarter_turn_moves(encoder, shaft, access.settings().geometry.steps_per_rev // 4, "scaling off")
+        encoder.write(objects.operating, 0, (access.read_int(objects.operating) or 0) | 1 << objects.scaling_bit)
+    mur, tmr = _scaled_setting(encoder)
+    encoder.write(objects.units_per_rev, 0, mur)
+    if access.description.multiturn:
+        encoder.write(objects.total_range, 0, tmr)
+    _quarter_turn_moves(encoder, shaft, mur // 4, f"scaling on, 6001h = {mur}, 6002h = {tmr}")
+
+
+def _quarter_turn_moves(encoder, shaft, expected: int, setting: str) -> None:
+    """Turn a quarter revolution (counting up) and check the position moved by ``expected`` units."""
+    access = encoder.access
+    settings = access.settings()
+    before = access.position()
+    shaft.turn_by(-0.25 if settings.scaling.ccw else 0.25)
+    after = access.position()
+    moved = _signed_distance(before, after, settings.span)
+    assert moved == expected, (
+        f"{setting}: a quarter revolution moved the position by {moved} ({before} -> {after}), expected {expected}")
+
+
+@pytest.mark.destructive
+@pytest.mark.requires("scaling")
+def test_scaled_position_stays_in_the_scaled_range(encoder, evidence):
+    """With a scaled range set (6001h, 6002h), the position and a preset at its last unit stay inside it."""
+    objects = encoder.access.objects
+    evidence.rests_on("cia" if not objects.relocated else "manual", "CiA 406 6001h/6002h (total measuring range)")
+    mur, tmr = _scaled_setting(encoder)
+    access = encoder.access
+    if objects.scaling_bit is not None:
+        operating = access.read_int(objects.operating) or 0
+        encoder.write(objects.operating, 0, operating | 1 << objects.scaling_bit)
+    encoder.write(objects.units_per_rev, 0, mur)
+    if access.description.multiturn:
+        encoder.write(objects.total_range, 0, tmr)
+    settings = access.settings()
+    low, high = settings.limits()
+    position = access.position()
+    assert low <= position <= high, f"6001h = {mur}, 6002h = {tmr}: position {position} outside {low} .. {high}"
+    if not access.description.preset:
+        return
+    reached = encoder.preset(high)
+    assert reached == high, f"preset {high} (the last unit of the scaled range): the position reads {reached}"
+
+
+@pytest.mark.destructive
+def test_operating_status_mirrors_operating_parameters(encoder, evidence):
+    """6500h (operating status) shows the code sequence and scaling bits of 6000h, also after 6000h changed."""
+    access = encoder.access
+    if access.objects.relocated or access.dut.profile.entry(od.OPERATING_STATUS, 0) is None:
+        pytest.skip("not applicable: the profile has no 6500h (operating status)")
+    evidence.rests_on("cia", "CiA 406 6500h (operating status: the 6000h settings in use)")
+    mask = 0x01 | (1 << access.objects.scaling_bit if access.objects.scaling_bit is not None else 0)
+    for ccw in (True, False):
+        _set_code_sequence(encoder, ccw)
+        operating, status = access.read_int(0x6000) or 0, access.read_int(od.OPERATING_STATUS) or 0
+        assert status & mask == operating & mask, (
+            f"6000h = {operating:04X}h but 6500h = {status:04X}h (bits {mask:02X}h must agree)")
+
+
+def _position_tpdos(dut, index: int) -> list[tuple[int, int, int]]:
+    """(comm index, byte offset, bits) of each TPDO whose readable mapping maps object ``index``."""
+    found = []
+    for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF):
+        mapping = comm + 0x200
+        if dut.profile.entry(mapping, 0) is None:
+            continue
+        bit = 0
+        for sub in range(1, dut.read_uint(mapping, 0) + 1):
+            entry = dut.read_uint(mapping, sub)
+            if entry >> 16 == index and (entry >> 8) & 0xFF == 0:
+                found.append((comm, bit // 8, entry & 0xFF))
+                break
+            bit += entry & 0xFF
+    return found
+
+
+def _sync_or_timer(dut, comm: int) -> tuple[bytes, bytes | None] | None:
+    """How to make TPDO ``comm`` send with the shaft at rest: (transmission type to write, event timer to write
+    or None); None where neither SYNC nor an event timer can be set."""
+    kind, timer = dut.profile.entry(comm, 2), dut.profile.entry(comm, 5)
+    types = dut.profile.capabilities.tpdo_transmission_types
+    if kind is not None and kind.writable and 1 in types:
+        return b"\x01", None
+    current = dut.read_uint(comm, 2)
+    if 1 <= current <= 240:
+        return current.to_bytes(1, "little"), None
+    if current in (254, 255) and timer is not None and timer.writable:
+        return current.to_bytes(1, "little"), (20).to_bytes(2, "little")
+    return None
+
+
+@pytest.mark.requires("tpdos")
+def test_position_in_tpdo_equals_sdo(encoder, dut, settings_journal, back_to_preoperational, evidence):
+    """With the shaft at rest, the position a TPDO carries equals 6004h read by SDO before and after it."""
+    evidence.rests_on("cia", "CiA 301 §7.2.2 (PDO carries the mapped object's value), CiA 406 6004h")
+    candidates = [(c, o, b, how) for c, o, b in _position_tpdos(dut, encoder.access.objects.position)
+                  if (how := _sync_or_timer(dut, c)) is not None]
+    if not candidates:
+        pytest.skip("not applicable: no TPDO maps the position object with a SYNC type or a settable event timer")
+    comm, offset, bits, (kind_bytes, timer) = candidates[0]
+    cob_id = dut.read_uint(comm, 1)
+    if cob_id & 0x80000000:
+        if not dut.profile.entry(comm, 1).writable:
+            pytest.skip(f"not applicable: {comm:04X}h is disabled and its COB-ID is read-only")
+        settings_journal.write(comm, 1, (cob_id & 0x7FFFFFFF).to_bytes(4, "little"))
+    if dut.profile.entry(comm, 2).writable:
+        settings_journal.write(comm, 2, kind_bytes)
+    if timer is not None:
+        settings_journal.write(comm, 5, timer)
+    kind = kind_bytes[0]
+    before = encoder.access.position()
+    dut.nmt("start")
+    mark = dut.frames.mark()
+    if 1 <= kind <= 240:
+        for _ in range(kind):
+            dut.send_sync()
+    pdo = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id & 0x7FF, 2.0, mark)
+    after = encoder.access.position()
+    assert pdo is not None, f"no TPDO on {cob_id & 0x7FF:03X}h ({comm:04X}h type {kind}) after start" + (
+        " and SYNC" if 1 <= kind <= 240 else "")
+    raw = int.from_bytes(bytes(pdo.data[offset:offset + bits // 8]), "little")
+    flags = encoder.access.description.flags
+    if flags is not None and "tpdo" in flags.channels:
+        raw &= flags.position_mask
+    if encoder.access.description.signed and raw >= 1 << (bits - 1):
+        raw -= 1 << bits
+    evidence.note(f"SDO {before} / TPDO {raw} / SDO {after}: {format_frames([pdo])}")
+    assert before == after, f"the position changed while the shaft was at rest ({before} -> {after})"
+    assert raw == before, f"TPDO {cob_id & 0x7FF:03X}h carries position {raw}, SDO 6004h reads {before}"
+
+
+@pytest.mark.destructive
+@pytest.mark.requires("speed")
+def test_speed_value_in_measuring_units_per_second(encoder, evidence):
+    """6030h sub 1 shows the shaft speed in measuring units per second (times the device's speed factor), signed
+    by the code sequence."""
+    access = encoder.access
+    if access.description.speed_scaling_object is not None:
+        documented_quirk(access.dut, fx.SpeedScalingObject, evidence, "CiA 406 6030h units per second")
+        evidence.rests_on("manual", "the manual's speed unit (quirk speed_scaling_object)")
+    else:
+        evidence.rests_on("cia", "CiA 406 6030h (speed value)")
+    shaft = encoder.rotation()
+    drive = shaft.drive
+    speed = 0.25  # rev/s: inside the 16-bit range at every resolution up to 2^17 units per revolution
+    drive.set_speed(speed)
+    try:
+        expected = encoder.reference().speed(speed)
+        deadline = time.monotonic() + SPEED_SETTLE_S
+        tolerance = max(2, abs(expected) // 50)
+        while True:
+            observed = access.read_int(od.SPEED, 1)
+            assert observed is not None
+            if abs(observed - expected) <= tolerance or time.monotonic() > deadline:
+                break
+    finally:
+        drive.set_speed(0.0)
+    evidence.measure("speed value 6030h.01", observed, "units/s", expected - tolerance, expected + tolerance)
+    assert abs(observed - expected) <= tolerance, (
+        f"shaft at {speed} rev/s: 6030h.01 = {observed}, expected {expected} +- {tolerance} (units per second"
+        f"{' times the speed factor' if access.description.speed_scaling_object else ''})")
