@@ -55,10 +55,21 @@ def inside(position: int, low: int, high: int, rules: CamRules) -> bool:
 
 
 def cam_active(position: int, cam: Cam, was_active: bool, rules: CamRules) -> bool:
-    """The cam's own state (before polarity) after the position reached ``position``."""
+    """The cam's own state (before polarity) after the position reached ``position``.
+
+    The hysteresis widens the window the limits stand for: a swapped window after the swap, both
+    parts of a wrap-around window (which may meet: then the active cam holds everywhere).
+    """
     if not was_active or cam.hysteresis <= 0:
         return inside(position, cam.low, cam.high, rules)
-    return inside(position, cam.low - cam.hysteresis, cam.high + cam.hysteresis, rules)
+    low, high, h = cam.low, cam.high, cam.hysteresis
+    if low > high and rules.low_above_high == "swap":
+        low, high = high, low
+    if low <= high:
+        return inside(position, low - h, high + h, rules)
+    if rules.edges_inclusive:
+        return position >= low - h or position <= high + h
+    return position > low - h or position < high + h
 
 
 @dataclass(frozen=True)

@@ -119,15 +119,28 @@ def counts_for_position(target: int, geometry: EncoderGeometry, scaling: Scaling
     """Physical counts at which the position reads ``target`` (unsigned form), or None if no count does.
 
     Used to move a simulated or motor-driven shaft to a position: the inverse of ``counts_value``
-    (scaling may skip values: then None).
+    (scaling may skip values: then None). Where the total measuring range is shorter than the
+    physical one, the value comes round once per span: a value scaling skips on one round may be
+    shown on a later one, so every round up to the physical range (or to where the pattern of
+    scaled values repeats, whichever is first) is searched.
     """
     span = position_span(geometry, scaling)
     wanted = (target - scaling.offset) % span if span else target - scaling.offset
     per_rev = units_per_rev(geometry, scaling)
     scaled = scaling.enabled and scaling.units_per_rev > 0
-    guess = -(-wanted * geometry.steps_per_rev // per_rev) if scaled else wanted
-    for counts in (guess, guess - 1, guess + 1):
-        mirrored = (geometry.range - counts) % geometry.range if scaling.ccw else counts % geometry.range
-        if counts_value(mirrored, geometry, scaling) == target % span:
-            return mirrored
-    return None
+    steps = geometry.steps_per_rev
+    end = geometry.range  # counts beyond which nothing new is shown
+    if scaled and span:
+        end = min(end, steps * span // math.gcd(per_rev, steps * span))  # the scaled values repeat after this
+    unshifted = wanted
+    while True:
+        guess = -(-unshifted * steps // per_rev) if scaled else unshifted
+        if guess >= end or guess < 0:
+            return None
+        for counts in (guess, guess - 1, guess + 1):
+            mirrored = (geometry.range - counts) % geometry.range if scaling.ccw else counts % geometry.range
+            if counts_value(mirrored, geometry, scaling) == target % span:
+                return mirrored
+        if not span:
+            return None
+        unshifted += span
