@@ -48,7 +48,7 @@ class EncoderDescription:
     flags: LimitSwitchFlags | None
     label_steps_per_rev: int | None  # simulator value / type-label default where 6501h is absent
     label_total_range: int | None
-    physical_revolutions: int | None  # quirk physical_revolutions: more than 6502h shows
+    physical_revolutions: int | None = None  # quirk physical_revolutions: more than 6502h shows
 
     @classmethod
     def of(cls, profile: DeviceProfile) -> EncoderDescription:
