@@ -138,6 +138,41 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "emcy_wrong_cob_id": "EMCY frames are sent on 080h + node-id + 1",
         },
     ),
+    (  # encoder function: position, preset, scaling, code sequence, speed (CiA 406)
+        ("test_encoder_position",),
+        {
+            "preset_ignored": "a preset (6003h) write is confirmed but the position does not move",
+            "preset_wrong_sign": "the preset offset is computed as unshifted position - preset instead of "
+                                 "preset - unshifted position",
+            "wrap_wrong_value": "the position wraps at the total measuring range minus 1 (never shows the last "
+                                "value)",
+            "direction_ignored": "the code sequence bit (6000h bit 0) is ignored: the position counts up clockwise",
+            "scaling_ignored": "the scaling bit, 6001h and 6002h are ignored: the position is the physical counts",
+            "offset_not_shown": "6509h keeps 0 after a preset (the position still moves to the preset)",
+            "speed_wrong_unit": "6030h is in revolutions per minute instead of measuring units per second",
+            "tpdo_position_unscaled": "TPDOs carry the physical counts without scaling and offset (SDO shows the "
+                                      "right position)",
+        },
+    ),
+    (  # CAM (CiA 406 6300h-6337h)
+        ("test_cam",),
+        {
+            "cam_polarity_ignored": "the CAM polarity register (6302h) is ignored",
+            "cam_hysteresis_ignored": "the CAM hysteresis (6330h+n) is ignored: a cam switches off at its limit",
+            "cam_edge_off_by_one": "the CAM high limit no longer belongs to the window (active up to high - 1)",
+            "cam_on_unscaled_value": "the CAMs compare the physical counts (without scaling and preset offset) "
+                                     "with their limits",
+            "cam_enable_ignored": "the CAM enable register (6301h) is ignored: every cam is evaluated",
+            "cam_low_order_ignored": "quirk cam_low_below_high ignored: a CAM low limit at or above the high limit "
+                                     "is accepted",
+        },
+    ),
+    (  # work area (CiA 406 6400h-6402h)
+        ("test_work_area",),
+        {
+            "work_area_flags_swapped": "6400h reads 04h above the work area and 02h below it (swapped)",
+        },
+    ),
 ]
 FAULTS: dict[str, str] = {name: text for _, group in FAULT_GROUPS for name, text in group.items()}
 
@@ -174,6 +209,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
     "autostart_ignored": "nmt_autostart_object",
     "lss_obeyed_in_any_state": "lss_only_in_states",
     "lss_auto_store_ignored": "lss_config_auto_stored",
+    "cam_low_order_ignored": "cam_low_below_high",
 }
 
 
