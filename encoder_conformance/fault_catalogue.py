@@ -213,6 +213,24 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 }
 
 
+#: faults the fault matrix judges with --strict-inferred: the suites can only see them through a rule they
+#: infer (a broken inferred rule is a warning by default, so the matrix could never see the fault caught).
+#: Only faults that need it: strictness on another fault would let an inferred check hide that the
+#: documented check meant to catch it does not.
+#: - cam_edge_off_by_one: that the high limit belongs to the window is inferred (WDGA example CAM1 0..2048,
+#:   CAM2 2049..4095); the fault shows only at the high limit itself.
+#: Judged without it (the rule that catches them is documented):
+#: - work_area_flags_swapped: 02h above / 04h below is CiA 406 6400h and WDGA T 6.9; only the edges are
+#:   inferred, and the swap shows at every position outside the area, not only at an edge;
+#: - cam_hysteresis_ignored: it breaks the hold past the limit when leaving (common to every reading of
+#:   CiA 406), not the inferred switch-on point (a cam without hysteresis switches on at the limit too);
+#: - cam_enable_ignored: a disabled cam changes state as the position crosses its window (WDGA M 7.5 "only
+#:   enabled cams can change state"), not only the inferred value 0 of its bit;
+#: - the position, preset, speed and TPDO faults, cam_polarity_ignored, cam_on_unscaled_value and
+#:   cam_low_order_ignored break CiA 406 or the profile's manual directly.
+JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one"})
+
+
 def faults_for(effects: Iterable[str]) -> list[str]:
     """The faults that can show on a device whose profile quirks have ``effects`` (sorted)."""
     present = set(effects)
