@@ -138,6 +138,41 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "emcy_wrong_cob_id": "EMCY frames are sent on 080h + node-id + 1",
         },
     ),
+    (  # encoder function: position, preset, scaling, code sequence, speed (CiA 406)
+        ("test_encoder_position",),
+        {
+            "preset_ignored": "a preset (6003h) write is confirmed but the position does not move",
+            "preset_wrong_sign": "the preset offset is computed as unshifted position - preset instead of "
+                                 "preset - unshifted position",
+            "wrap_wrong_value": "the position wraps at the total measuring range minus 1 (never shows the last "
+                                "value)",
+            "direction_ignored": "the code sequence bit (6000h bit 0) is ignored: the position counts up clockwise",
+            "scaling_ignored": "the scaling bit, 6001h and 6002h are ignored: the position is the physical counts",
+            "offset_not_shown": "6509h keeps 0 after a preset (the position still moves to the preset)",
+            "speed_wrong_unit": "6030h is in revolutions per minute instead of measuring units per second",
+            "tpdo_position_unscaled": "TPDOs carry the physical counts without scaling and offset (SDO shows the "
+                                      "right position)",
+        },
+    ),
+    (  # CAM (CiA 406 6300h-6337h)
+        ("test_cam",),
+        {
+            "cam_polarity_ignored": "the CAM polarity register (6302h) is ignored",
+            "cam_hysteresis_ignored": "the CAM hysteresis (6330h+n) is ignored: a cam switches off at its limit",
+            "cam_edge_off_by_one": "the CAM high limit no longer belongs to the window (active up to high - 1)",
+            "cam_on_unscaled_value": "the CAMs compare the physical counts (without scaling and preset offset) "
+                                     "with their limits",
+            "cam_enable_ignored": "the CAM enable register (6301h) is ignored: every cam is evaluated",
+            "cam_low_order_ignored": "quirk cam_low_below_high ignored: a CAM low limit at or above the high limit "
+                                     "is accepted",
+        },
+    ),
+    (  # work area (CiA 406 6400h-6402h)
+        ("test_work_area",),
+        {
+            "work_area_flags_swapped": "6400h reads 04h above the work area and 02h below it (swapped)",
+        },
+    ),
 ]
 FAULTS: dict[str, str] = {name: text for _, group in FAULT_GROUPS for name, text in group.items()}
 
@@ -174,7 +209,26 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
     "autostart_ignored": "nmt_autostart_object",
     "lss_obeyed_in_any_state": "lss_only_in_states",
     "lss_auto_store_ignored": "lss_config_auto_stored",
+    "cam_low_order_ignored": "cam_low_below_high",
 }
+
+
+#: faults the fault matrix judges with --strict-inferred: the suites can only see them through a rule they
+#: infer (a broken inferred rule is a warning by default, so the matrix could never see the fault caught).
+#: Only faults that need it: strictness on another fault would let an inferred check hide that the
+#: documented check meant to catch it does not.
+#: - cam_edge_off_by_one: that the high limit belongs to the window is inferred (WDGA example CAM1 0..2048,
+#:   CAM2 2049..4095); the fault shows only at the high limit itself.
+#: Judged without it (the rule that catches them is documented):
+#: - work_area_flags_swapped: 02h above / 04h below is CiA 406 6400h and WDGA T 6.9; only the edges are
+#:   inferred, and the swap shows at every position outside the area, not only at an edge;
+#: - cam_hysteresis_ignored: it breaks the hold past the limit when leaving (common to every reading of
+#:   CiA 406), not the inferred switch-on point (a cam without hysteresis switches on at the limit too);
+#: - cam_enable_ignored: a disabled cam changes state as the position crosses its window (WDGA M 7.5 "only
+#:   enabled cams can change state"), not only the inferred value 0 of its bit;
+#: - the position, preset, speed and TPDO faults, cam_polarity_ignored, cam_on_unscaled_value and
+#:   cam_low_order_ignored break CiA 406 or the profile's manual directly.
+JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one"})
 
 
 def faults_for(effects: Iterable[str]) -> list[str]:

@@ -1,7 +1,10 @@
 """Run the suites against the simulator once per named fault and tabulate which tests catch which fault.
 
 A conformance test that no fault can make fail proves nothing; the matrix shows it. Each run
-is a separate pytest process (the same command a user runs), parsed from its JUnit XML.
+is a separate pytest process (the same command a user runs), parsed from its JUnit XML. A fault
+the suites can only see through a rule they infer (``fault_catalogue.JUDGED_STRICTLY``) runs with
+``--strict-inferred``, so that its broken rule fails instead of warning; every other run (and the
+baseline) is judged as a user's run is.
 """
 
 from __future__ import annotations
@@ -16,8 +19,9 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .fault_catalogue import TARGET_MODULES
+from .fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
 from .paths import REPO_ROOT, SUITES_DIR
+from .plugin.verdicts import STRICT_OPTION
 
 _ENTRY_PARAM = re.compile(r"\[0x[0-9A-F]{4}\.[0-9A-F]{2} .*\]$")  # names may hold brackets: "Kv [1/s]"
 
@@ -74,12 +78,15 @@ def _suite_paths(fault: str | None, targeted: bool) -> list[str]:
 
 def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None = None,
               targeted: bool = False) -> RunResult:
-    """One pytest run of suites/ (``targeted``: the fault's own modules) against the twin with ``fault``."""
+    """One pytest run of suites/ (``targeted``: the fault's own modules) against the twin with ``fault``
+    (strict about inferred rules where the fault is in JUDGED_STRICTLY)."""
     folder = workdir / (fault or "no-fault")
     command = [sys.executable, "-m", "pytest", *_suite_paths(fault, targeted), "-q", "-p", "no:cacheprovider",
                "--device-profile", profile, "--report-dir", str(folder), "--tb=no"]
     if fault:
         command += ["--sim-fault", fault]
+    if fault in JUDGED_STRICTLY:
+        command.append(STRICT_OPTION)
     if select:
         command += ["-k", select]
     env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}

@@ -72,6 +72,14 @@ def is_signed(name: str) -> bool:
     return canonical_name(name).startswith("INTEGER")
 
 
+def as_signed(name: str, value: int) -> int:
+    """An integer as its type reads it: a SIGNED value kept in its unsigned (two's complement) form made negative."""
+    size = size_bytes(name)
+    if size and is_signed(name) and value >= 1 << (8 * size - 1):
+        return value - (1 << (8 * size))
+    return value
+
+
 def value_range(name: str) -> tuple[int, int] | None:
     """Inclusive (min, max) representable by an integer type, None for others."""
     canon = canonical_name(name)

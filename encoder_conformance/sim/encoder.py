@@ -5,6 +5,10 @@ Every value (position, CAM state, work-area state, speed, preset offset) is comp
 from a device. What stays here is the twin's own part: the shaft, the preset offset of devices
 without 6509h (kept in NVM), SIKO's position freeze while a write executes
 (``position_frozen_during_execution``) and the CAM history along the shaft's moves.
+
+The decisions a fault may change are small methods (the scaling the position applies, the cam
+settings the CAM logic applies, the position the CAMs and a TPDO see, the preset offset, the
+speed, the area state); the faults are the classes at the bottom, each overriding one of them.
 """
 
 from __future__ import annotations
@@ -12,11 +16,16 @@ from __future__ import annotations
 from dataclasses import replace
 
 from ..encoder_model import objects as od
+from ..encoder_model import position as pos
+from ..encoder_model.cam import Cam, CamChannel
 from ..encoder_model.freeze import FreezeRule
 from ..encoder_model.reference import EncoderReference
 from ..encoder_model.settings import EncoderDescription, EncoderSettings, read_settings
+from ..encoder_model.speed import speed_value
+from ..encoder_model.work_area import ABOVE, BELOW
 from ..profile import datatypes
 from ..profile.model import DeviceProfile
+from .faults import breaks
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
 from .scheduler import DeadlineScheduler, JobHandle
@@ -52,29 +61,74 @@ class EncoderFunction:
         value = self.store.get(key)
         if not isinstance(value, int):
             return None
-        entry = self.store.entries[key]
-        size = datatypes.size_bytes(entry.type)
-        if size and datatypes.is_signed(entry.type) and value >= 1 << (8 * size - 1):
-            return value - (1 << (8 * size))
-        return value
+        return datatypes.as_signed(self.store.entries[key].type, value)
 
     def settings(self) -> EncoderSettings:
-        has_offset_object = self.store.has((od.OFFSET, 0))
-        settings = read_settings(self.description, self.read_int, None if has_offset_object else self._offset)
-        if has_offset_object and settings.span:  # 6509h may read negative (SIGNED32); the arithmetic wants 0..span-1
-            offset = settings.scaling.offset % settings.span
-            settings = replace(settings, scaling=replace(settings.scaling, offset=offset))
-        return settings
+        """The settings as the function applies them: the stored ones, through the decisions below."""
+        in_object = self.offset_in_object()
+        stored = read_settings(self.description, self.read_int, None if in_object else self._offset)
+        scaling = stored.scaling
+        if in_object and stored.span:  # 6509h may read negative (SIGNED32); the arithmetic wants 0..span-1
+            scaling = replace(scaling, offset=scaling.offset % stored.span)
+        return replace(stored, scaling=self.position_scaling(scaling, stored.geometry),
+                       cam_channels=tuple(self.cam_channel(channel) for channel in stored.cam_channels))
 
     def _current(self) -> EncoderReference:
         """The reference with the settings as they are now (the CAM history kept)."""
         self.reference.settings = self.settings()
         return self.reference
 
+    # -- decisions (a fault overrides one) ---------------------------------------------------
+    def offset_in_object(self) -> bool:
+        """Is the preset offset kept in 6509h (else internally, in NVM: devices without 6509h)?"""
+        return self.store.has((od.OFFSET, 0))
+
+    def position_scaling(self, scaling: pos.Scaling, geometry: pos.EncoderGeometry) -> pos.Scaling:
+        """Code sequence, scaling and measuring range as the position applies them."""
+        return scaling
+
+    def cam_channel(self, channel: CamChannel) -> CamChannel:
+        """A CAM channel's enable, polarity, limits and hysteresis as the CAM logic applies them."""
+        return channel
+
+    def cam_position(self) -> int:
+        """The position the CAMs compare with their limits."""
+        return self.position()
+
+    def channel_position(self, channel: str) -> int:
+        """The position value as ``channel`` (sdo, tpdo) shows it."""
+        return self.position()
+
+    def preset_offset(self, preset: int, unshifted: int, span: int) -> int:
+        """The offset a preset produces where the position reads ``unshifted`` without offset."""
+        return pos.preset_offset(preset, unshifted, span)
+
+    def apply_preset(self, preset: int) -> None:
+        """A preset was written: keep the offset that makes the position read ``preset`` here."""
+        settings = self._current().settings
+        unshifted = pos.unshifted_position(self.shaft.turns(), settings.geometry, settings.scaling)
+        offset = self.preset_offset(preset, unshifted, settings.span)
+        if self.offset_in_object():
+            self.store.set((od.OFFSET, 0), offset)
+        else:
+            self._offset = offset
+
+    def speed(self) -> int:
+        """6030h: measuring units per second (the reference's rule)."""
+        return self._current().speed(self.shaft.speed)
+
+    def area_state(self) -> int:
+        """6400h sub 1 for the current position."""
+        return self._current().area_state(self.position())
+
     # -- values ------------------------------------------------------------------------------
     def position(self) -> int:
         """The position value (frozen while a write is processed, if the profile says so)."""
         return self._frozen if self._frozen is not None else self._current().position(self.shaft.turns())
+
+    def raw_counts(self) -> int:
+        """The sensor's physical counts (no code sequence, scaling or offset)."""
+        return pos.raw_counts(self.shaft.turns(), self.settings().geometry)
 
     def follow_shaft(self) -> None:
         """The shaft moved: the CAM history sees the position it reached."""
@@ -83,7 +137,7 @@ class EncoderFunction:
 
     def _cam_state(self, channel: int) -> int:
         """6300h sub ``channel``; every channel's history follows the position."""
-        reference, position = self._current(), self.position()
+        reference, position = self._current(), self.cam_position()
         channels = range(1, len(reference.settings.cam_channels) + 1)
         states = [reference.cam_state(position, number) for number in channels]
         return states[channel - 1]
@@ -92,17 +146,17 @@ class EncoderFunction:
         """Computed values (position, speed, CAM and area state, mirrors) as ``channel`` (sdo, tpdo) shows them."""
         index, sub = key
         if key in ((self.objects.position, 0), (0x6008, 0)):
-            position = self.position()
+            position = self.channel_position(channel)
             flags = self.description.flags
             if flags is not None and index == flags.value_object and channel in flags.channels:
                 return flags.apply(position, self.read_int)
             return position
         if index == od.SPEED and sub >= 1 and self.description.speed:
-            return self._current().speed(self.shaft.speed)
+            return self.speed()
         if index == od.CAM_STATE and 1 <= sub <= self.description.cam_channels:
             return self._cam_state(sub)
         if index == od.AREA_STATE and sub == 1 and self.description.work_area:
-            return self._current().area_state(self.position())
+            return self.area_state()
         if key == (od.OPERATING_STATUS, 0) and self.store.has((0x6000, 0)):
             value = self.store.get((0x6000, 0))
             return value if isinstance(value, int) else None
@@ -119,14 +173,7 @@ class EncoderFunction:
                 self._thaw_job.cancel()
             self._thaw_job = self.scheduler.call_later(duration, self.thaw)
         if key == (self.objects.preset, 0) and isinstance(value, int):
-            self._preset(self._signed_preset(value))
-
-    def _signed_preset(self, value: int) -> int:
-        entry = self.store.entries.get((self.objects.preset, 0))
-        size = datatypes.size_bytes(entry.type) if entry is not None else None
-        if entry is not None and size and datatypes.is_signed(entry.type) and value >= 1 << (8 * size - 1):
-            return value - (1 << (8 * size))
-        return value
+            self.apply_preset(datatypes.as_signed(self.store.entries[key].type, value))
 
     def thaw(self) -> None:
         """End a freeze: the position follows the shaft again."""
@@ -134,13 +181,6 @@ class EncoderFunction:
             self._thaw_job.cancel()
             self._thaw_job = None
         self._frozen = None
-
-    def _preset(self, preset: int) -> None:
-        offset = self._current().offset_for_preset(preset, self.shaft.turns())
-        if self.store.has((od.OFFSET, 0)):
-            self.store.set((od.OFFSET, 0), offset)
-        else:
-            self._offset = offset
 
     # -- persistence of the internal preset offset (devices without 6509h) -------------------
     def reload(self, nvm: NonVolatileMemory) -> None:
@@ -150,9 +190,106 @@ class EncoderFunction:
         self._offset = stored if isinstance(stored, int) else 0
 
     def persist(self, nvm: NonVolatileMemory) -> None:
-        if not self.store.has((od.OFFSET, 0)):
+        if not self.offset_in_object():
             nvm.put_many({OFFSET_KEY: self._offset})
 
     def forget(self, nvm: NonVolatileMemory) -> None:
         if OFFSET_KEY in nvm:
             nvm.remove_many([OFFSET_KEY])
+
+
+# -- faults: position, preset, speed (suite test_encoder_position) ------------------------------
+@breaks(EncoderFunction, "preset_ignored")
+class PresetIgnored(EncoderFunction):
+    def apply_preset(self, preset: int) -> None:
+        """The write is confirmed and stored in 6003h; the offset stays as it was."""
+
+
+@breaks(EncoderFunction, "preset_wrong_sign")
+class PresetWrongSign(EncoderFunction):
+    def preset_offset(self, preset: int, unshifted: int, span: int) -> int:
+        return pos.preset_offset(unshifted, preset, span)  # unshifted - preset
+
+
+@breaks(EncoderFunction, "wrap_wrong_value")
+class WrapsOneEarly(EncoderFunction):
+    def position_scaling(self, scaling: pos.Scaling, geometry: pos.EncoderGeometry) -> pos.Scaling:
+        """A measuring range one short: scaling 1:1 where it is off, so the physical counts wrap early too."""
+        scaling = super().position_scaling(scaling, geometry)
+        span = pos.position_span(geometry, scaling)
+        if not (scaling.enabled and scaling.units_per_rev > 0):
+            scaling = replace(scaling, enabled=True, units_per_rev=geometry.steps_per_rev)
+        return replace(scaling, total_range=span - 1)
+
+
+@breaks(EncoderFunction, "direction_ignored")
+class DirectionIgnored(EncoderFunction):
+    def position_scaling(self, scaling: pos.Scaling, geometry: pos.EncoderGeometry) -> pos.Scaling:
+        return replace(super().position_scaling(scaling, geometry), ccw=False)
+
+
+@breaks(EncoderFunction, "scaling_ignored")
+class ScalingIgnored(EncoderFunction):
+    def position_scaling(self, scaling: pos.Scaling, geometry: pos.EncoderGeometry) -> pos.Scaling:
+        return replace(super().position_scaling(scaling, geometry), enabled=False)
+
+
+@breaks(EncoderFunction, "offset_not_shown")
+class OffsetNotShown(EncoderFunction):
+    def offset_in_object(self) -> bool:
+        return False  # the offset is kept internally; 6509h keeps what it holds (0)
+
+
+@breaks(EncoderFunction, "speed_wrong_unit")
+class SpeedInRpm(EncoderFunction):
+    def speed(self) -> int:
+        return speed_value(self.shaft.speed * 60, 1, self.settings().scaling.ccw)
+
+
+@breaks(EncoderFunction, "tpdo_position_unscaled")
+class TpdoPositionUnscaled(EncoderFunction):
+    def channel_position(self, channel: str) -> int:
+        return self.raw_counts() if channel == "tpdo" else super().channel_position(channel)
+
+
+# -- faults: CAM (suite test_cam) and work area (suite test_work_area) ----------------------------
+@breaks(EncoderFunction, "cam_polarity_ignored")
+class CamPolarityIgnored(EncoderFunction):
+    def cam_channel(self, channel: CamChannel) -> CamChannel:
+        return replace(super().cam_channel(channel), polarity=0)
+
+
+@breaks(EncoderFunction, "cam_hysteresis_ignored")
+class CamHysteresisIgnored(EncoderFunction):
+    def cam_channel(self, channel: CamChannel) -> CamChannel:
+        channel = super().cam_channel(channel)
+        return replace(channel, cams=tuple(replace(cam, hysteresis=0) for cam in channel.cams))
+
+
+@breaks(EncoderFunction, "cam_edge_off_by_one")
+class CamHighEdgeExcluded(EncoderFunction):
+    def cam_channel(self, channel: CamChannel) -> CamChannel:
+        """Each window ends one before its high limit (a one-point window keeps its point)."""
+        channel = super().cam_channel(channel)
+        return replace(channel, cams=tuple(Cam(cam.low, cam.high - 1, cam.hysteresis) if cam.high > cam.low else cam
+                                           for cam in channel.cams))
+
+
+@breaks(EncoderFunction, "cam_on_unscaled_value")
+class CamOnUnscaledValue(EncoderFunction):
+    def cam_position(self) -> int:
+        return self.raw_counts()
+
+
+@breaks(EncoderFunction, "cam_enable_ignored")
+class CamEnableIgnored(EncoderFunction):
+    def cam_channel(self, channel: CamChannel) -> CamChannel:
+        channel = super().cam_channel(channel)
+        return replace(channel, enable=(1 << len(channel.cams)) - 1)
+
+
+@breaks(EncoderFunction, "work_area_flags_swapped")
+class WorkAreaFlagsSwapped(EncoderFunction):
+    def area_state(self) -> int:
+        state = super().area_state()
+        return state ^ (ABOVE | BELOW) if state & (ABOVE | BELOW) else state

@@ -20,10 +20,12 @@ import can
 
 from ..cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
 from ..profile import quirk_effects as fx
+from ..profile.datatypes import as_signed
 from ..profile.model import DeviceProfile
 from ..profile.od_builder import initial_value
 from .access import ObjectAccess, situation_codes
 from .autostart import Autostart
+from .cam_gate import CamLowLimitGate
 from .emcy import EmcyProducer
 from .encoder import EncoderFunction
 from .faults import FaultSet, assemble
@@ -87,7 +89,7 @@ class SimulatedNode:
             lock=self.lock,
         )
         self.shaft = Shaft()
-        self.encoder = EncoderFunction(profile, self.store, self.shaft, scheduler)
+        self.encoder = assemble(EncoderFunction, faults)(profile, self.store, self.shaft, scheduler)
         self.values = assemble(ObjectValues, faults)(self.store, hooks)
         codes = situation_codes(profile)
         self.access = assemble(ObjectAccess, faults)(profile, self.store, hooks, self.values.encode, codes)
@@ -128,6 +130,7 @@ class SimulatedNode:
                         .from_params(p, self.read_int, self.store.set)),
             self._built(fx.WritesPreopOnly, lambda p: preop_only(p, lambda: self.state, wrong_state)),
             self._built(fx.WritesNeedScalingBit, lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
+            self._built(fx.CamLowBelowHigh, self._cam_low_limit_gate),
             store_commands,
             self.emcy,
             # the encoder function (position, speed, preset) only where the profile is an encoder: a drive or an
@@ -143,6 +146,13 @@ class SimulatedNode:
             self._lss(),
         ]
         return [b for b in optional if b is not None]
+
+    def _cam_low_limit_gate(self, params: fx.CamLowBelowHigh) -> CamLowLimitGate:
+        cam = self.profile.capabilities.cam
+        return assemble(CamLowLimitGate, self.faults)(
+            params, self.encoder.read_int, lambda key, value: as_signed(self.store.entries[key].type, value),
+            cam.cams_per_channel if cam else 0,
+        )
 
     def _lss(self) -> LssBehaviour | None:
         """The LSS slave, where the profile declares LSS services (capabilities.lss)."""
