@@ -298,6 +298,11 @@ def _area_state_above_and_below(twin: Twin) -> tuple[int, int]:
     return above, twin.move_to(500) or twin.read(AREA_STATE, 1)
 
 
+def _operating_status_after_ccw(twin: Twin) -> int:
+    twin.write(0x6000, 0, 0x0005)
+    return twin.read(0x6500, 0)
+
+
 #: fault -> (scenario, what the conformant twin reads, what the twin with the fault reads)
 DEVIATIONS: dict[str, tuple[Callable[[Twin], object], object, object]] = {
     "preset_ignored": (_preset_position, 1000, 5000),
@@ -306,6 +311,7 @@ DEVIATIONS: dict[str, tuple[Callable[[Twin], object], object, object]] = {
     "direction_ignored": (_ccw_step, -100, 100),
     "scaling_ignored": (_one_turn_at_4096_units, 4096, STEPS),
     "offset_not_shown": (_offset_after_preset, (1000, (1000 - 5000) % TMR), (1000, 0)),
+    "operating_status_stale": (_operating_status_after_ccw, 0x0005, 0x0004),
     "speed_wrong_unit": (_speed_half_turn_per_second, STEPS // 2, 30),
     "tpdo_position_unscaled": (_sdo_and_tpdo_position, (1000, 1000), (1000, 40000)),
     "cam_polarity_ignored": (_cam_state_inverted_inside, 0, 1),

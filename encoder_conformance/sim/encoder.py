@@ -158,9 +158,13 @@ class EncoderFunction:
         if index == od.AREA_STATE and sub == 1 and self.description.work_area:
             return self.area_state()
         if key == (od.OPERATING_STATUS, 0) and self.store.has((0x6000, 0)):
-            value = self.store.get((0x6000, 0))
-            return value if isinstance(value, int) else None
+            return self.operating_status()
         return None
+
+    def operating_status(self) -> int | None:
+        """6500h: the 6000h settings in use."""
+        value = self.store.get((0x6000, 0))
+        return value if isinstance(value, int) else None
 
     # -- writes ------------------------------------------------------------------------------
     def on_write(self, key: Key, value: int | str | bytes) -> None:
@@ -244,6 +248,13 @@ class OffsetNotShown(EncoderFunction):
 class SpeedInRpm(EncoderFunction):
     def speed(self) -> int:
         return speed_value(self.shaft.speed * 60, 1, self.settings().scaling.ccw)
+
+
+@breaks(EncoderFunction, "operating_status_stale")
+class OperatingStatusStale(EncoderFunction):
+    def operating_status(self) -> int | None:
+        value = self.store.default_of((0x6000, 0), 0)
+        return value if isinstance(value, int) else None
 
 
 @breaks(EncoderFunction, "tpdo_position_unscaled")
