@@ -73,7 +73,7 @@ def test_preset_sets_position_and_offset(encoder, evidence, where: str, ccw: boo
     _allow_preset(encoder)
     _set_code_sequence(encoder, ccw)
     access = encoder.access
-    settings = access.settings()
+    settings = access.settings(functions=False)
     low, high = position_limits(settings.span, settings.signed)
     target = {"zero": 0, "middle": settings.shown(settings.span // 3), "top": high, "bottom": low}[where]
     if where == "bottom" and low == 0:
@@ -107,7 +107,7 @@ def test_preset_is_kept_while_the_shaft_turns(encoder, evidence):
     _rests_on_preset_clause(encoder, evidence)
     shaft = encoder.rotation()
     _allow_preset(encoder)
-    settings = encoder.access.settings()
+    settings = encoder.access.settings(functions=False)
     target = settings.shown(settings.span // 2)
     encoder.preset(target)
     per_rev = units_per_rev(settings.geometry, settings.scaling)
@@ -126,7 +126,7 @@ def test_position_wraps_at_the_total_measuring_range(encoder, evidence):
     _rests_on_preset_clause(encoder, evidence)
     shaft = encoder.rotation()
     _allow_preset(encoder)
-    settings = encoder.access.settings()
+    settings = encoder.access.settings(functions=False)
     low, high = settings.limits()
     start = settings.shown(unsigned_in_span(high - 1, settings.span))
     encoder.preset(start)
@@ -153,7 +153,7 @@ def test_code_sequence_sets_the_counting_direction(encoder, evidence):
     shaft = encoder.rotation()
     for ccw in (False, True):
         _set_code_sequence(encoder, ccw)
-        settings = encoder.access.settings()
+        settings = encoder.access.settings(functions=False)
         per_rev = units_per_rev(settings.geometry, settings.scaling)
         before = encoder.access.position()
         shaft.turn_by(STEP_UNITS / per_rev)  # clockwise
@@ -168,10 +168,10 @@ def test_code_sequence_sets_the_counting_direction(encoder, evidence):
 
 
 def _scaled_setting(encoder) -> tuple[int, int]:
-    """(MUR, TMR) other than the physical resolution: a quarter of the steps, the same number of revolutions."""
-    settings = encoder.access.settings()
+    """(MUR, TMR) other than the physical resolution: a quarter of the steps, the configured number of revolutions."""
+    settings = encoder.access.settings(functions=False)
     mur = max(1, settings.geometry.steps_per_rev // 4)
-    return mur, mur * settings.geometry.revolutions
+    return mur, mur * max(1, settings.span // units_per_rev(settings.geometry, settings.scaling))
 
 
 @pytest.mark.destructive
@@ -189,7 +189,7 @@ def test_scaling_sets_units_per_revolution(encoder, evidence):
         operating = access.read_int(objects.operating) or 0
         if operating >> objects.scaling_bit & 1:
             encoder.write(objects.operating, 0, operating & ~(1 << objects.scaling_bit))
-        _quarter_turn_moves(encoder, shaft, access.settings().geometry.steps_per_rev // 4, "scaling off")
+        _quarter_turn_moves(encoder, shaft, access.settings(functions=False).geometry.steps_per_rev // 4, "scaling off")
         encoder.write(objects.operating, 0, (access.read_int(objects.operating) or 0) | 1 << objects.scaling_bit)
     mur, tmr = _scaled_setting(encoder)
     encoder.write(objects.units_per_rev, 0, mur)
@@ -201,7 +201,7 @@ def test_scaling_sets_units_per_revolution(encoder, evidence):
 def _quarter_turn_moves(encoder, shaft, expected: int, setting: str) -> None:
     """Turn a quarter revolution (counting up) and check the position moved by ``expected`` units."""
     access = encoder.access
-    settings = access.settings()
+    settings = access.settings(functions=False)
     before = access.position()
     shaft.turn_by(-0.25 if settings.scaling.ccw else 0.25)
     after = access.position()
@@ -224,7 +224,7 @@ def test_scaled_position_stays_in_the_scaled_range(encoder, evidence):
     encoder.write(objects.units_per_rev, 0, mur)
     if access.description.multiturn:
         encoder.write(objects.total_range, 0, tmr)
-    settings = access.settings()
+    settings = access.settings(functions=False)
     low, high = settings.limits()
     position = access.position()
     assert low <= position <= high, f"6001h = {mur}, 6002h = {tmr}: position {position} outside {low} .. {high}"
@@ -287,7 +287,7 @@ def test_position_in_tpdo_equals_sdo(encoder, dut, settings_journal, back_to_pre
     preset away from the raw counts, where destructive changes are allowed)."""
     evidence.rests_on("cia", "CiA 301 §7.2.2 (PDO carries the mapped object's value), CiA 406 6004h")
     if encoder.access.description.preset and settings_of(pytestconfig).allow_destructive:
-        settings = encoder.access.settings()
+        settings = encoder.access.settings(functions=False)
         encoder.preset(settings.shown(unsigned_in_span(encoder.access.position() + settings.span // 3,
                                                        settings.span)))
     candidates = [(c, o, b, how) for c, o, b in _position_tpdos(dut, encoder.access.objects.position)

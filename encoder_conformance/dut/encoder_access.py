@@ -65,9 +65,10 @@ class EncoderAccess:
             time.sleep(remaining)
 
     # -- the encoder function -----------------------------------------------------------------------
-    def settings(self, offset: int | None = None) -> EncoderSettings:
-        """Everything the position, CAM and work-area values depend on, as the device shows it now."""
-        return read_settings(self.description, self.read_int, offset)
+    def settings(self, offset: int | None = None, functions: bool = True) -> EncoderSettings:
+        """Everything the position, CAM and work-area values depend on, as the device shows it now
+        (``functions=False``: only what the position depends on, a few reads instead of dozens)."""
+        return read_settings(self.description, self.read_int, offset, functions)
 
     def reference(self) -> EncoderReference:
         """A reference model with the device's current settings (no CAM history)."""

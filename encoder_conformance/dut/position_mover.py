@@ -44,7 +44,7 @@ class PresetMover:
         return self.access.position_when(target)
 
     def move_by(self, units: int) -> int:
-        settings = self.access.settings()
+        settings = self.access.settings(functions=False)
         target = settings.shown(unsigned_in_span(self.access.position() + units, settings.span))
         return self.move_to(target)
 
@@ -64,13 +64,13 @@ class ShaftMover:
         self.turned += revolutions
 
     def move_by(self, units: int) -> int:
-        settings = self.access.settings()
+        settings = self.access.settings(functions=False)
         per_rev = units_per_rev(settings.geometry, settings.scaling)
         self.turn_by((-units if settings.scaling.ccw else units) / per_rev)
         return self.access.position()
 
     def move_to(self, target: int) -> int:
-        settings = self.access.settings()
+        settings = self.access.settings(functions=False)
         span = settings.span
         position = self.access.position()
         for _ in range(1 + CORRECTIONS):

@@ -33,14 +33,14 @@ def restore_reference_point(access: EncoderAccess, found: ReferencePoint) -> str
 
     Call it after the scaling settings are back: the offset means something only in their units.
     """
-    span = access.settings().span
+    span = access.settings(functions=False).span
     if found.offset is not None:
         now = access.offset()
         assert now is not None
         if unsigned_in_span(now - found.offset, span) == 0:
             return None
         unshifted = unsigned_in_span(access.position() - now, span)
-        target = access.settings().shown(unsigned_in_span(unshifted + found.offset, span))
+        target = access.settings(functions=False).shown(unsigned_in_span(unshifted + found.offset, span))
         access.preset(target)
         after = access.offset()
         if after is None or unsigned_in_span(after - found.offset, span) != 0:

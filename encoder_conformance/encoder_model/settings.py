@@ -165,15 +165,17 @@ def read_speed_factor(description: EncoderDescription, read: Reader) -> Fraction
     return Fraction(numerator or 1, denominator or 1)
 
 
-def read_settings(description: EncoderDescription, read: Reader, offset: int | None = None) -> EncoderSettings:
-    """The settings as ``read`` shows them; ``offset``: the preset offset where 6509h cannot be read."""
+def read_settings(description: EncoderDescription, read: Reader, offset: int | None = None,
+                  functions: bool = True) -> EncoderSettings:
+    """The settings as ``read`` shows them; ``offset``: the preset offset where 6509h cannot be read;
+    ``functions=False``: only what the position depends on (no CAM, work-area or speed objects read)."""
     if offset is None:
         offset = (None if description.objects.relocated else read(od.OFFSET, 0)) or 0
     return EncoderSettings(
         geometry=read_geometry(description, read),
         scaling=read_scaling(description, read, offset),
         signed=description.signed,
-        cam_channels=read_cam_channels(description, read),
-        areas=read_areas(description, read),
-        speed_factor=read_speed_factor(description, read),
+        cam_channels=read_cam_channels(description, read) if functions else (),
+        areas=read_areas(description, read) if functions else (),
+        speed_factor=read_speed_factor(description, read) if functions else Fraction(1),
     )
