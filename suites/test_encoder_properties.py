@@ -144,7 +144,8 @@ class Replay:
         position = self.access.position()
         expected = cam_state(position, settings.cam_channels[0], description.cam_rules)
         observed = self.access.read_int(od.CAM_STATE, 1)
-        open_edges = cam_state(position, settings.cam_channels[0], replace(description.cam_rules, edges_inclusive=False))
+        open_rules = replace(description.cam_rules, edges_inclusive=False)
+        open_edges = cam_state(position, settings.cam_channels[0], open_rules)
         if observed != expected and observed == open_edges:  # only the edges differ: that rule is our inference
             self.evidence.inferred_problem(
                 self.fail(f"position {position} on a window edge: 6300h.01 = {observed:02X}h, {expected:02X}h with "
