@@ -74,7 +74,12 @@ class Replay:
         self.encoder = encoder
         self.evidence = evidence
         self.access = encoder.access
-        self.done: list[str] = []
+        settings = self.access.settings(functions=False)
+        scaling = settings.scaling
+        self.done: list[str] = [
+            f"(as the previous example left it: position {self.access.position()}, code sequence "
+            f"{'CCW' if scaling.ccw else 'CW'}, scaling {'on' if scaling.enabled else 'off'}, 6001h = "
+            f"{scaling.units_per_rev}, 6002h = {scaling.total_range}, range {settings.span})"]
 
     def fail(self, text: str) -> str:
         return f"{text}\nsteps so far (replay them in this order):\n  " + "\n  ".join(self.done)

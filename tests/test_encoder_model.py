@@ -244,9 +244,10 @@ def test_dividing_total_range_with_skipped_values_moves_at_most_ceil_mur_per_ste
         assert circular_distance(change, 0, span) <= most
 
 
-@given(st.integers(1, 4096), st.integers(1, 256), st.data())
+@given(st.integers(1, 4096), st.integers(2, 256), st.data())
 def test_non_dividing_total_range_jumps_at_the_physical_wrap(steps: int, revs: int, data: st.DataObject) -> None:
-    """Documented behaviour: a TMR that does not divide revolutions x MUR makes the value jump at the physical wrap.
+    """Documented behaviour (multi-turn): a TMR that does not divide revolutions x MUR makes the value jump at the
+    physical wrap (a singleturn range is one revolution whatever 6002h holds).
 
     CW: from count range-1 to count 0 the value moves by (1 - revolutions x MUR) mod TMR instead of 1
     (CCW: the same jump from count 0 to count 1); CiA 406 asks for a dividing range, the model keeps

@@ -5,7 +5,8 @@ The order of the steps and where the value wraps:
 1. physical counts ``floor(turns * steps_per_rev)`` wrap at the physical range (6501h x 6502h);
 2. code sequence (6000h bit 0): counter-clockwise counting mirrors the counts in that range;
 3. scaling (6000h bit 2 where the device has the bit): ``counts * MUR // steps_per_rev`` (6001h);
-4. the preset offset (6509h) is added and the sum wraps at the total measuring range (6002h).
+4. the preset offset (6509h) is added and the sum wraps at the total measuring range (6002h; on a
+   singleturn encoder at one revolution, 6001h).
 
 Where the configured range does not divide the physical one (a number of revolutions that is not a
 power of two on most devices), the value jumps at the physical wrap: CiA 406 asks the user to pick
@@ -58,8 +59,11 @@ def units_per_rev(geometry: EncoderGeometry, scaling: Scaling) -> int:
 
 
 def position_span(geometry: EncoderGeometry, scaling: Scaling) -> int:
-    """Where the position value wraps: the total measuring range (scaled or physical)."""
+    """Where the position value wraps: the total measuring range (scaled or physical); a singleturn
+    encoder's range is one revolution whatever 6002h holds."""
     if scaling.enabled and scaling.units_per_rev > 0:
+        if geometry.revolutions == 1:
+            return scaling.units_per_rev
         return scaling.total_range or geometry.revolutions * scaling.units_per_rev
     return geometry.range
 
