@@ -149,6 +149,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "direction_ignored": "the code sequence bit (6000h bit 0) is ignored: the position counts up clockwise",
             "scaling_ignored": "the scaling bit, 6001h and 6002h are ignored: the position is the physical counts",
             "offset_not_shown": "6509h keeps 0 after a preset (the position still moves to the preset)",
+            "module_identification_stale": "650Ah sub 2/3 (min/max position) keep their factory values after the "
+                                           "measuring range changed",
             "operating_status_stale": "6500h keeps showing the factory 6000h value after 6000h changed",
             "speed_wrong_unit": "6030h is in revolutions per minute instead of measuring units per second",
             "tpdo_position_unscaled": "TPDOs carry the physical counts without scaling and offset (SDO shows the "

@@ -235,6 +235,37 @@ def test_scaled_position_stays_in_the_scaled_range(encoder, evidence):
 
 
 @pytest.mark.destructive
+@pytest.mark.requires("scaling")
+def test_module_identification_follows_the_range(encoder, evidence):
+    """650Ah sub 2 / sub 3 (min/max position value) follow the measuring range set with 6001h/6002h, where the
+    profile has them read-only (not constant)."""
+    access = encoder.access
+    profile = access.dut.profile
+    entries = [profile.entry(od.MODULE_IDENTIFICATION, sub) for sub in (2, 3)]
+    if any(e is None or e.access != "ro" for e in entries) or access.objects.relocated:
+        pytest.skip("not applicable: 650Ah sub 2/3 are absent or constant in the profile")
+    source = profile.objects[od.MODULE_IDENTIFICATION].manual
+    if source:
+        evidence.rests_on("manual", f"650Ah ({source}): min/max position follow the measuring range")
+    objects = access.objects
+    mur, tmr = _scaled_setting(encoder)
+    if objects.scaling_bit is not None:
+        encoder.write(objects.operating, 0, (access.read_int(objects.operating) or 0) | 1 << objects.scaling_bit)
+    encoder.write(objects.units_per_rev, 0, mur)
+    if access.description.multiturn:
+        encoder.write(objects.total_range, 0, tmr)
+    access.wait_until_executed()
+    expected = access.settings(functions=False).limits()
+    observed = tuple(access.read_int(od.MODULE_IDENTIFICATION, sub) for sub in (2, 3))
+    if observed != expected and not source:
+        evidence.inferred_problem(f"650Ah sub 2/3 = {observed} with 6001h = {mur}, 6002h = {tmr}; the range is "
+                                  f"{expected}", "650Ah min/max position follow the measuring range")
+        return
+    assert observed == expected, (
+        f"6001h = {mur}, 6002h = {tmr}: 650Ah sub 2/3 = {observed}, the range is {expected[0]} .. {expected[1]}")
+
+
+@pytest.mark.destructive
 def test_operating_status_mirrors_operating_parameters(encoder, evidence):
     """6500h (operating status) shows the code sequence and scaling bits of 6000h, also after 6000h changed."""
     access = encoder.access

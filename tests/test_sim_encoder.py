@@ -303,6 +303,14 @@ def _operating_status_after_ccw(twin: Twin) -> int:
     return twin.read(0x6500, 0)
 
 
+def _module_limits_after_scaling(twin: Twin) -> tuple[int, int]:
+    """650Ah sub 2/3 on a twin whose profile has them read-only: the WDGA has them constant, so the scenario
+    reads what the twin computes for a halved range directly."""
+    twin.write(0x6001, 0, STEPS // 2)
+    twin.write(0x6002, 0, TMR // 2)
+    return twin.node.encoder.module_limits()
+
+
 #: fault -> (scenario, what the conformant twin reads, what the twin with the fault reads)
 DEVIATIONS: dict[str, tuple[Callable[[Twin], object], object, object]] = {
     "preset_ignored": (_preset_position, 1000, 5000),
@@ -311,6 +319,7 @@ DEVIATIONS: dict[str, tuple[Callable[[Twin], object], object, object]] = {
     "direction_ignored": (_ccw_step, -100, 100),
     "scaling_ignored": (_one_turn_at_4096_units, 4096, STEPS),
     "offset_not_shown": (_offset_after_preset, (1000, (1000 - 5000) % TMR), (1000, 0)),
+    "module_identification_stale": (_module_limits_after_scaling, (0, TMR // 2 - 1), (0, 0)),
     "operating_status_stale": (_operating_status_after_ccw, 0x0005, 0x0004),
     "speed_wrong_unit": (_speed_half_turn_per_second, STEPS // 2, 30),
     "tpdo_position_unscaled": (_sdo_and_tpdo_position, (1000, 1000), (1000, 40000)),

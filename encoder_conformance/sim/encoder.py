@@ -159,7 +159,18 @@ class EncoderFunction:
             return self.area_state()
         if key == (od.OPERATING_STATUS, 0) and self.store.has((0x6000, 0)):
             return self.operating_status()
+        if index == od.MODULE_IDENTIFICATION and sub in (2, 3) and self._follows_range(key):
+            return self.module_limits()[sub - 2]
         return None
+
+    def _follows_range(self, key: Key) -> bool:
+        """650Ah sub 2/3 follow the measuring range where the profile has them read-only, not constant."""
+        entry = self.store.entries.get(key)
+        return entry is not None and entry.access == "ro"
+
+    def module_limits(self) -> tuple[int, int]:
+        """650Ah sub 2 / sub 3: the smallest and largest position value of the range in use."""
+        return self.settings().limits()
 
     def operating_status(self) -> int | None:
         """6500h: the 6000h settings in use."""
@@ -248,6 +259,13 @@ class OffsetNotShown(EncoderFunction):
 class SpeedInRpm(EncoderFunction):
     def speed(self) -> int:
         return speed_value(self.shaft.speed * 60, 1, self.settings().scaling.ccw)
+
+
+@breaks(EncoderFunction, "module_identification_stale")
+class ModuleIdentificationStale(EncoderFunction):
+    def module_limits(self) -> tuple[int, int]:
+        low, high = (self.store.default_of((od.MODULE_IDENTIFICATION, sub), 0) for sub in (2, 3))
+        return (low if isinstance(low, int) else 0), (high if isinstance(high, int) else 0)
 
 
 @breaks(EncoderFunction, "operating_status_stale")
