@@ -138,10 +138,15 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "emcy_wrong_cob_id": "EMCY frames are sent on 080h + node-id + 1",
         },
     ),
+    (  # the generated sequences against the reference model (and the preset checks)
+        ("test_encoder_position", "test_encoder_properties"),
+        {
+            "preset_ignored": "a preset (6003h) write is confirmed but the position does not move",
+        },
+    ),
     (  # encoder function: position, preset, scaling, code sequence, speed (CiA 406)
         ("test_encoder_position",),
         {
-            "preset_ignored": "a preset (6003h) write is confirmed but the position does not move",
             "preset_wrong_sign": "the preset offset is computed as unshifted position - preset instead of "
                                  "preset - unshifted position",
             "wrap_wrong_value": "the position wraps at the total measuring range minus 1 (never shows the last "
