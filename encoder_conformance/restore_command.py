@@ -2,6 +2,8 @@
 
 Connects to the device the snapshot was taken from (the serial number must match), resets it,
 writes back and stores what differs from the stored snapshot, then the values that were in use.
+An encoder's preset objects are never written back as values (a snapshot of an older run may hold
+them): its reference point is given back by presetting, where the snapshot recorded it.
 """
 
 from __future__ import annotations
@@ -20,11 +22,13 @@ from .dut.identity import read_identity
 from .dut.lss_device import LssDevice
 from .dut.lss_master import LssAddress, LssMaster
 from .dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
+from .dut.reference_point import preset_keys
 from .dut.snapshot import Snapshot
 from .dut.store_watch import StoreWatch
 from .errors import BusSetupError, DutLostError
 from .exit_codes import RunExit
 from .profile.loader import load_profile
+from .profile.model import DeviceProfile
 
 
 @dataclass(frozen=True)
@@ -47,6 +51,7 @@ def restore_from_snapshot(request: RestoreRequest) -> int:
     loaded = load_profile(snapshot.profile_id)
     if loaded.sha256 != snapshot.profile_sha256:
         print(f"note: profile {snapshot.profile_id} changed since the snapshot; restoring the snapshot's values")
+    _leave_out_presets(snapshot, loaded.profile)
     if request.power_on_command:  # a crash between power off and on leaves the device switched off
         try:
             ShellPowerSwitch("true", request.power_on_command).on()
@@ -78,6 +83,16 @@ def restore_from_snapshot(request: RestoreRequest) -> int:
         connection.disconnect(network)
     _print(record)
     return RunExit.PASSED if record.ok else RunExit.NOT_RESTORED
+
+
+def _leave_out_presets(snapshot: Snapshot, profile: DeviceProfile) -> None:
+    """A snapshot of an older run holds the preset objects as values: writing one back would preset again."""
+    presets = set(preset_keys(profile))
+    left_out = [e for e in snapshot.entries if e.key in presets]
+    snapshot.entries = [e for e in snapshot.entries if e.key not in presets]
+    for entry in left_out:
+        print(f"note: {entry.label} not written back: writing a preset value moves the reference point"
+              + ("" if snapshot.reference_in_use else " (this snapshot did not record the reference point)"))
 
 
 def _wrong_device(dut: DeviceUnderTest, snapshot: Snapshot, force: bool) -> str | None:

@@ -1,22 +1,38 @@
 """The parts of the device custody without a bus: write order, snapshot file, store watch, store commands,
-station file and power switches."""
+station file and power switches; and the reference point an encoder's preset moves, given back by a custody
+driven directly against an in-process twin."""
 
 from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
+from types import SimpleNamespace
 
 import can
 import pytest
 
+from encoder_conformance.bus_config import BusConfig
 from encoder_conformance.cia301 import LOAD, SAVE
-from encoder_conformance.dut.persist import StoreCommand, store_commands_for
+from encoder_conformance.dut.custody import Custody, RestoreRecord
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.encoder_access import EncoderAccess
+from encoder_conformance.dut.persist import StoreCommand, persist_entry, store_commands_for
 from encoder_conformance.dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
+from encoder_conformance.dut.reference_custody import ReferenceCustody
+from encoder_conformance.dut.reference_point import ReferencePoint, read_reference_point
 from encoder_conformance.dut.snapshot import Snapshot, SnapshotEntry, custody_keys
-from encoder_conformance.dut.store_watch import StoreWatch
-from encoder_conformance.dut.write_plan import plan_writes
+from encoder_conformance.dut.store_watch import AUTO_STORED, StoreWatch
+from encoder_conformance.dut.write_plan import SCALING_GATE, plan_writes
+from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.restore_command import RestoreRequest, restore_from_snapshot
 from encoder_conformance.station import StationError, load_station
+from tests import sim_rig
+from tests.sim_rig import WAIT_S, Rig
+
+rig = sim_rig.rig  # the shared simulator fixture
 
 
 def u32(value: int) -> bytes:
@@ -88,12 +104,23 @@ def test_custody_keys_leave_out_commands_and_changing_values(wdga):
     assert (0x1018, 1) not in keys  # read-only
 
 
+def test_custody_keys_leave_out_the_preset_objects(wdga, siko):
+    """Writing a preset value presets again: 6003h, 6009h and POSITAL's 2103h are given back as a reference point."""
+    posital = load_profile("fraba-posital-awc58-c2-mt").profile
+    assert not {(0x6003, 0), (0x6009, 0)} & set(custody_keys(wdga))
+    assert (0x6003, 0) not in custody_keys(siko)
+    assert (0x2103, 0) not in custody_keys(posital)
+    assert (0x2101, 0) in custody_keys(posital)  # the scaling stays a plain value
+
+
 def test_snapshot_file_round_trip(tmp_path):
     snapshot = Snapshot("p", "abc", 5, {"serial number (1018h.4)": "7"}, True, 0x05,
-                        [SnapshotEntry(0x1017, 0, "Producer heartbeat time", "store_comm", "e803", "0000")])
+                        [SnapshotEntry(0x1017, 0, "Producer heartbeat time", "store_comm", "e803", "0000")],
+                        ReferencePoint(-77, 1234), ReferencePoint(None, 5))
     path = snapshot.save(tmp_path / "s.json")
     loaded = Snapshot.load(path)
     assert loaded == snapshot
+    assert json.loads(path.read_text(encoding="utf-8"))["reference_found"] == {"offset": -77, "position": 1234}
     assert loaded.entries[0].target_found() == b"\xe8\x03"
     assert loaded.entries[0].target_stored() == b"\x00\x00"
     assert loaded.serial == "7"
@@ -103,6 +130,8 @@ def test_snapshot_file_round_trip(tmp_path):
     ("{not json", "cannot read the snapshot"),
     ('{"format": "something else"}', "not a device snapshot"),
     ('{"format": "encoder-conformance device snapshot 1", "entries": [{"index": 1}]}', "malformed snapshot"),
+    ('{"format": "encoder-conformance device snapshot 1", "entries": [], "reference_found": {"offset": 1}}',
+     "malformed snapshot"),
 ])
 def test_snapshot_file_errors_name_the_file(tmp_path, content, message):
     path = tmp_path / "bad.json"
@@ -185,3 +214,155 @@ def test_snapshot_json_is_readable_by_people(tmp_path):
     raw = json.loads(snapshot.save(tmp_path / "s.json").read_text(encoding="utf-8"))
     assert raw["entries"][0] == {"index": 0x6200, "sub": 0, "name": "Cyclic timer", "persisted_by": "store_app",
                                  "found": None, "stored": "1400"}
+
+
+# -- the reference point: a custody driven directly against an in-process twin ----------------------
+
+def _fast(profile_id: str) -> DeviceProfile:
+    """The profile with a 5 ms boot-up (POSITAL's store reboots after 150 ms instead of 4 s)."""
+    profile = load_profile(profile_id).profile
+    quirks = dict(profile.quirks)
+    if "store-via-2300h-reboots" in quirks:
+        quirk = quirks["store-via-2300h-reboots"]
+        quirks["store-via-2300h-reboots"] = quirk.model_copy(
+            update={"params": quirk.params.model_copy(update={"reboot_ms": 150})})
+    simulator = profile.simulator.model_copy(update={"bootup_delay_ms": 5})
+    return profile.model_copy(update={"simulator": simulator, "quirks": quirks})
+
+
+class Bench:
+    """A twin of ``profile`` with its shaft at ``turns``, and the tester's device access to it."""
+
+    def __init__(self, rig: Rig, profile: DeviceProfile, turns: float) -> None:
+        self.node, _ = rig.boot(profile)
+        self.node.shaft.set_turns(turns)
+        self.dut = DeviceUnderTest(rig.network, rig.log, profile, self.node.node_id)
+        self.access = EncoderAccess(self.dut)
+        self.log = rig.log
+
+    def preset(self, value: int, store: bool = False) -> None:
+        """Preset as a test (or the machine's owner) does (SIKO: with the scaling bit set for it)."""
+        self.access.preset(value)
+        assert self.access.position_when(value, WAIT_S) == value
+        if store:
+            persist_entry(self.dut, self.access.objects.preset, 0)
+
+    def reset(self) -> ReferencePoint:
+        """Reset node: the reference point the device stored."""
+        assert self.dut.reset_and_reach()
+        return read_reference_point(self.access)
+
+    def custody(self, tmp_path: Path) -> Custody:
+        watch = StoreWatch(self.dut.profile, self.dut.node_id)
+        self.log.add_listener(watch)
+        custody = Custody(self.dut, tmp_path / "device-snapshot.json", watch)
+        custody.take("sha")
+        return custody
+
+    def settled(self, wanted: ReferencePoint) -> ReferencePoint:
+        """The reference point once a write's processing time is over (SIKO holds the position meanwhile)."""
+        return ReferencePoint(self.access.offset(), self.access.position_when(wanted.position, WAIT_S))
+
+
+def _given_back(bench: Bench, custody: Custody, record: RestoreRecord) -> None:
+    """6509h and the position as found, and after a reset as stored; the preset object left out of the values."""
+    snapshot = custody.snapshot
+    assert record.ok, record.failures
+    assert not any(e.key == (bench.access.objects.preset, 0) for e in snapshot.entries)
+    assert bench.settled(snapshot.reference_found) == snapshot.reference_found, record.written
+    assert bench.reset() == snapshot.reference_stored, record.written
+
+
+@pytest.mark.parametrize("store", [False, True], ids=["preset", "preset and store"])
+def test_wdga_reference_point_given_back(rig, tmp_path, store):
+    """WDGA: a preset in use (and stored) before the run, another preset in use than stored; a run presets
+    (and stores): the offset in use is preset back, the stored one preset and stored with 1010h again."""
+    bench = Bench(rig, _fast("wachendorff-wdga-mt"), 1.3)
+    bench.preset(777, store=True)
+    bench.reset()
+    bench.preset(4242)  # in use, not stored
+    custody = bench.custody(tmp_path)
+    found, stored = custody.snapshot.reference_found, custody.snapshot.reference_stored
+    assert (found.position, stored.position) == (4242, 777)
+    bench.preset(5, store=store)
+    record = custody.give_back(30)
+    _given_back(bench, custody, record)
+    lines = [line for line in record.written if line.startswith("reference point: preset")]
+    assert lines[-1].startswith("reference point: preset 4242 to give back offset 6509h = ")
+    assert lines[-1].endswith("6003h now reads 4242")
+    assert len(lines) == (2 if store else 1)  # the stored one only where the run stored
+    assert record.store_commands == (["1010h.03 'save'"] if store else [])
+    assert [c.label for c in record.left_changed] == ["reference point (offset 6509h)"]
+    assert [c.label for c in record.stored_changed] == (["reference point (offset 6509h)"] if store else [])
+
+
+@pytest.mark.parametrize(("profile_id", "counts", "unknown", "may"), [
+    ("wachendorff-wdga-mt", {"store 1010h.02": 1}, False, False),  # communication parameters only
+    ("wachendorff-wdga-mt", {"store 1010h.03": 1}, False, True),  # 6003h is store_app
+    ("wachendorff-wdga-mt", {"store 1010h.01": 2}, False, True),
+    ("wachendorff-wdga-mt", {"restore defaults 1011h.01": 1}, False, True),
+    ("wachendorff-wdga-mt", {}, True, True),  # restore --from: what the run sent is not known
+    ("siko-wx58m-1212-mt", {AUTO_STORED: 3}, False, True),
+    ("siko-wx58m-1212-mt", {"LSS store configuration": 1}, False, False),
+    ("fraba-posital-awc58-c2-mt", {"store 2300h.00": 1}, False, True),
+    ("cia406-c1-st", {"store 1010h.01": 1}, False, False),  # no preset
+])
+def test_stored_reference_point_checked_only_where_the_run_could_have_changed_it(profile_id, counts, unknown, may):
+    """A position at rest after a reset is no evidence of a stored preset unless the run could have stored one."""
+    dut = SimpleNamespace(profile=load_profile(profile_id).profile)  # no bus needed
+    assert ReferenceCustody(dut).store_may_have_changed(counts, unknown) is may
+
+
+def test_siko_reference_point_given_back(rig, tmp_path):
+    """SIKO stores 6003h and its offset by itself, the position is signed, 6003h needs the scaling bit and its
+    6509h is a zeroing point in sensor steps (the position at rest is the reference): a run that presets changes
+    what is stored; the custody presets the stored position back (no store command)."""
+    bench = Bench(rig, _fast("siko-wx58m-1212-mt"), -0.7)
+    bench.preset(-1234)
+    custody = bench.custody(tmp_path)
+    assert custody.snapshot.reference_found == custody.snapshot.reference_stored == ReferencePoint(None, -1234)
+    bench.preset(-5)
+    assert bench.reset().position == -5  # the run's preset is stored
+    record = custody.give_back(30)
+    _given_back(bench, custody, record)
+    assert any(line.startswith("reference point: preset -1234 to give back the position found at rest")
+               for line in record.written)
+    assert record.store_commands == []
+    assert bench.dut.read(*SCALING_GATE) == b"\x00\x00"  # the scaling bit closed again
+
+
+def test_posital_reference_point_given_back(rig, tmp_path):
+    """POSITAL has no 6509h: the position at rest is the reference (2103h presets it, 2300h stores and reboots)."""
+    bench = Bench(rig, _fast("fraba-posital-awc58-c2-mt"), 0.5)
+    bench.preset(5000, store=True)
+    bench.preset(6000)
+    custody = bench.custody(tmp_path)
+    assert custody.snapshot.reference_found == ReferencePoint(None, 6000)
+    assert custody.snapshot.reference_stored == ReferencePoint(None, 5000)
+    bench.preset(100, store=True)
+    record = custody.give_back(30)
+    _given_back(bench, custody, record)
+    assert any("store-via-2300h-reboots" in command for command in record.store_commands)
+    assert any("preset 6000 to give back the position found at rest" in line and "assumes the shaft did not move"
+               in line for line in record.written)
+
+
+def test_restore_from_a_snapshot_without_reference_point(rig, tmp_path, capsys):
+    """A snapshot file written before the reference point was recorded (6003h among the values) still loads for
+    ``restore --from``, which writes no preset value back: the reference point stays where it is."""
+    bench = Bench(rig, _fast("wachendorff-wdga-mt"), 2.25)
+    bench.preset(900, store=True)
+    custody = bench.custody(tmp_path)
+    path = tmp_path / "device-snapshot.json"
+    raw = json.loads(path.read_text(encoding="utf-8"))
+    del raw["reference_found"], raw["reference_stored"]
+    raw["entries"].append({"index": 0x6003, "sub": 0, "name": "Preset value", "persisted_by": "store_app",
+                           "found": "00000000", "stored": "00000000"})
+    path.write_text(json.dumps(raw), encoding="utf-8")
+    before = read_reference_point(bench.access)
+    assert Snapshot.load(path).reference_in_use is None
+    request = RestoreRequest(path, BusConfig({"interface": "virtual", "channel": rig.host.channel}), None, 30, False)
+    assert restore_from_snapshot(request) == RunExit.PASSED, capsys.readouterr()
+    output = capsys.readouterr().out
+    assert "6003h.00 Preset value not written back" in output
+    assert read_reference_point(bench.access) == before == custody.snapshot.reference_found

@@ -8,7 +8,9 @@ from its memory are read as stored; the snapshot file is written before the firs
 ``encoder-conformance restore --from``). When the run sent anything that may have changed the
 stored configuration, it resets the node, writes back what differs from the stored snapshot,
 stores it with the device's own store commands, resets again and checks; then it writes back the
-values that were in use when the run began, and checks them. Every step has a deadline.
+values that were in use when the run began, and checks them. An encoder's preset is no value to
+write back: its reference point is given back by presetting (``reference_custody``), the stored one
+with the stored values, the one found after the values in use. Every step has a deadline.
 """
 
 from __future__ import annotations
@@ -28,6 +30,8 @@ from .frames import Mark
 from .identity import identity_mismatch, read_identity
 from .persist import CannotPersist, store_commands_for
 from .power import BenchPower
+from .reference_custody import ReferenceCustody
+from .reference_point import ReferencePoint
 from .restart_watch import RestartWatch
 from .sdo_frames import abort_name
 from .snapshot import Key, Snapshot, SnapshotEntry, custody_keys, hex_or_none, is_stored, read_values
@@ -100,6 +104,7 @@ class Custody:
         self.snapshot: Snapshot | None = None
         self.record: RestoreRecord | None = None
         self.power: BenchPower | None = None  # the bench's power switch, once a test used it
+        self.reference = ReferenceCustody(dut)
         #: put back first what a test changed outside the object dictionary (an LSS node-ID): each step
         #: returns None or what it could not put back
         self.first_steps: list[Callable[[], str | None]] = []
@@ -131,6 +136,7 @@ class Custody:
             if answered:
                 self._check_identity(snapshot)
                 found = read_values(dut, keys)
+                snapshot.reference_found = self.reference.read()
                 snapshot.entries = [self._entry(k, found[k], None) for k in keys]
                 snapshot.found_state = self._state_seen(before)
                 self._save()
@@ -142,6 +148,7 @@ class Custody:
             if not answered:
                 self._check_identity(snapshot)
             stored = read_values(dut, keys)
+            snapshot.reference_stored = self.reference.read()
             found_values = {e.key: e.found for e in snapshot.entries}
             snapshot.entries = [self._entry(k, None, stored[k], found_values.get(k)) for k in keys]
             return self._save()
@@ -197,7 +204,7 @@ class Custody:
         self.watch.restoring = True
         try:
             with self.dut.custody():
-                self._give_back(record, deadline, check_stored or self.watch.total > 0)
+                self._give_back(record, deadline, check_stored or self.watch.total > 0, history_unknown=check_stored)
             record.done = True
         except DutLostError as exc:
             record.fail(f"the device could not be reached: {exc}")
@@ -209,7 +216,7 @@ class Custody:
             record.seconds = round(time.monotonic() - started, 3)
         return record
 
-    def _give_back(self, record: RestoreRecord, deadline: Deadline, check_stored: bool) -> None:
+    def _give_back(self, record: RestoreRecord, deadline: Deadline, check_stored: bool, history_unknown: bool) -> None:
         dut = self.dut
         snapshot = self.snapshot
         assert snapshot is not None
@@ -231,16 +238,18 @@ class Custody:
         keys = [e.key for e in snapshot.entries]
         now = read_values(dut, keys)
         record.left_changed = self._differences(now, lambda e: e.target_found())
-        if check_stored and self._give_back_stored(record, deadline, now):
+        if check_stored and self._give_back_stored(record, deadline, now, history_unknown):
             now = read_values(dut, keys)  # a reset or writes since the first read
         targets = {e.key: e.target_found() for e in snapshot.entries}
         self._write(record, deadline, {k: v for k, v in targets.items() if v is not None and now.get(k) != v}, now)
+        self._give_back_reference(record, deadline, snapshot.reference_in_use, record.left_changed)  # scaled units
         after = read_values(dut, keys)
         for change in self._differences(after, lambda e: e.target_found()):
             record.fail(f"not restored: {change.describe()}")
         self._back_to_found_state(record)
 
-    def _give_back_stored(self, record: RestoreRecord, deadline: Deadline, now: dict[Key, bytes | None]) -> bool:
+    def _give_back_stored(self, record: RestoreRecord, deadline: Deadline, now: dict[Key, bytes | None],
+                          history_unknown: bool) -> bool:
         """Reset, compare with what was stored, write and store what differs, reset and check; True if it
         reset the device or wrote to it (the values in use may then differ from ``now``).
 
@@ -258,13 +267,17 @@ class Custody:
         loaded = {k: now.get(k) for k in stored_keys} if shows_stored else read_values(dut, stored_keys)
         record.stored_changed = self._differences(loaded, lambda e: e.target_stored(), stored_keys)
         defaults_restored = any(kind.startswith("restore defaults") for kind in self.watch.counts)
-        if not record.stored_changed and not defaults_restored:
+        reference = self.reference.stored_to_give_back(
+            snapshot.reference_stored, self.reference.store_may_have_changed(self.watch.counts, history_unknown))
+        if not record.stored_changed and not defaults_restored and reference is None:
             return not shows_stored
         targets = {k: snapshot.entry(k).target_stored() for k in stored_keys}  # type: ignore[union-attr]
         differing = {k: v for k, v in targets.items() if v is not None and loaded.get(k) != v}
         self._write(record, deadline, differing, loaded)
+        preset = self._give_back_reference(record, deadline, reference, record.stored_changed)
         try:
-            commands = store_commands_for(dut.profile, stored_keys if defaults_restored else sorted(differing))
+            keys = stored_keys if defaults_restored else sorted(differing)
+            commands = store_commands_for(dut.profile, keys + (self.reference.store_keys() if preset else []))
         except CannotPersist as exc:
             record.fail(f"cannot store the restored values: {exc}")
             return
@@ -276,7 +289,25 @@ class Custody:
         reloaded = read_values(dut, stored_keys)
         for change in self._differences(reloaded, lambda e: e.target_stored(), stored_keys):
             record.fail(f"stored value not restored: {change.describe()}")
+        problem = self.reference.check(reference, "stored") if preset and reference is not None else None
+        if problem:
+            record.fail(problem)
         return True
+
+    def _give_back_reference(self, record: RestoreRecord, deadline: Deadline, target: ReferencePoint | None,
+                             changes: list[Change]) -> bool:
+        """Preset to ``target`` where the reference point differs (a Change in ``changes``); True if it preset."""
+        if target is None:
+            return False
+        self._check_time(deadline, "giving back the reference point")
+        outcome = self.reference.give_back(target, settle=not self.restarts.shows_stored)
+        if outcome.change:
+            changes.append(Change(*outcome.change))
+        if outcome.done:
+            record.written.append(outcome.done)
+        if outcome.problem:
+            record.fail(outcome.problem)
+        return outcome.done is not None
 
     def _differences(self, values: dict[Key, bytes | None], target, keys: list[Key] | None = None) -> list[Change]:  # noqa: ANN001
         assert self.snapshot is not None

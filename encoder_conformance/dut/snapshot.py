@@ -2,9 +2,11 @@
 
 Before the first test the run reads every readable-and-writable entry the profile declares
 (``found``: the values in use, possibly changed without storing), resets the node and reads them
-again (``stored``: what the device loads from its memory). The snapshot is written as JSON into
-the report directory before any test runs, so ``encoder-conformance restore --from`` can put the
-device back even after a crash or a power loss of the test PC.
+again (``stored``: what the device loads from its memory); for an encoder with a preset, its
+reference point both times instead of the preset objects, which are no values to write back
+(``reference_point``). The snapshot is written as JSON into the report directory before any test
+runs, so ``encoder-conformance restore --from`` can put the device back even after a crash or a
+power loss of the test PC.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from ..profile.model import DeviceProfile, EntrySpec
 from .device import DeviceUnderTest
+from .reference_point import ReferencePoint, preset_keys
 from .store_watch import store_command_objects
 
 SNAPSHOT_FILE = "device-snapshot.json"
@@ -27,12 +30,14 @@ Key = tuple[int, int]
 
 
 def custody_keys(profile: DeviceProfile) -> list[Key]:
-    """Entries a run must give back: readable, writable configuration (no commands, nothing that changes by itself)."""
+    """Entries a run must give back: readable, writable configuration (no commands, nothing that changes by itself,
+    no preset object: its reference point is given back instead)."""
     commands = store_command_objects(profile)
+    presets = preset_keys(profile)
     return [
         (index, sub)
         for index, sub, _, entry in profile.iter_entries()
-        if _is_configuration(entry) and index not in commands
+        if _is_configuration(entry) and index not in commands and (index, sub) not in presets
     ]
 
 
@@ -82,12 +87,21 @@ class Snapshot:
     found_readable: bool  # the device answered SDO before the run's first reset
     found_state: int | None  # NMT state seen in a heartbeat before the run touched the device
     entries: list[SnapshotEntry] = field(default_factory=list)
+    #: the reference point (6509h or the position at rest) before the run and after the reset; None where the
+    #: device has no preset, or in a snapshot from before the reference point was recorded
+    reference_found: ReferencePoint | None = None
+    reference_stored: ReferencePoint | None = None
     taken_at: str = field(default_factory=lambda: time.strftime("%Y-%m-%dT%H:%M:%S%z"))
     format: str = FORMAT
 
     @property
     def serial(self) -> str | None:
         return self.identity.get("serial number (1018h.4)")
+
+    @property
+    def reference_in_use(self) -> ReferencePoint | None:
+        """The reference point to give back at the end (the stored one where none was readable before)."""
+        return self.reference_found or self.reference_stored
 
     def entry(self, key: Key) -> SnapshotEntry | None:
         return next((e for e in self.entries if e.key == key), None)
@@ -110,7 +124,9 @@ class Snapshot:
             raise ValueError(f"{path}: not a device snapshot (expected format {FORMAT!r})")
         try:
             entries = [SnapshotEntry(**e) for e in raw.pop("entries")]
-            return cls(entries=entries, **raw)
+            references = {key: ReferencePoint.from_dict(raw.pop(key, None))  # absent in snapshots of older runs
+                          for key in ("reference_found", "reference_stored")}
+            return cls(entries=entries, **references, **raw)
         except (TypeError, KeyError) as exc:
             raise ValueError(f"{path}: malformed snapshot: {exc}") from None
 

@@ -22,6 +22,8 @@ from ..profile.quirk_effects import LssConfigAutoStored, ManufacturerStoreObject
 
 #: SDO client command specifiers that start a download (CiA 301 §7.2.4.3): initiate, block initiate
 _DOWNLOAD_INITIATE = {1, 6}
+#: how the counts name writes to entries the device stores by itself
+AUTO_STORED = "writes the device stores by itself"
 
 
 def store_command_objects(profile: DeviceProfile) -> frozenset[int]:
@@ -61,7 +63,7 @@ class StoreWatch(can.Listener):
         elif index in self._commands:
             kind = f"store {index:04X}h.{sub:02X}"
         elif (index, sub) in self._auto:
-            kind = "writes the device stores by itself"
+            kind = AUTO_STORED
         else:
             return
         self._count(kind)

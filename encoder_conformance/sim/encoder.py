@@ -2,8 +2,9 @@
 
 Every value (position, CAM state, work-area state, speed, preset offset) is computed by
 ``encoder_model`` from the settings in the twin's object store, read the way the suites read them
-from a device. What stays here is the twin's own part: the shaft, the preset offset of devices
-without 6509h (kept in NVM), SIKO's position freeze while a write executes
+from a device. What stays here is the twin's own part: the shaft, the preset offset (6509h, or
+internal on devices without it) kept in NVM whenever the preset object is stored (by a store
+command, or by itself where it is persisted_by auto), SIKO's position freeze while a write executes
 (``position_frozen_during_execution``) and the CAM history along the shaft's moves.
 
 The decisions a fault may change are small methods (the scaling the position applies, the cam
@@ -13,6 +14,7 @@ speed, the area state); the faults are the classes at the bottom, each overridin
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import replace
 
 from ..encoder_model import objects as od
@@ -31,7 +33,7 @@ from .object_store import ObjectStore
 from .scheduler import DeadlineScheduler, JobHandle
 from .shaft import Shaft
 
-#: NVM slot (index 0 is no object) for the preset offset of devices without 6509h
+#: NVM slot (index 0 is no object) for the preset offset (6509h's value, or the internal one without 6509h)
 OFFSET_KEY: Key = (0x0000, 0)
 
 
@@ -197,18 +199,30 @@ class EncoderFunction:
             self._thaw_job = None
         self._frozen = None
 
-    # -- persistence of the internal preset offset (devices without 6509h) -------------------
+    # -- persistence of the preset offset --------------------------------------------------
     def reload(self, nvm: NonVolatileMemory) -> None:
+        """A (re)start: the stored offset (6509h keeps its default where none was stored)."""
         self.thaw()
         self.reference.forget_cam_history()
         stored = nvm.get(OFFSET_KEY)
-        self._offset = stored if isinstance(stored, int) else 0
+        if self.offset_in_object():
+            if isinstance(stored, int):
+                self.store.set((od.OFFSET, 0), stored)
+        else:
+            self._offset = stored if isinstance(stored, int) else 0
 
-    def persist(self, nvm: NonVolatileMemory) -> None:
-        if not self.offset_in_object():
-            nvm.put_many({OFFSET_KEY: self._offset})
+    def persist(self, nvm: NonVolatileMemory, stored: Iterable[Key] | None = None) -> None:
+        """Keep the offset where the preset object was just stored (``stored``: the keys stored, None: all)."""
+        if stored is not None and (self.objects.preset, 0) not in stored:
+            return
+        offset = self.store.get((od.OFFSET, 0)) if self.offset_in_object() else self._offset
+        if isinstance(offset, int):
+            nvm.put_many({OFFSET_KEY: offset})
 
-    def forget(self, nvm: NonVolatileMemory) -> None:
+    def forget(self, nvm: NonVolatileMemory, cleared: Iterable[Key] | None = None) -> None:
+        """Restore defaults: the stored offset goes with the preset object (``cleared``: its keys, None: all)."""
+        if cleared is not None and (self.objects.preset, 0) not in cleared:
+            return
         if OFFSET_KEY in nvm:
             nvm.remove_many([OFFSET_KEY])
 

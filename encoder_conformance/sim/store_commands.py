@@ -25,10 +25,10 @@ from .store_variants import ManufacturerStoreObject, ParameterSets
 
 @dataclass(frozen=True)
 class EncoderMemory:
-    """What the encoder function keeps in NVM besides objects (the internal preset offset)."""
+    """What the encoder function keeps in NVM besides objects (the preset offset, with the preset object)."""
 
-    persist: Callable[[NonVolatileMemory], None]
-    forget: Callable[[NonVolatileMemory], None]
+    persist: Callable[[NonVolatileMemory, list[Key] | None], None]
+    forget: Callable[[NonVolatileMemory, list[Key] | None], None]
 
 
 class StoreCommands:
@@ -80,6 +80,8 @@ class StoreCommands:
         self._store.persist_auto(key)
         if self.automatic:
             self._store.persist(key)
+        if self.automatic or self._store.entries[key].persisted_by == "auto":
+            self._encoder.persist(self._nvm, [key])  # a preset object that stores itself keeps its offset
 
     def signature_accepted(self, value: object, signature: int) -> bool:
         return value == signature
@@ -120,13 +122,13 @@ class StoreCommands:
         if storing:
             if self.persists():
                 self._store.store(group)
-                self._encoder.persist(self._nvm)
+                self._encoder.persist(self._nvm, self._store.storable_keys(group))
         else:
             self.restore_defaults(group)
 
     def restore_defaults(self, group: str) -> None:
         self._store.restore_defaults(group)
-        self._encoder.forget(self._nvm)
+        self._encoder.forget(self._nvm, None if group == "store_all" else self._store.storable_keys(group))
 
     def _store_and_reboot(self, value: object, params: fx.StoreRebootsWithoutReply) -> None:
         """Quirk store_reboots_without_reply: store everything, no SDO reply, reboot, boot-up later.
@@ -137,7 +139,7 @@ class StoreCommands:
         self._check_signature(value, params.signature_u32, params.wrong_signature_abort)
         if self.persists():
             self._store.store_all_storable()
-            self._encoder.persist(self._nvm)
+            self._encoder.persist(self._nvm, None)
         reboot_ms = self._profile.simulator.bootup_delay_ms if params.reboot_ms is None else params.reboot_ms
         self._reboot(reboot_ms / 1000)
         raise SdoNoReply
