@@ -366,3 +366,41 @@ def test_restore_from_a_snapshot_without_reference_point(rig, tmp_path, capsys):
     output = capsys.readouterr().out
     assert "6003h.00 Preset value not written back" in output
     assert read_reference_point(bench.access) == before == custody.snapshot.reference_found
+
+
+def test_restore_from_gives_back_the_reference_point_after_a_crash(rig, tmp_path, capsys):
+    """A run dies with its preset stored: ``restore --from`` (which cannot know what the run sent) presets the
+    stored reference point again and stores it, then the one found."""
+    bench = Bench(rig, _fast("wachendorff-wdga-mt"), 0.8)
+    bench.preset(300, store=True)
+    bench.reset()
+    bench.preset(600)
+    custody = bench.custody(tmp_path)
+    bench.preset(9, store=True)  # then the test PC crashes: no give_back
+    request = RestoreRequest(tmp_path / "device-snapshot.json",
+                             BusConfig({"interface": "virtual", "channel": rig.host.channel}), None, 30, False)
+    assert restore_from_snapshot(request) == RunExit.PASSED, capsys.readouterr()
+    output = capsys.readouterr().out
+    assert "wrote reference point: preset 300 to give back offset 6509h" in output
+    assert "wrote reference point: preset 600 to give back offset 6509h" in output
+    assert "stored with 1010h.03 'save'" in output
+    assert bench.settled(custody.snapshot.reference_found) == custody.snapshot.reference_found
+    assert bench.reset() == custody.snapshot.reference_stored
+
+
+def test_wdga_offset_given_back_where_the_shaft_moved(rig, tmp_path):
+    """The machine's zero is the offset, not the preset value: the run turns the shaft a quarter and presets;
+    writing 6003h back as a value would preset the found value at the new angle. The custody gives the offset back
+    (the position then reads a quarter turn on), in use and as stored."""
+    bench = Bench(rig, _fast("wachendorff-wdga-mt"), 1.3)
+    bench.preset(777, store=True)
+    custody = bench.custody(tmp_path)
+    found = custody.snapshot.reference_found
+    bench.node.shaft.turn_by(0.25)
+    bench.preset(5, store=True)
+    record = custody.give_back(30)
+    assert record.ok, record.failures
+    quarter = bench.access.settings(functions=False).scaling.units_per_rev // 4
+    assert read_reference_point(bench.access) == ReferencePoint(found.offset, found.position + quarter)
+    assert bench.reset().offset == custody.snapshot.reference_stored.offset == found.offset
+    assert bench.dut.read_uint(0x6003) != 777  # the preset that recreates the offset here is another value

@@ -130,7 +130,7 @@ def _give_back_position(access: EncoderAccess, position: int, settle: bool) -> O
     if now == position:
         return Outcome()
     access.preset(position)
-    reached = access.position_when(position, TESTER_MARGIN_S)
+    reached = access.position_when(position, _late_s(access))
     done = (f"reference point: preset {position} to give back the position found at rest "
             f"({access.objects.position:04X}h = {position}; this assumes the shaft did not move since); "
             f"{_preset_reads(access)}")
@@ -146,6 +146,12 @@ def _preset_reads(access: EncoderAccess) -> str:
     return f"{index:04X}h now reads {access.read_int(index, 0)}"
 
 
+def _late_s(access: EncoderAccess) -> float:
+    """How long to read again after the execution time the manual gives: a busy device (or a twin on a busy PC)
+    may show the new value later; the reads stop as soon as it shows."""
+    return max(TESTER_MARGIN_S, access.dut.sdo_timeout)
+
+
 def _settle(access: EncoderAccess) -> None:
     """Wait out the longest execution time the manual gives for a write (0 s on most devices): writes made
     around ``access`` may hold the position at its old value until then."""
@@ -155,10 +161,10 @@ def _settle(access: EncoderAccess) -> None:
 
 
 def _offset_when(access: EncoderAccess, wanted: int, span: int) -> int | None:
-    """6509h once the device executed the preset, read again until it is ``wanted`` or the tester's margin is
-    over (the last read)."""
+    """6509h once the device executed the preset, read again until it is ``wanted`` or a late device had time
+    enough (the last read)."""
     access.wait_until_executed()
-    deadline = time.monotonic() + TESTER_MARGIN_S
+    deadline = time.monotonic() + _late_s(access)
     while True:
         value = access.offset()
         if same_offset(value, wanted, span) or time.monotonic() >= deadline:
