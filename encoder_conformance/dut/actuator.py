@@ -37,6 +37,28 @@ class SimulatorControls(ShaftDrive, ErrorStimulus, Protocol):
     def power_on(self) -> None: ...
 
 
+class ReturningShaft:
+    """A shaft drive that remembers how far a test turned it and turns it back afterwards, so the angle the
+    device was found at stays its reference (a constant speed is not followed: set it back to 0)."""
+
+    def __init__(self, drive: ShaftDrive) -> None:
+        self.drive = drive
+        self.turned = 0.0
+
+    def turn_by(self, revolutions: float) -> None:
+        self.drive.turn_by(revolutions)
+        self.turned += revolutions
+
+    def set_speed(self, revolutions_per_second: float) -> None:
+        self.drive.set_speed(revolutions_per_second)
+
+    def go_back(self) -> None:
+        self.drive.set_speed(0.0)
+        if self.turned:
+            self.drive.turn_by(-self.turned)
+            self.turned = 0.0
+
+
 @dataclass
 class BenchActuator:
     """The stimuli of one bench; None where the bench has none, with the reason in ``unavailable``."""
