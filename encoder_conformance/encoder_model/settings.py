@@ -49,6 +49,7 @@ class EncoderDescription:
     label_steps_per_rev: int | None  # simulator value / type-label default where 6501h is absent
     label_total_range: int | None
     physical_revolutions: int | None = None  # quirk physical_revolutions: more than 6502h shows
+    module_max_is_range: bool = False  # quirk module_max_is_range: 650Ah sub 3 = range, not range - 1
 
     @classmethod
     def of(cls, profile: DeviceProfile) -> EncoderDescription:
@@ -78,6 +79,7 @@ class EncoderDescription:
             label_steps_per_rev=int(steps) if isinstance(steps, int) and steps else label_steps,
             label_total_range=_default_int(profile, objects.total_range) if objects.relocated else None,
             physical_revolutions=None if revolutions is None else revolutions.revolutions,
+            module_max_is_range=profile.has_effect(fx.ModuleMaxIsRange),
         )
 
 

@@ -8,7 +8,7 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 
 Adding an effect: write its model here (the docstring says what the device does, each field
 what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 33 effects, one small model
+This module is over 400 lines because it is the catalogue of the 34 effects, one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -484,6 +484,17 @@ class PhysicalRevolutions(EffectParams):
     shown: Documentation = _doc("what 6502h reads instead")
 
 
+class ModuleMaxIsRange(EffectParams):
+    """650Ah sub 3 reads the number of position values (the measuring range), one more than the largest
+    position value CiA 406 names there; it follows the range all the same."""
+
+    effect = "module_max_is_range"
+    index: Documentation = _doc("the module identification object")
+    subindex: Documentation = _doc("the max position sub-index")
+    printed: Documentation = _doc("the value the manual prints")
+    likely: Documentation = _doc("the value CiA 406's meaning would give")
+
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -494,6 +505,6 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         LimitSwitchFlags, FixedTpdoMapping, GuardingHeartbeatExclusive, RestoreExcludes, NmtAutostartObject,
         ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
         UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
-        OffsetIsZeroingPoint, PhysicalRevolutions,
+        OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange,
     )
 }

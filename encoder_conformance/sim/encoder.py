@@ -171,8 +171,10 @@ class EncoderFunction:
         return entry is not None and entry.access == "ro"
 
     def module_limits(self) -> tuple[int, int]:
-        """650Ah sub 2 / sub 3: the smallest and largest position value of the range in use."""
-        return self.settings().limits()
+        """650Ah sub 2 / sub 3: the smallest and largest position value of the range in use (sub 3 one more
+        where the profile says so, quirk ``module_max_is_range``)."""
+        low, high = self.settings().limits()
+        return low, high + 1 if self.description.module_max_is_range else high
 
     def operating_status(self) -> int | None:
         """6500h: the 6000h settings in use."""
