@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from ..bus_config import BusConfig, resolve_bus_config
+from ..dut.actuator import ShaftDrivePlugin
 from ..fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS  # faults and conformant variants
 from ..paths import DEFAULT_PROFILE
 from ..profile.loader import LoadedProfile, load_profile
@@ -44,6 +45,7 @@ class RunSettings:
     power: PowerSettings | None = None
     station: Station | None = None
     delivery_state: bool = False
+    shaft_drive: ShaftDrivePlugin | None = None
 
 
 SETTINGS = pytest.StashKey[RunSettings]()
@@ -84,6 +86,10 @@ def add_options(parser: pytest.Parser) -> None:
                     help="ask the operator at the terminal to switch the power off and on")
     group.addoption("--power-off-time", default=None, type=float,
                     help="seconds the power stays off in a power cycle (default 1.0, 0 on the simulator)")
+    group.addoption("--shaft-drive", default=None, metavar="MODULE:FACTORY[=ARGUMENT]",
+                    help="bench only: a plug-in that turns the encoder's shaft (a motor): FACTORY(config) returns an "
+                         "object with turn_by(revolutions) and set_speed(revolutions_per_second); config.argument is "
+                         "the text after '='. Without it the tests that need rotation skip on a bench")
     group.addoption("--delivery-state", action="store_true", default=False,
                     help="the device is in its delivery state (never configured): check factory defaults "
                          "as found, without restoring defaults first (no --allow-destructive needed)")
@@ -146,7 +152,21 @@ def configure(config: pytest.Config) -> None:
         power=_power_settings(config, station, station_path, bus.simulated),
         station=station,
         delivery_state=bool(config.getoption("--delivery-state")),
+        shaft_drive=_shaft_drive(config, bus.simulated),
     )
+
+
+def _shaft_drive(config: pytest.Config, simulated: bool) -> ShaftDrivePlugin | None:
+    """The --shaft-drive plug-in, imported now so that a wrong name is a usage error before any test."""
+    spec = config.getoption("--shaft-drive")
+    if spec is None:
+        return None
+    if simulated:
+        raise pytest.UsageError("--shaft-drive is for a bench: the built-in simulator turns its own shaft")
+    try:
+        return ShaftDrivePlugin.load(spec)
+    except ValueError as exc:
+        raise pytest.UsageError(str(exc)) from None
 
 
 def _bus_settings(config: pytest.Config, station: Station | None, station_path: str | None) -> BusConfig:

@@ -119,6 +119,8 @@ def header_lines(config: pytest.Config) -> list[str]:
         f"verdicts: SDO abort codes {config.getoption('--abort-codes')} (--abort-codes); rules we inferred judged as "
         f"{'failures (--strict-inferred)' if verdicts_strict(config) else 'warnings (--strict-inferred fails them)'}",
     ]
+    if settings.shaft_drive is not None:
+        lines.append(f"shaft drive: {settings.shaft_drive.spec} (--shaft-drive)")
     folder = report_dir(config)
     if folder:
         lines.append(f"reports: {folder}")
