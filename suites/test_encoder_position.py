@@ -167,6 +167,18 @@ def test_code_sequence_sets_the_counting_direction(encoder, evidence):
             f"{moved}, expected {expected}")
 
 
+def _scale(encoder) -> tuple[int, int]:
+    """Switch scaling on (where 6000h has the bit) with ``_scaled_setting``; returns (MUR, TMR) written."""
+    access, objects = encoder.access, encoder.access.objects
+    mur, tmr = _scaled_setting(encoder)
+    if objects.scaling_bit is not None:
+        encoder.write(objects.operating, 0, (access.read_int(objects.operating) or 0) | 1 << objects.scaling_bit)
+    encoder.write(objects.units_per_rev, 0, mur)
+    if access.description.multiturn:
+        encoder.write(objects.total_range, 0, tmr)
+    return mur, tmr
+
+
 def _scaled_setting(encoder) -> tuple[int, int]:
     """(MUR, TMR) other than the physical resolution: a quarter of the steps, the configured number of revolutions."""
     settings = encoder.access.settings(functions=False)
@@ -190,11 +202,7 @@ def test_scaling_sets_units_per_revolution(encoder, evidence):
         if operating >> objects.scaling_bit & 1:
             encoder.write(objects.operating, 0, operating & ~(1 << objects.scaling_bit))
         _quarter_turn_moves(encoder, shaft, access.settings(functions=False).geometry.steps_per_rev // 4, "scaling off")
-        encoder.write(objects.operating, 0, (access.read_int(objects.operating) or 0) | 1 << objects.scaling_bit)
-    mur, tmr = _scaled_setting(encoder)
-    encoder.write(objects.units_per_rev, 0, mur)
-    if access.description.multiturn:
-        encoder.write(objects.total_range, 0, tmr)
+    mur, tmr = _scale(encoder)
     _quarter_turn_moves(encoder, shaft, mur // 4, f"scaling on, 6001h = {mur}, 6002h = {tmr}")
 
 
@@ -216,14 +224,8 @@ def test_scaled_position_stays_in_the_scaled_range(encoder, evidence):
     """With a scaled range set (6001h, 6002h), the position and a preset at its last unit stay inside it."""
     objects = encoder.access.objects
     evidence.rests_on("cia" if not objects.relocated else "manual", "CiA 406 6001h/6002h (total measuring range)")
-    mur, tmr = _scaled_setting(encoder)
     access = encoder.access
-    if objects.scaling_bit is not None:
-        operating = access.read_int(objects.operating) or 0
-        encoder.write(objects.operating, 0, operating | 1 << objects.scaling_bit)
-    encoder.write(objects.units_per_rev, 0, mur)
-    if access.description.multiturn:
-        encoder.write(objects.total_range, 0, tmr)
+    mur, tmr = _scale(encoder)
     settings = access.settings(functions=False)
     low, high = settings.limits()
     position = access.position()
@@ -247,13 +249,7 @@ def test_module_identification_follows_the_range(encoder, evidence):
     source = profile.objects[od.MODULE_IDENTIFICATION].manual
     if source:
         evidence.rests_on("manual", f"650Ah ({source}): min/max position follow the measuring range")
-    objects = access.objects
-    mur, tmr = _scaled_setting(encoder)
-    if objects.scaling_bit is not None:
-        encoder.write(objects.operating, 0, (access.read_int(objects.operating) or 0) | 1 << objects.scaling_bit)
-    encoder.write(objects.units_per_rev, 0, mur)
-    if access.description.multiturn:
-        encoder.write(objects.total_range, 0, tmr)
+    mur, tmr = _scale(encoder)
     access.wait_until_executed()
     low, high = access.settings(functions=False).limits()
     if access.description.module_max_is_range:

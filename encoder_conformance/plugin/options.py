@@ -101,9 +101,9 @@ def add_options(parser: pytest.Parser) -> None:
                     help="how SDO abort codes are judged: 'exact' (default) the code CiA 301 or the manual names for "
                          "the situation; 'family' any code that differs only in its last digit (06090031h for "
                          "06090030h), as the CiA conformance test tool accepts")
-    group.addoption("--budget", default=2.0, type=float, metavar="SECONDS",
+    group.addoption("--budget", default=1.0, type=float, metavar="SECONDS",
                     help="wall-clock time each property test (hypothesis sequences against the device) may spend "
-                         "generating examples (default 2 s; raise it for long bench runs)")
+                         "generating examples (default 1 s; raise it for long bench runs)")
     group.addoption("--allure", action="store_true", default=False,
                     help="also write allure-pytest results (allure-results/ in the report folder; render with "
                          "`npx allure generate`). Off by default: about 3,400 files and 3 s of a 14 s WDGA run")
