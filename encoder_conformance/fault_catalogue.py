@@ -156,6 +156,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "offset_not_shown": "6509h keeps 0 after a preset (the position still moves to the preset)",
             "module_identification_stale": "650Ah sub 2/3 (min/max position) keep their factory values after the "
                                            "measuring range changed",
+            "limit_switch_flags_ignored": "the process value carries no limit-switch flag bits (quirk "
+                                          "limit_switch_flags ignored)",
             "operating_status_stale": "6500h keeps showing the factory 6000h value after 6000h changed",
             "speed_wrong_unit": "6030h is in revolutions per minute instead of measuring units per second",
             "tpdo_position_unscaled": "TPDOs carry the physical counts without scaling and offset (SDO shows the "
@@ -217,6 +219,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
     "autostart_ignored": "nmt_autostart_object",
     "lss_obeyed_in_any_state": "lss_only_in_states",
     "lss_auto_store_ignored": "lss_config_auto_stored",
+    "limit_switch_flags_ignored": "limit_switch_flags",
     "cam_low_order_ignored": "cam_low_below_high",
 }
 

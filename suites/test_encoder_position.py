@@ -388,3 +388,47 @@ def test_speed_value_in_measuring_units_per_second(encoder, evidence):
     assert abs(observed - expected) <= tolerance, (
         f"shaft at {speed} rev/s: 6030h.01 = {observed}, expected {expected} +- {tolerance} (units per second"
         f"{' times the speed factor' if access.description.speed_scaling_object else ''})")
+
+
+@pytest.mark.destructive
+def test_limit_switch_flags_in_the_process_value(encoder, dut, settings_journal, back_to_preoperational, evidence):
+    """Documented quirk: enabled limit switches set their flag bit in the process value a TPDO carries while the
+    position is beyond the limit (Min: below, Max: above), and clear it when the limit moves past the position."""
+    params = documented_quirk(dut, fx.LimitSwitchFlags, evidence, "CiA 406 position value is a plain count")
+    mapping = dut.profile.params_of(fx.FixedTpdoMapping)
+    sync = mapping.sync_tpdos[0] if mapping is not None and mapping.sync_tpdos else None
+    if sync is None or "tpdo" not in params.applies_to:
+        pytest.skip("not applicable: no fixed SYNC TPDO carries the process value")
+    evidence.rests_on("manual", "the manual's limit switches (quirk limit_switch_flags)")
+    access = encoder.access
+    cob_id = dut.read_uint(sync.tpdo, 1) & 0x7FF
+    every = max(1, dut.read_uint(sync.tpdo, sync.counter_subindex))
+    settings = access.settings(functions=False)
+    if access.description.preset:  # room on both sides of the position for the limits
+        position = encoder.preset(settings.shown(settings.span // 2))
+    position = access.position()
+    if not 100 <= position < settings.span - 100:
+        pytest.skip(f"not applicable: the position {position} leaves no room for a limit on both sides (no preset)")
+    enable = dut.read_uint(params.enable_object, 0)
+    switches = [(s, below) for s, below in ((params.min, True), (params.max, False)) if s is not None]
+    for switch, _ in switches:
+        encoder.write(params.enable_object, 0, enable | 1 << switch.enable_bit)
+        enable |= 1 << switch.enable_bit
+    dut.nmt("start")
+    problems = []
+    for switch, below in switches:
+        for beyond in (True, False):  # position beyond the limit, then the limit moved past the position
+            limit = position + 100 if below == beyond else position - 100
+            encoder.write(switch.object, 0, limit)
+            mark = dut.frames.mark()
+            for _ in range(every):
+                dut.send_sync()
+            frame = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id, 1.0, mark)
+            if frame is None:
+                problems.append(f"no TPDO {cob_id:03X}h after {every} SYNC(s)")
+                break
+            flag = bool(int.from_bytes(bytes(frame.data[:4]), "little") >> switch.flag_bit & 1)
+            where = f"position {position}, limit {switch.object:04X}h = {limit}"
+            if flag != beyond:
+                problems.append(f"{where}: bit {switch.flag_bit} = {int(flag)}, expected {int(beyond)}")
+    assert not problems, "limit-switch flags in the process value:\n" + "\n".join(problems)

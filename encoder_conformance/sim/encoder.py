@@ -151,7 +151,7 @@ class EncoderFunction:
             position = self.channel_position(channel)
             flags = self.description.flags
             if flags is not None and index == flags.value_object and channel in flags.channels:
-                return flags.apply(position, self.read_int)
+                return self.process_value(position)
             return position
         if index == od.SPEED and sub >= 1 and self.description.speed:
             return self.speed()
@@ -175,6 +175,11 @@ class EncoderFunction:
         where the profile says so, quirk ``module_max_is_range``)."""
         low, high = self.settings().limits()
         return low, high + 1 if self.description.module_max_is_range else high
+
+    def process_value(self, position: int) -> int:
+        """The position with the limit-switch flag bits (quirk ``limit_switch_flags``)."""
+        assert self.description.flags is not None
+        return self.description.flags.apply(position, self.read_int)
 
     def operating_status(self) -> int | None:
         """6500h: the 6000h settings in use."""
@@ -282,6 +287,13 @@ class ModuleIdentificationStale(EncoderFunction):
     def module_limits(self) -> tuple[int, int]:
         low, high = (self.store.default_of((od.MODULE_IDENTIFICATION, sub), 0) for sub in (2, 3))
         return (low if isinstance(low, int) else 0), (high if isinstance(high, int) else 0)
+
+
+@breaks(EncoderFunction, "limit_switch_flags_ignored")
+class LimitSwitchFlagsIgnored(EncoderFunction):
+    def process_value(self, position: int) -> int:
+        assert self.description.flags is not None
+        return position & self.description.flags.position_mask
 
 
 @breaks(EncoderFunction, "operating_status_stale")
