@@ -158,6 +158,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
                                            "measuring range changed",
             "limit_switch_flags_ignored": "the process value carries no limit-switch flag bits (quirk "
                                           "limit_switch_flags ignored)",
+            "zeroing_ignored": "writing 1 to the zeroing object (quirk zeroing_object) leaves the position",
+            "zeroing_rearm_ignored": "the zeroing object zeroes on every 1, also without the 0 that re-arms it",
             "operating_status_stale": "6500h keeps showing the factory 6000h value after 6000h changed",
             "speed_wrong_unit": "6030h is in revolutions per minute instead of measuring units per second",
             "tpdo_position_unscaled": "TPDOs carry the physical counts without scaling and offset (SDO shows the "
@@ -221,6 +223,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
     "lss_auto_store_ignored": "lss_config_auto_stored",
     "limit_switch_flags_ignored": "limit_switch_flags",
     "cam_low_order_ignored": "cam_low_below_high",
+    "zeroing_ignored": "zeroing_object",
+    "zeroing_rearm_ignored": "zeroing_object",
 }
 
 

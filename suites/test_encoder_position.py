@@ -432,3 +432,36 @@ def test_limit_switch_flags_in_the_process_value(encoder, dut, settings_journal,
             if flag != beyond:
                 problems.append(f"{where}: bit {switch.flag_bit} = {int(flag)}, expected {int(beyond)}")
     assert not problems, "limit-switch flags in the process value:\n" + "\n".join(problems)
+
+
+@pytest.mark.destructive
+def test_zeroing_object_zeroes_once_per_rearm(encoder, evidence):
+    """Documented quirk: writing the trigger value to the zeroing object sets the position to 0 (with the preset
+    at 0); writing it again does nothing until the re-arm value was written."""
+    params = documented_quirk(encoder.access.dut, fx.ZeroingObject, evidence, "no zeroing object besides 6003h")
+    evidence.rests_on("manual", "the manual's zeroing object (quirk zeroing_object)")
+    shaft = encoder.rotation()
+    access = encoder.access
+    encoder.preset(0)  # the manual's condition: preset value 0
+    index, sub = params.index, params.subindex
+    settings = access.settings(functions=False)
+    per_rev = units_per_rev(settings.geometry, settings.scaling)
+    steps = []
+
+    def turn_and_write(value: int) -> int:
+        shaft.turn_by(STEP_UNITS / per_rev * (-1 if settings.scaling.ccw else 1))
+        before = access.position()
+        encoder.write(index, sub, value)
+        after = access.position_when(0, timeout=params.duration_ms / 1000)
+        steps.append(f"{before} -> write {value} -> {after}")
+        return after
+
+    encoder.write(index, sub, params.rearm_value)
+    zeroed = turn_and_write(params.trigger_value)
+    assert zeroed == 0, f"{index:04X}h = {params.trigger_value} must zero the position: {'; '.join(steps)}"
+    again = turn_and_write(params.trigger_value)
+    assert again != 0, (f"{index:04X}h = {params.trigger_value} a second time without {params.rearm_value} first "
+                        f"must not zero again: {'; '.join(steps)}")
+    encoder.write(index, sub, params.rearm_value)
+    rearmed = turn_and_write(params.trigger_value)
+    assert rearmed == 0, f"after {params.rearm_value}, {params.trigger_value} must zero again: {'; '.join(steps)}"

@@ -8,7 +8,7 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 
 Adding an effect: write its model here (the docstring says what the device does, each field
 what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 34 effects, one small model
+This module is over 400 lines because it is the catalogue of the 35 effects, one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -495,6 +495,16 @@ class ModuleMaxIsRange(EffectParams):
     likely: Documentation = _doc("the value CiA 406's meaning would give")
 
 
+class ZeroingObject(ObjectAt):
+    """Writing ``trigger_value`` to a manufacturer object sets the position to 0 (like a preset of 0); a
+    further zeroing works only after ``rearm_value`` was written (edge-triggered)."""
+
+    effect = "zeroing_object"
+    trigger_value: int = Field(default=1, description="the value that zeroes the position")
+    rearm_value: int = Field(default=0, description="the value that arms the next zeroing")
+    duration_ms: float = Field(default=0, ge=0, description="execution time after the write (position frozen)")
+
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -505,6 +515,6 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         LimitSwitchFlags, FixedTpdoMapping, GuardingHeartbeatExclusive, RestoreExcludes, NmtAutostartObject,
         ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
         UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
-        OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange,
+        OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange, ZeroingObject,
     )
 }

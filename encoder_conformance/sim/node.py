@@ -49,6 +49,7 @@ from .store_commands import EncoderMemory, StoreCommands
 from .tpdo import TpdoEngine
 from .values import ObjectValues
 from .write_gates import preop_only, scaling_bit_needed
+from .zeroing import Zeroing
 
 Send = Callable[[int, bytes, bool], None]
 P = TypeVar("P", bound=fx.EffectParams)
@@ -136,6 +137,8 @@ class SimulatedNode:
             # the encoder function (position, speed, preset) only where the profile is an encoder: a drive or an
             # I/O module keeps whatever its 6004h/6030h/6500h hold
             _EncoderBehaviour(self.encoder, self.nvm) if self.profile.capabilities.encoder else None,
+            self._built(fx.ZeroingObject, lambda p: assemble(Zeroing, faults)(
+                p, lambda: self.encoder.apply_preset(0), self._preset_is_zero)),
             self._built(fx.BitsForcedAtInit, lambda p: assemble(ForcedBits, faults)(p, self.store)),
             self.heartbeat,
             self._built(fx.NmtAutostartObject, lambda p: assemble(Autostart, faults)(p, self.read_int,
@@ -153,6 +156,9 @@ class SimulatedNode:
             params, self.encoder.read_int, lambda key, value: as_signed(self.store.entries[key].type, value),
             cam.cams_per_channel if cam else 0,
         )
+
+    def _preset_is_zero(self) -> bool:
+        return not self.encoder.read_int(self.encoder.objects.preset)
 
     def _lss(self) -> LssBehaviour | None:
         """The LSS slave, where the profile declares LSS services (capabilities.lss)."""
