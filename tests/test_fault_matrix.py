@@ -42,7 +42,7 @@ def _functions(result, outcome: str) -> set[str]:
 def main_matrix(tmp_path_factory):
     """Every fault that can show on the main profile (faults of quirks it lacks go to the complements)."""
     faults = faults_for(_effects(MAIN_PROFILE))
-    return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=3, targeted=True)
+    return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=2, targeted=True)
 
 
 @pytest.fixture(scope="module")
@@ -64,7 +64,7 @@ def complement_matrices(main_matrix, tmp_path_factory):
         folder = tmp_path_factory.mktemp("matrix-extra")
         applicable = set(faults_for(_effects(profile)))
         matrix = run_until_caught(profile, [f for f in order if f in applicable], folder,
-                                  " or ".join(sorted(uncovered)), workers=3, must_try=unseen & applicable,
+                                  " or ".join(sorted(uncovered)), workers=2, must_try=unseen & applicable,
                                   targeted=True)
         matrices.append(matrix)
         uncovered -= _functions(matrix[0], "passed")
