@@ -69,6 +69,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "sync_tpdo_every_sync": "a TPDO with transmission type n (1..240) is sent on every SYNC, not every n-th",
             "type_255_timer_0_sends": "type 255 with event timer 0 sends on change (quirk says it disables the TPDO)",
             "event_timer_slow_20pct": "TPDO event timers run 20 % slower than 18xxh sub 5 says",
+            "event_timer_outside_operational": "TPDO event timers keep firing after the device left operational "
+                                               "(SYNC-driven TPDOs stop)",
             "send_repeat_counter_ignored": (
                 "quirk pdo_send_repeat_counters ignored: the change-driven TPDO goes out once per change whatever "
                 "its counter (e.g. SIKO 2800h), the SYNC-driven one on every n-th SYNC without the limit (2801h)"

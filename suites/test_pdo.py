@@ -84,3 +84,37 @@ def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_
         f"{comm:04X}h.02 = 255 and sub 5 = 0 must switch the TPDO off (documented); observed {len(pdos)} on "
         f"{cob_id:03X}h during 10 SYNCs{' and a turning shaft' if control else ''}:\n{format_frames(pdos[:5])}"
     )
+
+
+@pytest.mark.parametrize("state", ["pre-operational", "stop"], ids=["pre-operational", "stopped"])
+def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, back_to_preoperational, evidence,
+                                                        state):
+    """A TPDO whose event timer is running when the device leaves operational sends nothing more in pre-operational
+    or stopped (CiA 301 §7.3.2.2: PDOs only in operational), and sends again after NMT start."""
+    evidence.rests_on("cia", "CiA 301 §7.3.2.2 (PDO communication only in operational)")
+    comm, kind = _configurable_tpdo(dut, 5, evidence, settings_journal, [255, 254])
+    cob_id = dut.read_uint(comm, 1) & 0x7FF
+    if dut.profile.entry(comm, 2).writable:
+        settings_journal.write(comm, 2, bytes([kind]))
+    period_s = 0.02
+    settings_journal.write(comm, 5, round(period_s * 1000).to_bytes(2, "little"))
+
+    def is_this_tpdo(msg) -> bool:
+        return msg.is_rx and msg.arbitration_id == cob_id
+
+    window = 5 * period_s + dut.pdo_silence_s
+    mark = dut.nmt("start")
+    running = dut.frames.wait_count(is_this_tpdo, 2, window, mark)
+    assert len(running) == 2, f"{comm:04X}h with event timer {period_s * 1000:.0f} ms: {len(running)} TPDO(s) in " \
+                              f"operational within {window * 1000:.0f} ms"
+    dut.nmt(state)
+    dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)  # the state change
+    after = dut.frames.mark()
+    late = dut.frames.quiet_period(is_this_tpdo, window, after)
+    evidence.measure(f"TPDO {cob_id:03X}h frames in {state} (event timer running at the transition)", len(late),
+                     "frames", 0, 0)
+    assert not late, f"{len(late)} TPDO(s) on {cob_id:03X}h in {state}, {window * 1000:.0f} ms after the " \
+                     f"transition (event timer {period_s * 1000:.0f} ms):\n{format_frames(late[:5])}"
+    again = dut.nmt("start")
+    resumed = dut.frames.wait_for(is_this_tpdo, window, again)
+    assert resumed is not None, f"no TPDO on {cob_id:03X}h within {window * 1000:.0f} ms after NMT start again"

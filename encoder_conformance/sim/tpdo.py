@@ -259,3 +259,17 @@ class SlowEventTimer(TpdoEngine):
 class SendsOutsideOperational(TpdoEngine):
     def sends_in(self, state: NmtState) -> bool:
         return True
+
+
+@breaks(TpdoEngine, "event_timer_outside_operational")
+class EventTimerOutsideOperational(TpdoEngine):
+    left_operational = False
+
+    def on_state(self, state: NmtState) -> None:
+        self.left_operational = not self.sends_in(state)
+        if not self.left_operational:
+            self.start()  # leaving operational cancels nothing: the event timers keep firing
+
+    def on_sync(self) -> None:
+        if not self.left_operational:  # SYNC-driven TPDOs do stop
+            super().on_sync()
