@@ -36,14 +36,12 @@ def _signed_distance(before: int, after: int, span: int) -> int:
 
 
 def _allow_preset(encoder) -> None:
-    """Where the preset is writable only with the scaling bit set (quirk writes_need_scaling_bit), set it."""
-    found = encoder.access.dut.profile.quirk_objects(fx.WritesNeedScalingBit)
-    objects = encoder.access.objects
-    if found is None or objects.preset not in found[1] or objects.scaling_bit is None:
-        return
-    operating = encoder.access.read_int(objects.operating) or 0
-    if not operating >> objects.scaling_bit & 1:
-        encoder.write(objects.operating, 0, operating | 1 << objects.scaling_bit)
+    """Where the preset is writable only with the scaling bit set (quirk writes_need_scaling_bit), set it for the
+    whole test (the access layer would otherwise switch it on and off around every preset)."""
+    bit = encoder.access.scaling_bit_needed_for_preset()
+    if bit is not None:
+        operating = encoder.access.objects.operating
+        encoder.write(operating, 0, (encoder.access.read_int(operating) or 0) | bit)
 
 
 def _set_code_sequence(encoder, ccw: bool) -> None:

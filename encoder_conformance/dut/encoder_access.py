@@ -100,7 +100,7 @@ class EncoderAccess:
     def preset(self, value: int) -> None:
         """Write the preset object (6003h, or the manufacturer's). Where the device takes a preset only with
         the scaling bit set (quirk ``writes_need_scaling_bit``), the bit is set for the write and put back."""
-        bit = self._scaling_bit_needed_for_preset()
+        bit = self.scaling_bit_needed_for_preset()
         if bit is None:
             self.write_int(self.objects.preset, 0, value)
             return
@@ -111,7 +111,7 @@ class EncoderAccess:
         finally:
             self.write_int(self.objects.operating, 0, operating)
 
-    def _scaling_bit_needed_for_preset(self) -> int | None:
+    def scaling_bit_needed_for_preset(self) -> int | None:
         """The scaling bit mask where it is clear now and the preset needs it, else None."""
         found = self.dut.profile.quirk_objects(fx.WritesNeedScalingBit)
         if found is None or self.objects.preset not in found[1] or self.objects.scaling_bit is None:

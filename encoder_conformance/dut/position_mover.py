@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Protocol
 
 from ..encoder_model.position import units_per_rev, unsigned_in_span
-from .actuator import ShaftDrive
+from .actuator import ReturningShaft, ShaftDrive
 from .encoder_access import EncoderAccess
 
 #: corrections after the first turn (scaling may round a distance to a neighbouring unit)
@@ -41,7 +41,7 @@ class PresetMover:
 
     def move_to(self, target: int) -> int:
         self.access.preset(target)
-        return self.access.position_when(target)
+        return self.access.position()
 
     def move_by(self, units: int) -> int:
         settings = self.access.settings(functions=False)
@@ -50,18 +50,16 @@ class PresetMover:
 
 
 class ShaftMover:
-    """Moves the position by turning the shaft; ``turned`` revolutions in total since it was made."""
+    """Moves the position by turning the shaft; remembers how far, to turn it back (``go_home``)."""
 
     rotates = True
 
     def __init__(self, access: EncoderAccess, drive: ShaftDrive) -> None:
         self.access = access
-        self.drive = drive
-        self.turned = 0.0
+        self.drive = ReturningShaft(drive)
 
     def turn_by(self, revolutions: float) -> None:
         self.drive.turn_by(revolutions)
-        self.turned += revolutions
 
     def move_by(self, units: int) -> int:
         settings = self.access.settings(functions=False)
@@ -83,7 +81,5 @@ class ShaftMover:
         return position
 
     def go_home(self) -> None:
-        """Turn back what this mover turned (the shaft where it was found)."""
-        if self.turned:
-            self.drive.turn_by(-self.turned)
-            self.turned = 0.0
+        """Turn back what this mover turned (the shaft where it was found), speed 0."""
+        self.drive.go_back()

@@ -11,13 +11,12 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import signal
 import sys
 import threading
 
 from can_remote.server import RemoteServer
 
-from .link import parse_address
+from .link import parse_address, wait_for_sigterm
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -29,13 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     server = RemoteServer(host, port, interface="virtual", channel=f"independent-{os.getpid()}")
     threading.Thread(target=lambda: server.serve_forever(poll_interval=0.05), daemon=True).start()
     print(f"READY ws://{host}:{server.server_port}/", flush=True)
-    stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    try:
-        while not stop.wait(0.5):
-            pass
-    except KeyboardInterrupt:
-        pass
+    wait_for_sigterm()
     sys.stdout.flush()
     os._exit(0)  # the clients' threads would hold the interpreter's shutdown
 

@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import signal
 import subprocess
 import sys
 import tempfile
@@ -52,7 +51,7 @@ from .encoder_function import (
     shown_position,
     speed_value,
 )
-from .link import AUTHKEY, COMMANDS, format_address, parse_address
+from .link import AUTHKEY, COMMANDS, format_address, parse_address, wait_for_sigterm
 
 Key = tuple[int, int]
 
@@ -429,13 +428,7 @@ def main(argv: list[str] | None = None) -> int:
     device.boot()
     info = {"shaft": format_address(shaft.address), "node_id": args.node_id, "breaks": args.breaks}
     print("READY " + json.dumps(info), flush=True)
-    stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    try:
-        while not stop.wait(0.5):
-            pass
-    except KeyboardInterrupt:
-        pass
+    wait_for_sigterm()
     network.disconnect()
     sys.stdout.flush()
     os._exit(0)  # the websocket threads would hold the interpreter's shutdown

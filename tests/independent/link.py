@@ -7,6 +7,9 @@ looking at the shaft), ``set_speed`` (revolutions per second), ``angle`` (the sh
 
 from __future__ import annotations
 
+import signal
+import threading
+
 AUTHKEY = b"independent-encoder-shaft"
 #: environment variable with the link address HOST:PORT (the plug-in's fallback when the option gives none)
 ADDRESS_ENV = "INDEPENDENT_ENCODER_SHAFT"
@@ -23,3 +26,14 @@ def parse_address(text: str) -> tuple[str, int]:
 
 def format_address(address: tuple[str, int]) -> str:
     return f"{address[0]}:{address[1]}"
+
+
+def wait_for_sigterm() -> None:
+    """Serve until SIGTERM or Ctrl-C (the test harness stops the processes with SIGTERM)."""
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    try:
+        while not stop.wait(0.5):
+            pass
+    except KeyboardInterrupt:
+        pass
