@@ -17,6 +17,12 @@ from .lss_cli import add_lss_parser
 from .paths import DEFAULT_PROFILE, SUITES_DIR
 
 
+def _pytest_arguments(extra: list[str]) -> list[str]:
+    """What goes to pytest: the arguments ``run`` does not know, with the ``--`` that may separate them dropped
+    (to pytest a ``--`` would turn every option after it into a file name)."""
+    return [arg for arg in extra if arg != "--"]
+
+
 def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
     import pytest
 
@@ -33,7 +39,7 @@ def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
         argv.append("--strict-inferred")  # pytest's own --strict is about markers and config
     for fault in args.sim_fault:
         argv += ["--sim-fault", fault]
-    status = int(pytest.main(argv + extra))
+    status = int(pytest.main(argv + _pytest_arguments(extra)))
     # pytest's own 'interrupted' (2) comes only from a Ctrl-C before the run's signal handling was set up
     return RunExit.INTERRUPTED if status == pytest.ExitCode.INTERRUPTED else status
 
@@ -222,7 +228,9 @@ def build_parser() -> argparse.ArgumentParser:
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    run = sub.add_parser("run", help="run the conformance suites (extra arguments go to pytest)")
+    run = sub.add_parser("run", help="run the conformance suites (extra arguments go to pytest)",
+                         epilog="Arguments 'run' does not know go to pytest, with or without a '--' before them: "
+                                "e.g. 'run --profile waycon-sx -k test_pdo -x' or 'run -- --durations=10'.")
     run.add_argument("--profile", default=DEFAULT_PROFILE,
                      help=f"device profile id or file (default {DEFAULT_PROFILE})")
     _bus_arguments(run)
