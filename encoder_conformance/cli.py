@@ -188,6 +188,17 @@ def _cmd_fault_matrix(args: argparse.Namespace, extra: list[str]) -> int:
     return 1 if broken or uncaught else 0
 
 
+def _cmd_repeat(args: argparse.Namespace, extra: list[str]) -> int:
+    import tempfile
+
+    from .repeat_runs import repeat_runs
+
+    with tempfile.TemporaryDirectory(prefix="repeat-") as workdir:
+        result = repeat_runs(args.profile, args.runs, Path(workdir), args.select, args.parallel, args.busy)
+    print(result.format())
+    return 1 if result.failing() else 0
+
+
 def _cmd_faults(args: argparse.Namespace, extra: list[str]) -> int:
     from .fault_catalogue import FAULTS, VARIANTS
 
@@ -317,6 +328,15 @@ def build_parser() -> argparse.ArgumentParser:
     matrix.add_argument("--targeted", action="store_true",
                         help="run each fault only against the suite modules it is made for (faster)")
     matrix.set_defaults(func=_cmd_fault_matrix)
+
+    repeat = sub.add_parser("repeat", help="repeat a run against the twin, several at a time: which verdicts are "
+                                           "stable (timing limits on a loaded PC)")
+    repeat.add_argument("--profile", default=DEFAULT_PROFILE)
+    repeat.add_argument("--runs", type=int, default=20, help="runs in all (default 20)")
+    repeat.add_argument("--parallel", type=int, default=2, help="runs at a time (default 2)")
+    repeat.add_argument("--busy", action="store_true", help="beside a process that keeps one core busy")
+    repeat.add_argument("-k", dest="select", help="pytest -k expression selecting the tests")
+    repeat.set_defaults(func=_cmd_repeat)
 
     faults = sub.add_parser("faults", help="list the simulator's named faults")
     faults.set_defaults(func=_cmd_faults)

@@ -21,15 +21,14 @@ import sys
 import threading
 import time
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 from bench_twin import CUSTOMER_VALUES, REPO, ExternalTwin, start_twin, wait_for_line
 
 from encoder_conformance.exit_codes import RunExit
+from encoder_conformance.host_load import busy_process
 
 #: seconds after the start of the run at which Ctrl-C arrives (the suites start about 1.5 s in)
 INTERRUPT_AT_S = [1.0, 2.0, 3.0, 4.5, 6.0, 7.5, 9.0]  # 10.5 s and 12 s came after the end of faster runs
@@ -132,16 +131,6 @@ def _interrupted_run(folder: Path, at: float | str) -> dict:
     finally:
         twin.close()
 
-
-@contextmanager
-def busy_process() -> Iterator[None]:
-    """A process that keeps one core busy: the tester's PC under load."""
-    process = subprocess.Popen([sys.executable, "-c", "while True: pass"])
-    try:
-        yield
-    finally:
-        process.kill()
-        process.wait()
 
 
 @pytest.fixture(scope="module")

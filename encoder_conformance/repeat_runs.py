@@ -1,0 +1,96 @@
+"""The same run repeated, several at a time, optionally beside a busy process: which verdicts are stable.
+
+A timing verdict that fails once in twenty runs of a conformant twin is the tester's problem, not
+the device's. This runs the suites (or a ``-k`` selection) ``runs`` times against the twin,
+``parallel`` at a time, each a separate pytest process parsed from its JUnit XML (as the fault matrix
+does), and lists every test that did not pass every time. Measurements recorded as JUnit properties
+(``measurement:<name>``) are summarised over the runs (worst value seen), so the margin a timing
+limit leaves on this machine can be read off.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from collections import Counter, defaultdict
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .fault_matrix import RunResult, run_suite
+from .host_load import busy_process
+
+MEASUREMENT_PREFIX = "measurement:"
+
+
+@dataclass
+class RepeatedRuns:
+    """The outcomes of every run, and the numeric JUnit measurements per (test, name) over all runs."""
+
+    runs: list[RunResult]
+    measurements: dict[tuple[str, str], list[float]] = field(default_factory=dict)
+
+    def outcomes(self) -> dict[str, Counter[str]]:
+        """Test -> how often it passed, failed, skipped or errored."""
+        counts: dict[str, Counter[str]] = defaultdict(Counter)
+        for run in self.runs:
+            for test, outcome in run.outcomes.items():
+                counts[test][outcome] += 1
+        return counts
+
+    def unstable(self) -> dict[str, Counter[str]]:
+        """Tests that failed at least once or did not have the same outcome every time (an inconclusive skip)."""
+        return {t: c for t, c in self.outcomes().items() if c["failed"] or c["error"] or len(c) > 1}
+
+    def failing(self) -> dict[str, Counter[str]]:
+        """Tests that failed or errored at least once."""
+        return {t: c for t, c in self.outcomes().items() if c["failed"] or c["error"]}
+
+    def format(self) -> str:
+        lines = [f"{len(self.runs)} runs: return codes {dict(Counter(r.returncode for r in self.runs))}"]
+        unstable = self.unstable()
+        lines.append(f"tests that failed at least once: {len(self.failing())}; not the same outcome every time: "
+                     f"{len(unstable)}")
+        lines += [f"  {test}: {dict(counts)}" for test, counts in sorted(unstable.items())]
+        if self.measurements:
+            lines.append("measurements over all runs (min / max):")
+            for (test, name), values in sorted(self.measurements.items()):
+                lines.append(f"  {test} {name}: {min(values):g} / {max(values):g} ({len(values)} values)")
+        return "\n".join(lines)
+
+
+def _measurements(junit: Path) -> dict[tuple[str, str], float]:
+    """Numeric ``measurement:`` properties of every test case in one JUnit file."""
+    found: dict[tuple[str, str], float] = {}
+    if not junit.exists():
+        return found
+    for case in ET.parse(junit).getroot().iter("testcase"):
+        test = f"{case.get('classname', '').split('.')[-1]}::{case.get('name')}"
+        for prop in case.iter("property"):
+            name, value = prop.get("name", ""), prop.get("value", "")
+            if name.startswith(MEASUREMENT_PREFIX):
+                try:
+                    found[(test, name.removeprefix(MEASUREMENT_PREFIX))] = float(value.split()[0])
+                except (ValueError, IndexError):
+                    continue
+    return found
+
+
+def repeat_runs(profile: str, runs: int, workdir: Path, select: str | None = None, parallel: int = 2,
+                busy: bool = False) -> RepeatedRuns:
+    """``runs`` runs of the suites against the ``profile`` twin, ``parallel`` at a time (``busy``: beside a
+    process keeping one core busy)."""
+
+    def one(number: int) -> tuple[RunResult, dict[tuple[str, str], float]]:
+        folder = workdir / f"run-{number:02d}"
+        result = run_suite(profile, None, folder, select)
+        return result, _measurements(folder / "no-fault" / "junit.xml")
+
+    collected = RepeatedRuns([])
+    values: dict[tuple[str, str], list[float]] = defaultdict(list)
+    with busy_process(busy), ThreadPoolExecutor(max_workers=parallel) as pool:
+        for result, found in pool.map(one, range(runs)):
+            collected.runs.append(result)
+            for key, value in found.items():
+                values[key].append(value)
+    collected.measurements = dict(values)
+    return collected
