@@ -262,6 +262,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #: documented check meant to catch it does not.
 #: - cam_edge_off_by_one: that the high limit belongs to the window is inferred (WDGA example CAM1 0..2048,
 #:   CAM2 2049..4095); the fault shows only at the high limit itself.
+#: - change_of_state_ignored: that a 254/255 TPDO with timer 0 is sent on a change of its mapped position is
+#:   our reading of "event-driven" (CiA 301 §7.5.2.35 leaves the event to the manufacturer or profile).
 #: Judged without it (the rule that catches them is documented):
 #: - work_area_flags_swapped: 02h above / 04h below is CiA 406 6400h and WDGA T 6.9; only the edges are
 #:   inferred, and the swap shows at every position outside the area, not only at an edge;

@@ -265,6 +265,12 @@ def _rtr_dlc(dut, comm: int) -> int:
     return polled.rtr_dlc if polled is not None and isinstance(polled.rtr_dlc, int) else 0
 
 
+def _sent_by_itself(dut, comm: int) -> bool:
+    """A TPDO a fixed-layout quirk sends cyclically (e.g. POSITAL 1800h every 2200h ms)."""
+    found = dut.profile.params_of(fx.FixedTpdoMapping)
+    return found is not None and comm in {spec.tpdo for spec in found.cyclic_tpdos}
+
+
 def _rtr_tpdo(dut, evidence, settings_journal) -> tuple[int, str]:
     """A TPDO that answers RTR per profile: a polled fixed-layout TPDO (manual), else one that accepts type 253
     (CiA 301), set to 253; skips where the profile declares none."""
@@ -293,13 +299,15 @@ def test_rtr_answered(dut, settings_journal, back_to_preoperational, evidence):
     if how == "type 253":
         unasked = _syncs(dut, 2, cob_id)
         assert not unasked, f"{comm:04X}h type 253 sent on SYNC:\n{format_frames(unasked[:5])}"
-    # a TPDO that is also sent by itself (POSITAL 1800h: cyclic): ask right after one of its own frames, so that
-    # the answer window ends before the next one is due
-    if dut.frames.quiet_period(_is_tpdo(cob_id), dut.pdo_silence_s):
-        dut.frames.wait_for(_is_tpdo(cob_id), 2.0)
-        evidence.note(f"{cob_id:03X}h is also sent by itself: the remote frame followed one of its own frames")
-    mark = dut.send(cob_id, bytes(dlc), remote=True)
+    # a TPDO that is also sent by itself (POSITAL 1800h: cyclic): ask right after one of its own frames, and wait
+    # for the answer less than half its period, so that its next own frame cannot pass for the answer
     window = dut.pdo_silence_s
+    own = dut.frames.wait_count(_is_tpdo(cob_id), 2, 2.0) if _sent_by_itself(dut, comm) else []
+    if len(own) == 2:
+        window = min(window, (own[1].timestamp - own[0].timestamp) / 2)
+        evidence.note(f"{cob_id:03X}h is also sent by itself (every {(own[1].timestamp - own[0].timestamp) * 1000:.0f}"
+                      " ms): the remote frame followed one of its own frames")
+    mark = dut.send(cob_id, bytes(dlc), remote=True)
     answer = dut.frames.wait_for(_is_tpdo(cob_id), window, mark)
     assert answer is not None, (f"no TPDO on {cob_id:03X}h within {window * 1000:.0f} ms of a remote frame "
                                 f"(DLC {dlc}) on it ({how})\n{format_frames(dut.frames.since(mark)[:8])}")
