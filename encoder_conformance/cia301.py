@@ -26,6 +26,17 @@ SYNC_COB_ID = 0x080  # the pre-defined connection set's SYNC (CiA 301 §7.3.5, 1
 SDO_REQUEST_BASE = 0x600  # + node-id: client -> server (CiA 301 §7.3.5)
 COB_ID_INVALID = 0x80000000  # bit 31 of a PDO/SYNC/EMCY COB-ID: the object does not exist / is not valid
 COB_ID_NO_RTR = 0x40000000  # bit 30 of a TPDO COB-ID: no RTR allowed on this PDO (CiA 301 §7.5.2.35)
+COB_ID_FRAME_29_BIT = 0x20000000  # bit 29 of a PDO COB-ID: 29-bit (extended) CAN-ID
+#: bits 0-29 of a PDO COB-ID: "shall not be changed while the PDO exists (bit 31 = 0)" (CiA 301 §7.5.2.35)
+COB_ID_FIXED_WHILE_VALID = 0x3FFFFFFF
+#: CAN-IDs no configurable communication object may use (CiA 301 §7.3.5, restricted CAN-IDs table)
+RESTRICTED_CAN_IDS: tuple[range, ...] = (
+    range(0x000, 0x080), range(0x101, 0x181), range(0x581, 0x600), range(0x601, 0x680),
+    range(0x6E0, 0x700), range(0x701, 0x780), range(0x780, 0x800),
+)
+SYNC_COUNTER_OVERFLOW = 0x1019  # 0: SYNC without counter; 2..240: the counter's overflow (CiA 301 §7.5.2.18)
+COMMUNICATION_CYCLE_PERIOD = 0x1006  # 1019h is writable only while it is 0 (CiA 301 §7.5.2.18)
+SYNC_COUNTER_OVERFLOW_VALID = frozenset({0, *range(2, 241)})  # 1 and 241..255 are reserved
 TPDO_COMMUNICATION = range(0x1800, 0x1A00)
 TPDO_MAPPING = range(0x1A00, 0x1C00)
 RPDO_COMMUNICATION = range(0x1400, 0x1600)
@@ -67,6 +78,11 @@ COMMAND_FOR_STATE = {
     NmtState.STOPPED: "stop",
     NmtState.PRE_OPERATIONAL: "pre-operational",
 }
+
+
+def is_restricted_can_id(can_id: int) -> bool:
+    """A CAN-ID of the restricted table (CiA 301 §7.3.5): refused for PDOs, SYNC, EMCY, TIME and SDO."""
+    return any(can_id in ids for ids in RESTRICTED_CAN_IDS)
 
 
 def cob_id_valid(cob_id: int) -> int:

@@ -67,6 +67,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
         ("test_pdo", "test_pdo_repeat"),
         {
             "sync_tpdo_every_sync": "a TPDO with transmission type n (1..240) is sent on every SYNC, not every n-th",
+            "sync_tpdo_off_by_one": "a TPDO with transmission type n (1..240) is sent on every (n+1)-th SYNC",
             "type_255_timer_0_sends": "type 255 with event timer 0 sends on change (quirk says it disables the TPDO)",
             "event_timer_slow_20pct": "TPDO event timers run 20 % slower than 18xxh sub 5 says",
             "event_timer_outside_operational": "TPDO event timers keep firing after the device left operational "
@@ -78,6 +79,30 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "forced_bits_not_applied": (
                 "quirk bits_forced_at_init ignored: the value (e.g. SIKO 1801h sub 1) keeps its stored bits at init"
             ),
+        },
+    ),
+    (  # PDO communication parameters: COB-ID bits, transmission types, SYNC counter, gating
+        ("test_pdo_comm",),
+        {
+            "cob_id_valid_bit_ignored": "a TPDO whose COB-ID has bit 31 set (not valid) is sent all the same",
+            "cob_id_change_while_valid_accepted": "a TPDO COB-ID write that changes bits 0-29 while the PDO is valid "
+                                                  "is accepted",
+            "restricted_cob_id_accepted": "a valid PDO COB-ID with a restricted CAN-ID (CiA 301 §7.3.5) is accepted",
+            "rtr_ignored": "a remote frame on a TPDO that answers RTR (type 252/253, polled layout) is not answered",
+            "rtr_bit_30_ignored": "every valid TPDO answers a remote frame on its COB-ID, also with bit 30 set (no "
+                                  "RTR) or a type that is not RTR-driven",
+            "type_0_sends_every_sync": "a TPDO of transmission type 0 is sent on every SYNC, changed or not",
+            "change_of_state_ignored": "an event-driven TPDO (254/255) is not sent when its mapped value changes "
+                                       "(only its event timer sends it)",
+            "sync_start_value_ignored": "18xxh sub 6 (SYNC start value) is ignored: SYNC TPDOs count from the "
+                                        "first SYNC whatever its counter",
+            "sync_counter_overflow_unchecked": "1019h accepts the reserved values 1 and 241..255",
+            "tpdo_on_sync_outside_operational": "after leaving operational the SYNC-driven TPDOs (and RTR answers) "
+                                                "go on; event timers and the change check stop",
+            "change_tpdo_outside_operational": "after leaving operational event-driven TPDOs are still sent on a "
+                                               "change of their mapped value; SYNC TPDOs and timers stop",
+            "preop_only_writes_accepted": "quirk writes_preop_only ignored: the listed objects are writable in "
+                                          "operational too",
         },
     ),
     (  # heartbeat
@@ -226,6 +251,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
     "limit_switch_flags_ignored": "limit_switch_flags",
     "cam_low_order_ignored": "cam_low_below_high",
     "zeroing_ignored": "zeroing_object",
+    "preop_only_writes_accepted": "writes_preop_only",
     "zeroing_rearm_ignored": "zeroing_object",
 }
 
@@ -236,6 +262,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #: documented check meant to catch it does not.
 #: - cam_edge_off_by_one: that the high limit belongs to the window is inferred (WDGA example CAM1 0..2048,
 #:   CAM2 2049..4095); the fault shows only at the high limit itself.
+#: - change_of_state_ignored: that a 254/255 TPDO with timer 0 is sent on a change of its mapped position is
+#:   our reading of "event-driven" (CiA 301 §7.5.2.35 leaves the event to the manufacturer or profile).
 #: Judged without it (the rule that catches them is documented):
 #: - work_area_flags_swapped: 02h above / 04h below is CiA 406 6400h and WDGA T 6.9; only the edges are
 #:   inferred, and the swap shows at every position outside the area, not only at an edge;
@@ -245,7 +273,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #:   enabled cams can change state"), not only the inferred value 0 of its bit;
 #: - the position, preset, speed and TPDO faults, cam_polarity_ignored, cam_on_unscaled_value and
 #:   cam_low_order_ignored break CiA 406 or the profile's manual directly.
-JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one"})
+JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored"})
 
 
 def faults_for(effects: Iterable[str]) -> list[str]:

@@ -11,28 +11,10 @@ import pytest
 from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.stimulus import pdo_stimulus
-from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
 from encoder_conformance.profile import quirk_effects as fx
+from fixtures.pdo import configurable_tpdo as _configurable_tpdo
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos")]
-
-
-def _configurable_tpdo(dut, sub: int, evidence, settings_journal, usable_types: list[int]) -> tuple[int, int]:
-    """(comm index, transmission type) of the TPDO to use (``choose_tpdo``), enabled for the test where it
-    is disabled; skips where no TPDO qualifies."""
-    try:
-        choice = choose_tpdo(dut, sub, usable_types)
-    except NoUsableTpdo as exc:
-        for quirk_id, text in exc.deviations:
-            evidence.deviation(quirk_id, text)
-        pytest.skip(str(exc))
-    for quirk_id, text in choice.deviations:
-        evidence.deviation(quirk_id, text)
-    if choice.enable_cob_id is not None:
-        settings_journal.write(choice.comm, 1, choice.enable_cob_id.to_bytes(4, "little"))
-    for note in choice.notes:
-        evidence.note(note)
-    return choice.comm, choice.transmission_type
 
 
 def _start(dut):

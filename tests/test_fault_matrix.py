@@ -18,7 +18,8 @@ MAIN_PROFILE = "wachendorff-wdga-mt"
 #: profiles with what the WDGA lacks, tried in order: a write-only object; a store-by-reboot command;
 #: every LSS service (identify, fastscan); the quirks other families document (guarding/heartbeat
 #: exclusivity, immediate reload and LSS self-store on the FAULHABER, a second store object and
-#: type 255 without timer on the WayCon, send-repeat counters and PDO2 disabled at init on the SIKO)
+#: type 255 without timer on the WayCon, send-repeat counters and PDO2 disabled at init on the SIKO; the SYNC
+#: start value and 1019h of the full-PDO self-test variant)
 COMPLEMENT_PROFILES = [
     "tests/data/profiles/minimal-encoder.yaml",
     "tests/data/profiles/posital-fast-reboot.yaml",
@@ -26,6 +27,7 @@ COMPLEMENT_PROFILES = [
     "faulhaber-mc5005",
     "waycon-sx",
     "siko-wx58m-1212-mt",
+    "tests/data/profiles/cia406-full-pdo.yaml",
 ]
 
 

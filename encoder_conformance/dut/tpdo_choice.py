@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 from ..cia301 import COB_ID_INVALID, cob_id_valid
 from ..profile import quirk_effects as fx
+from ..profile.value_domain import declared_domain
 from .device import DeviceUnderTest
 
 
@@ -54,14 +55,15 @@ def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int]) -> Tpdo
     Raises NoUsableTpdo when none qualifies.
     """
     fixed, deviation = fixed_behaviour_tpdos(dut)
-    accepted = set(dut.profile.capabilities.tpdo_transmission_types)
     for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF and i not in fixed):
         entry, kind, cob = (dut.profile.entry(comm, s) for s in (sub, 2, 1))
         if entry is None or kind is None or cob is None or not entry.writable:
             continue
         if dut.profile.entry(comm + 0x200, 0) is not None and dut.read_uint(comm + 0x200, 0) == 0:
             continue  # nothing mapped
-        candidates = [t for t in usable_types if t in accepted] if kind.writable else [dut.read_uint(comm, 2)]
+        accepted = declared_domain(dut.profile, comm, 2)  # the profile's types within the entry's own limits
+        candidates = ([t for t in usable_types if accepted is None or t in accepted] if kind.writable
+                      else [dut.read_uint(comm, 2)])
         chosen = next((t for t in candidates if t in usable_types), None)
         cob_id = dut.read_uint(comm, 1)
         if chosen is None or (cob_id & COB_ID_INVALID and not cob.writable):

@@ -56,7 +56,8 @@ class NodeHooks:
     halted: list[Callable[[], None]] = field(default_factory=list)
     powered_off: list[Callable[[], None]] = field(default_factory=list)
     sources: list[ValueSource] = field(default_factory=list)
-    sync: list[Callable[[], None]] = field(default_factory=list)
+    #: SYNC frames, with their counter byte (None: a SYNC without counter, 1019h = 0)
+    sync: list[Callable[[int | None], None]] = field(default_factory=list)
     remote_frame: list[Callable[[int], None]] = field(default_factory=list)
     #: LSS master frames (7E5h), whatever the NMT state
     lss: list[Callable[[bytes], None]] = field(default_factory=list)

@@ -39,6 +39,7 @@ from .nmt import NmtState, sync_allowed
 from .nmt_slave import NmtSlave
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
+from .pdo_cob_id import PdoCobIdRules
 from .pdo_layout import FixedTpdoLayout
 from .scheduler import DeadlineScheduler
 from .sdo_channel import SdoChannel
@@ -46,6 +47,7 @@ from .sdo_server import SdoServer
 from .send_repeat import SendRepeatCounters
 from .shaft import Shaft
 from .store_commands import EncoderMemory, StoreCommands
+from .sync_counter import SyncCounterRules
 from .tpdo import TpdoEngine
 from .values import ObjectValues
 from .write_gates import preop_only, scaling_bit_needed
@@ -129,9 +131,11 @@ class SimulatedNode:
         optional: list[Behaviour | None] = [
             self._built(fx.GuardingHeartbeatExclusive, lambda p: assemble(GuardingHeartbeatExclusion, faults)
                         .from_params(p, self.read_int, self.store.set)),
-            self._built(fx.WritesPreopOnly, lambda p: preop_only(p, lambda: self.state, wrong_state)),
+            self._built(fx.WritesPreopOnly, lambda p: preop_only(p, lambda: self.state, wrong_state, faults)),
             self._built(fx.WritesNeedScalingBit, lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
             self._built(fx.CamLowBelowHigh, self._cam_low_limit_gate),
+            assemble(PdoCobIdRules, faults)(self.read_int),
+            assemble(SyncCounterRules, faults)(self.read_int, wrong_state),
             store_commands,
             self.emcy,
             # the encoder function (position, speed, preset) only where the profile is an encoder: a drive or an
@@ -260,8 +264,9 @@ class SimulatedNode:
             elif can_id == 0x600 + self.node_id and not msg.is_remote_frame:
                 self.sdo_channel.on_request(bytes(msg.data))
             elif self._is_sync(msg) and sync_allowed(self.state):
+                counter = msg.data[0] if msg.dlc >= 1 else None
                 for listener in self.hooks.sync:
-                    listener()
+                    listener(counter)
             elif msg.is_remote_frame and not msg.is_extended_id:
                 for listener in self.hooks.remote_frame:  # answered only by TPDOs that allow RTR
                     listener(can_id)

@@ -1,4 +1,5 @@
-"""TPDO engine: SYNC-driven (types 0..240), event-driven (254/255) with event timer and change check.
+"""TPDO engine: SYNC-driven (types 0..240, SYNC start value), RTR-only (252/253), event-driven (254/255) with
+event timer and change check.
 
 Reads its configuration from 1800h+n (communication) and 1A00h+n (mapping) whenever the node
 enters operational or a PDO parameter is written. A FixedTpdoLayout (quirk ``fixed_tpdo_mapping``)
@@ -13,6 +14,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from ..cia301 import COB_ID_INVALID, COB_ID_NO_RTR, RTR_EVENT, RTR_SYNCHRONOUS, SYNC_COUNTER_OVERFLOW
 from .faults import breaks
 from .hooks import NodeHooks, Value
 from .nmt import NmtState, pdo_allowed
@@ -87,11 +89,13 @@ class TpdoEngine:
             config = TpdoConfig(
                 number=comm - 0x1800 + 1,
                 cob_id=cob_id & 0x1FFFFFFF if cob_id & 0x20000000 else cob_id & 0x7FF,
-                valid=not cob_id & 0x80000000,
+                valid=self.is_valid(cob_id),
                 transmission_type=self._read(comm, 2) or 0,
                 inhibit_100us=self._read(comm, 3) or 0,
                 event_timer_ms=self._read(comm, 5) or 0,
                 mapping=self._mapping(comm),
+                rtr_allowed=not cob_id & COB_ID_NO_RTR,
+                sync_start=self.sync_start_value(comm),
             )
             self._cia_semantics(config)
             if self._layout is not None:
@@ -101,6 +105,17 @@ class TpdoEngine:
                 self.apply_send_repeat(comm, config, self._repeat)
             configs.append(config)
         return configs
+
+    def is_valid(self, cob_id: int) -> bool:
+        """Sub 1 bit 31 clear: the PDO exists (CiA 301 §7.5.2.35)."""
+        return not cob_id & COB_ID_INVALID
+
+    def sync_start_value(self, comm: int) -> int:
+        """Sub 6, where 1019h > 0 makes the SYNC carry a counter (CiA 301 §7.5.2.35): the counter value of
+        the first SYNC counted; 0 where there is none."""
+        if not self._read(SYNC_COUNTER_OVERFLOW, 0):
+            return 0
+        return self._read(comm, 6) or 0
 
     def sync_divisor(self, every: int) -> int:
         """Sent on every n-th SYNC: n as configured (0: not SYNC-counted)."""
@@ -126,10 +141,13 @@ class TpdoEngine:
         return entries
 
     def _cia_semantics(self, config: TpdoConfig) -> None:
-        """CiA 301 transmission types: 1..240 every n-th SYNC, 254/255 on change and event timer."""
+        """CiA 301 transmission types: 0 on a SYNC after a change, 1..240 every n-th SYNC, 252 sampled at SYNC and
+        sent on RTR, 253 sent on RTR (both only where sub 1 bit 30 allows RTR), 254/255 on change and event timer."""
         kind = config.transmission_type
         config.sync_every = kind if 1 <= kind <= 240 else 0
         config.acyclic_sync = kind == 0
+        config.rtr = kind in (RTR_SYNCHRONOUS, RTR_EVENT) and config.rtr_allowed
+        config.sampled_at_sync = kind == RTR_SYNCHRONOUS
         event_driven = kind in (254, 255)
         if kind == 255 and config.event_timer_ms == 0 and self.timer_zero_disables_255():
             event_driven = False
@@ -154,14 +172,15 @@ class TpdoEngine:
         self._configs = [c for c in self._load() if c.valid and c.mapping]
         self.running = True
         for config in self._configs:
+            config.last_payload = self._payload(config)  # type 0 and the change check: changes from now on
+            config.waiting_for_start = config.sync_start > 0
+        for config in self._configs:
             if config.event_timer_ms > 0:
                 period = self.timer_period_s(config)
                 self._jobs.append(
                     self._scheduler.call_later(period, lambda c=config: self._transmit(c), period)
                 )
         if any(c.on_change for c in self._configs):
-            for config in self._configs:
-                config.last_payload = self._payload(config)
             self._jobs.append(self._scheduler.call_later(CHANGE_POLL_S, self._poll_changes, CHANGE_POLL_S))
 
     def stop(self) -> None:
@@ -174,41 +193,60 @@ class TpdoEngine:
         if self.running:
             self.start()
 
-    def on_sync(self) -> None:
+    def on_sync(self, counter: int | None = None) -> None:
+        """A SYNC (``counter``: its counter byte, None without one)."""
         if not self.running:
             return
         for config in self._configs:
+            if config.sampled_at_sync:
+                config.sample = self._payload(config)
             if config.sync_every:
+                if config.waiting_for_start:  # the SYNC whose counter is the start value is the first one counted
+                    if counter != config.sync_start:
+                        continue
+                    config.waiting_for_start = False
+                    config.sync_count = config.sync_every - 1
                 config.sync_count += 1
                 if config.sync_count >= config.sync_every:
                     config.sync_count = 0
                     if within_sync_limit(config, self._payload(config)):
                         self._transmit(config)
-            elif config.acyclic_sync and self._payload(config) != config.last_payload:
+            elif config.acyclic_sync and self.acyclic_due(config):
                 self._transmit(config)
+
+    def acyclic_due(self, config: TpdoConfig) -> bool:
+        """Type 0: the mapped value changed since the TPDO was last sent."""
+        return self._payload(config) != config.last_payload
+
+    def answers_rtr(self, config: TpdoConfig) -> bool:
+        return config.rtr
 
     def on_rtr(self, cob_id: int) -> None:
         """A remote frame: TPDOs that answer RTR on this COB-ID send their current payload."""
         if not self.running:
             return
         for config in self._configs:
-            if config.rtr and config.cob_id == cob_id:
-                self._transmit(config, inhibit=False)
+            if self.answers_rtr(config) and config.cob_id == cob_id:
+                self._transmit(config, inhibit=False, payload=config.sample if config.sampled_at_sync else None)
 
     def _poll_changes(self) -> None:
         for config in self._configs:
-            if config.on_change and self._payload(config) != config.last_payload:
+            if config.on_change and self.change_seen(config):
                 self._transmit(config)
                 config.repeats_left = config.sends_per_change - 1
             elif config.repeats_left > 0:
                 config.repeats_left -= 1
                 self._transmit(config)
 
+    def change_seen(self, config: TpdoConfig) -> bool:
+        """Event-driven types: the mapped value differs from the one last sent."""
+        return self._payload(config) != config.last_payload
+
     def _payload(self, config: TpdoConfig) -> bytes:
         data = b"".join(self._mapped_bytes(i, s, bits) for i, s, bits in config.mapping)
         return data[:8]
 
-    def _transmit(self, config: TpdoConfig, inhibit: bool = True) -> None:
+    def _transmit(self, config: TpdoConfig, inhibit: bool = True, payload: bytes | None = None) -> None:
         """Send now, or, for an event-driven TPDO inside its inhibit time, once that time is over (CiA 301
         §7.5.2.35: the inhibit time applies to types 254/255 only, and delays a transmission, never drops it)."""
         if not self.running:
@@ -220,7 +258,7 @@ class TpdoEngine:
                 config.delayed = True
                 self._jobs.append(self._scheduler.call_later(wait, lambda: self._send_delayed(config)))
             return
-        payload = self._payload(config)
+        payload = self._payload(config) if payload is None else payload
         config.last_payload = payload
         config.last_sent = now
         self._send(config.cob_id, payload)
@@ -270,6 +308,75 @@ class EventTimerOutsideOperational(TpdoEngine):
         if not self.left_operational:
             self.start()  # leaving operational cancels nothing: the event timers keep firing
 
-    def on_sync(self) -> None:
+    def on_sync(self, counter: int | None = None) -> None:
         if not self.left_operational:  # SYNC-driven TPDOs do stop
-            super().on_sync()
+            super().on_sync(counter)
+
+
+@breaks(TpdoEngine, "sync_tpdo_off_by_one")
+class SendsOnEveryNPlusOneSync(TpdoEngine):
+    def sync_divisor(self, every: int) -> int:
+        return every + 1 if every else 0
+
+
+@breaks(TpdoEngine, "cob_id_valid_bit_ignored")
+class ValidBitIgnored(TpdoEngine):
+    def is_valid(self, cob_id: int) -> bool:
+        return True
+
+
+@breaks(TpdoEngine, "type_0_sends_every_sync")
+class Type0SendsEverySync(TpdoEngine):
+    def acyclic_due(self, config: TpdoConfig) -> bool:
+        return True
+
+
+@breaks(TpdoEngine, "sync_start_value_ignored")
+class SyncStartValueIgnored(TpdoEngine):
+    def sync_start_value(self, comm: int) -> int:
+        return 0
+
+
+@breaks(TpdoEngine, "rtr_ignored")
+class RtrIgnored(TpdoEngine):
+    def answers_rtr(self, config: TpdoConfig) -> bool:
+        return False
+
+
+@breaks(TpdoEngine, "rtr_bit_30_ignored")
+class RtrOnEveryTpdo(TpdoEngine):
+    def answers_rtr(self, config: TpdoConfig) -> bool:
+        return True
+
+
+@breaks(TpdoEngine, "change_of_state_ignored")
+class ChangeOfStateIgnored(TpdoEngine):
+    def change_seen(self, config: TpdoConfig) -> bool:
+        return False
+
+
+@breaks(TpdoEngine, "tpdo_on_sync_outside_operational")
+class SyncTpdoOutsideOperational(TpdoEngine):
+    def on_state(self, state: NmtState) -> None:
+        was_running = self.running
+        super().on_state(state)
+        if was_running and not self.sends_in(state):
+            self.running = True  # timers and the change check stopped; SYNC (and RTR) still make TPDOs
+
+
+@breaks(TpdoEngine, "change_tpdo_outside_operational")
+class ChangeTpdoOutsideOperational(TpdoEngine):
+    outside = False
+
+    def on_state(self, state: NmtState) -> None:
+        was_running = self.running
+        super().on_state(state)
+        self.outside = was_running and not self.sends_in(state)
+        if self.outside and any(c.on_change for c in self._configs):
+            self.running = True  # the change check goes on; SYNC-driven TPDOs and timers stopped
+            self._jobs.append(self._scheduler.call_later(CHANGE_POLL_S, self._poll_changes, CHANGE_POLL_S))
+
+    def on_sync(self, counter: int | None = None) -> None:
+        if not self.outside:
+            super().on_sync(counter)
+

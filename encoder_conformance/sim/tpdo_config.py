@@ -18,6 +18,11 @@ class TpdoConfig:
     on_change: bool = False  # sent when the payload changes
     acyclic_sync: bool = False  # type 0: sent on a SYNC after the payload changed
     rtr: bool = False  # answers a remote frame on its COB-ID
+    rtr_allowed: bool = True  # sub 1 bit 30 clear
+    sampled_at_sync: bool = False  # type 252: the payload is sampled at SYNC, sent on RTR
+    sample: bytes = b""  # type 252: the payload of the last SYNC
+    sync_start: int = 0  # sub 6 with 1019h > 0: the counter of the first SYNC counted (0: none)
+    waiting_for_start: bool = False
     sync_count: int = 0
     sends_per_change: int = 1  # frames per detected change (send-repeat counter)
     repeats_left: int = 0  # frames of the last change still to send, one per change poll

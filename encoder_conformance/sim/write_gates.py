@@ -6,6 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..profile.quirk_effects import WritesNeedScalingBit, WritesPreopOnly
+from .faults import FaultSet, assemble, breaks
 from .hooks import NodeHooks
 from .nmt import NmtState
 from .nvm import Key
@@ -31,10 +32,22 @@ class ObjectWriteGate:
             raise SdoAbort(self._abort)
 
 
-def preop_only(params: WritesPreopOnly, state: Callable[[], NmtState | None], default_abort: int) -> ObjectWriteGate:
-    return ObjectWriteGate(params, lambda: state() is NmtState.PRE_OPERATIONAL, default_abort)
+class PreopOnlyGate(ObjectWriteGate):
+    """``writes_preop_only``: the listed objects are writable in pre-operational only."""
+
+
+def preop_only(params: WritesPreopOnly, state: Callable[[], NmtState | None], default_abort: int,
+               faults: FaultSet | None = None) -> ObjectWriteGate:
+    gate = assemble(PreopOnlyGate, faults or FaultSet())
+    return gate(params, lambda: state() is NmtState.PRE_OPERATIONAL, default_abort)
 
 
 def scaling_bit_needed(params: WritesNeedScalingBit, read: Callable[[int, int], int | None],
                        default_abort: int) -> ObjectWriteGate:
     return ObjectWriteGate(params, lambda: bool((read(0x6000, 0) or 0) & SCALING_BIT), default_abort)
+
+
+@breaks(PreopOnlyGate, "preop_only_writes_accepted")
+class PreopOnlyIgnored(PreopOnlyGate):
+    def gate(self, key: Key, value: object) -> None:
+        return
