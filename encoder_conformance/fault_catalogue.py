@@ -97,8 +97,9 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "sync_start_value_ignored": "18xxh sub 6 (SYNC start value) is ignored: SYNC TPDOs count from the "
                                         "first SYNC whatever its counter",
             "sync_counter_overflow_unchecked": "1019h accepts the reserved values 1 and 241..255",
-            "tpdo_on_sync_outside_operational": "after leaving operational the SYNC-driven TPDOs (and RTR answers) "
-                                                "go on; event timers and the change check stop",
+            "tpdo_on_sync_outside_operational": "after leaving operational (to pre-operational or stopped) the "
+                                                "SYNC-driven TPDOs (and RTR answers) go on; event timers and the "
+                                                "change check stop",
             "change_tpdo_outside_operational": "after leaving operational event-driven TPDOs are still sent on a "
                                                "change of their mapped value; SYNC TPDOs and timers stop",
             "preop_only_writes_accepted": "quirk writes_preop_only ignored: the listed objects are writable in "

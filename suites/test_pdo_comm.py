@@ -66,12 +66,16 @@ def _window(dut) -> float:
     return dut.pdo_silence_s + dut.profile.timing.nmt_settle_ms / 1000
 
 
-def _syncs(dut, count: int, cob_id: int) -> list[can.Message]:
-    """``count`` SYNCs, one PDO silence window after each: the TPDOs on ``cob_id`` they brought."""
+def _syncs(dut, count: int, cob_id: int, until_first: bool = False) -> list[can.Message]:
+    """``count`` SYNCs, one PDO silence window after each (``until_first``: up to the first TPDO): the TPDOs on
+    ``cob_id`` they brought."""
     mark = dut.frames.mark()
     for _ in range(count):
         dut.send_sync()
-        dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
+        if until_first and dut.frames.wait_for(_is_tpdo(cob_id), dut.pdo_silence_s, mark) is not None:
+            break
+        if not until_first:
+            dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
     return dut.frames.since(mark, _is_tpdo(cob_id))
 
 
@@ -179,16 +183,21 @@ def test_invalid_tpdo_sends_nothing(dut, settings_journal, back_to_preoperationa
     cob = dut.read_uint(comm, 1)
     cob_id = cob & 0x7FF
 
-    def frames() -> list[can.Message]:
+    def frames(expected: bool = True) -> list[can.Message]:
+        """The TPDOs of three SYNCs or five event-timer periods (up to the first where one is ``expected``)."""
         _start(dut)
-        # three SYNCs, or five event-timer periods
-        found = _syncs(dut, 3, cob_id) if trigger == "SYNC" else dut.frames.quiet_period(_is_tpdo(cob_id), 0.1)
+        if trigger == "SYNC":
+            found = _syncs(dut, 3, cob_id, until_first=expected)
+        elif expected:
+            found = dut.frames.wait_count(_is_tpdo(cob_id), 1, 0.1, dut.frames.mark())
+        else:
+            found = dut.frames.quiet_period(_is_tpdo(cob_id), 0.1)
         return_to_preoperational(dut)
         return found
 
     assert frames(), f"{comm:04X}h valid ({cob:08X}h): no TPDO on {cob_id:03X}h on its {trigger} in operational"
     settings_journal.write(comm, 1, _u32(cob | COB_ID_INVALID))
-    silent = frames()
+    silent = frames(expected=False)
     evidence.measure(f"TPDO {cob_id:03X}h frames with bit 31 set ({trigger})", len(silent), "frames", 0, 0)
     assert not silent, (f"{comm:04X}h.01 = {cob | COB_ID_INVALID:08X}h (not valid): {len(silent)} TPDO(s) on "
                         f"{cob_id:03X}h on its {trigger}:\n{format_frames(silent[:5])}")
@@ -510,14 +519,19 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
     cob_id = dut.read_uint(comm, 1) & 0x7FF
     is_this = _is_tpdo(cob_id)
 
-    def stimulate() -> list[can.Message]:
+    def stimulate(expected: bool = True) -> list[can.Message]:
+        """Three triggers, each followed by a PDO silence window (cut short by the first TPDO where one is
+        ``expected``): the TPDOs they brought."""
         mark = dut.frames.mark()
         for _ in range(3):
             if trigger == "SYNC":
                 dut.send_sync()
             else:
                 shaft.turn_by(TURN)
-            dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
+            if expected and dut.frames.wait_for(is_this, dut.pdo_silence_s, mark) is not None:
+                break
+            if not expected:
+                dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
         return dut.frames.since(mark, is_this)
 
     _start(dut)
@@ -528,7 +542,7 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
     assert running, f"{comm:04X}h: no TPDO on {cob_id:03X}h on {trigger} in operational"
     dut.nmt(state)
     dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)
-    late = stimulate()
+    late = stimulate(expected=False)
     evidence.measure(f"TPDO {cob_id:03X}h frames on {trigger} in {state}", len(late), "frames", 0, 0)
     assert not late, f"{len(late)} TPDO(s) on {cob_id:03X}h on {trigger} after NMT {state}:\n{format_frames(late[:5])}"
     _start(dut)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..cia301 import NmtCommand, NmtState
 
-__all__ = ["TARGET", "NmtCommand", "NmtState", "emcy_allowed", "pdo_allowed", "sdo_allowed", "sync_allowed"]
+__all__ = ["TARGET", "NmtCommand", "NmtState", "emcy_allowed", "pdo_allowed", "sdo_allowed"]
 
 
 #: Target state of the state-changing commands (resets are handled by the node).
@@ -26,6 +26,3 @@ def pdo_allowed(state: NmtState) -> bool:
 def emcy_allowed(state: NmtState) -> bool:
     return state in (NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL)
 
-
-def sync_allowed(state: NmtState) -> bool:
-    return state in (NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL)

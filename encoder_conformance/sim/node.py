@@ -35,7 +35,7 @@ from .heartbeat import HeartbeatProducer
 from .hooks import NodeHooks, ReloadEvent
 from .lss_behaviour import LssBehaviour
 from .lss_configuration import usable_node_id
-from .nmt import NmtState, sync_allowed
+from .nmt import NmtState
 from .nmt_slave import NmtSlave
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
@@ -263,7 +263,9 @@ class SimulatedNode:
                 self.nmt.on_command(bytes(msg.data))
             elif can_id == 0x600 + self.node_id and not msg.is_remote_frame:
                 self.sdo_channel.on_request(bytes(msg.data))
-            elif self._is_sync(msg) and sync_allowed(self.state):
+            elif self._is_sync(msg):
+                # every state: each listener knows when a SYNC acts on it (the TPDO engine only in operational,
+                # CiA 301 §7.3.2.2), so that a fault of the listener alone can break that
                 counter = msg.data[0] if msg.dlc >= 1 else None
                 for listener in self.hooks.sync:
                     listener(counter)
