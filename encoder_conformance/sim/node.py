@@ -40,6 +40,7 @@ from .nmt_slave import NmtSlave
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
 from .pdo_layout import FixedTpdoLayout
+from .pdo_mapping import MappingRules
 from .scheduler import DeadlineScheduler
 from .sdo_channel import SdoChannel
 from .sdo_server import SdoServer
@@ -132,6 +133,7 @@ class SimulatedNode:
             self._built(fx.WritesPreopOnly, lambda p: preop_only(p, lambda: self.state, wrong_state)),
             self._built(fx.WritesNeedScalingBit, lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
             self._built(fx.CamLowBelowHigh, self._cam_low_limit_gate),
+            assemble(MappingRules, faults)(self.profile, self.read_int, codes),
             store_commands,
             self.emcy,
             # the encoder function (position, speed, preset) only where the profile is an encoder: a drive or an

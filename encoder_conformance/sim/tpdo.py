@@ -273,3 +273,14 @@ class EventTimerOutsideOperational(TpdoEngine):
     def on_sync(self) -> None:
         if not self.left_operational:  # SYNC-driven TPDOs do stop
             super().on_sync()
+
+
+@breaks(TpdoEngine, "payload_not_matching_mapping")
+class PayloadNotMatchingMapping(TpdoEngine):
+    """The mapped objects go out in reverse order; a single entry one byte late."""
+
+    def _payload(self, config: TpdoConfig) -> bytes:
+        if len(config.mapping) > 1:
+            reverse = TpdoConfig(**{**config.__dict__, "mapping": config.mapping[::-1]})
+            return super()._payload(reverse)
+        return (b"\x00" + super()._payload(config))[:8]
