@@ -194,6 +194,7 @@ def _capabilities(result: EdsImport, todos: list[str]) -> dict[str, Any]:
         "tpdos": _count(objects, 0x1800, 0x19FF),
         "rpdos": _count(objects, 0x1400, 0x15FF),
         "pdo_granularity": _info_number(info, "Granularity"),
+        "pdo_dummy_mapping": result.dummy_usage,
         "lss": list(_LSS_ASSUMED) if lss else [],
         "scaling": cia406 and 0x6000 in objects and (0x6001 in objects or 0x6002 in objects),
         "preset": cia406 and 0x6003 in objects,
