@@ -188,12 +188,13 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
         pytest.skip(str(exc))
     tpdo = _variable(dut, choice.comm)
     if tpdo is None:
-        pytest.skip(f"not applicable: the mapping of {choice.comm + 0x200:04X}h is fixed (sub 0 or entries read-only)")
+        fixed = "is fixed (sub 0 or entries read-only)" if _mapping_objects(dut) else "has no object"
+        pytest.skip(f"not applicable: the mapping of {choice.comm:04X}h {fixed}")
     plan = _plan(dut, tpdo.slots)
     if not plan:
         pytest.skip("not applicable: the profile names no readable PDO-mappable object of at most 32 bits")
     if shaft is not None:
-        shaft.turn_by(0.37)  # a position other than the start's
+        shaft.turn_by(0.37)  # a position other than 0, which a shifted entry's zeros would match
     evidence.rests_on("cia", "CiA 301 §7.5.2.36 (procedure), §7.2.2 (a PDO carries the mapped objects in order)")
     with MappingCustody(dut, tpdo.comm):
         if dut.profile.entry(tpdo.comm, 2).writable:
@@ -341,7 +342,7 @@ def test_mapping_refused_while_pdo_valid(dut: DeviceUnderTest, variable_tpdo, ev
 
 # -- dummy entries and fixed mappings ---------------------------------------------------------------------
 
-def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, evidence: Evidence) -> None:
+def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: Evidence) -> None:
     """Where the profile declares dummy mapping (capabilities.pdo_dummy_mapping, EDS [DummyUsage]), a dummy entry
     is accepted and takes its data type's bytes in the TPDO: the next object follows it (CiA 301 §7.4.7.1,
     §7.5.2.36; CTT PDO 33). The dummy's own bytes are not judged."""
@@ -359,6 +360,8 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, evidence: Evidenc
     dummy = max(dummies, key=lambda d: (DUMMY_BITS[d] % 8 == 0, DUMMY_BITS[d]))
     target = next((c for c in objects if c[0] == POSITION), objects[0])
     plan = [(dummy, 0, DUMMY_BITS[dummy]), target]
+    if shaft is not None:
+        shaft.turn_by(0.37)  # a position other than 0, which a dummy's zeros would match
     evidence.rests_on("cia", "CiA 301 §7.4.7.1 (dummy mapping), §7.5.2.36")
     with MappingCustody(dut, tpdo.comm):
         if dut.profile.entry(tpdo.comm, 2).writable:

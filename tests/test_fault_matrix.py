@@ -26,6 +26,7 @@ COMPLEMENT_PROFILES = [
     "faulhaber-mc5005",
     "waycon-sx",
     "siko-wx58m-1212-mt",
+    "tests/data/profiles/cia406-full-pdo.yaml",  # dummy mapping (capabilities.pdo_dummy_mapping)
 ]
 
 
