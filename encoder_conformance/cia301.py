@@ -142,6 +142,24 @@ ABORT_FOR_SITUATION: dict[str, int] = {
 }
 
 
+#: a PDO carries at most 64 bits of mapped data (CiA 301 §7.5.2.36: more aborts 06040042h)
+PDO_MAX_BITS = 64
+#: the data-type indices a mapping entry may name as a dummy (CiA 301 §7.4.7.1, EDS [DummyUsage] Dummy0001..0007)
+DUMMY_INDICES = range(0x0001, 0x0008)
+#: size in bits of each dummy data type (BOOLEAN, INTEGER8/16/32, UNSIGNED8/16/32)
+DUMMY_BITS = {0x0001: 1, 0x0002: 8, 0x0003: 16, 0x0004: 32, 0x0005: 8, 0x0006: 16, 0x0007: 32}
+
+
+def mapping_word(index: int, sub: int, bits: int) -> int:
+    """A PDO mapping entry (CiA 301 §7.5.2.36): index (16 bit) | sub-index (8 bit) | length in bits (8 bit)."""
+    return (index & 0xFFFF) << 16 | (sub & 0xFF) << 8 | bits & 0xFF
+
+
+def mapping_fields(word: int) -> tuple[int, int, int]:
+    """(index, sub-index, length in bits) of a PDO mapping entry."""
+    return word >> 16 & 0xFFFF, word >> 8 & 0xFF, word & 0xFF
+
+
 def pdo_mapping_of(communication_index: int) -> int | None:
     """The mapping object of a PDO communication object (1800h -> 1A00h, 1400h -> 1600h)."""
     if communication_index in TPDO_COMMUNICATION or communication_index in RPDO_COMMUNICATION:

@@ -194,6 +194,21 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
                                       "right position)",
         },
     ),
+    (  # PDO mapping (CiA 301 §7.5.2.36)
+        ("test_pdo_mapping",),
+        {
+            "mapping_accepted_while_valid": "TPDO mapping writes are accepted while the PDO is valid (COB-ID bit 31 "
+                                            "clear)",
+            "mapping_entries_while_enabled_count": "mapping entries are accepted while sub 0 is not 0",
+            "non_mappable_object_accepted": "a mapping entry naming an object that is not PDO-mappable is accepted",
+            "missing_object_mapped": "a mapping entry naming an object that does not exist is accepted",
+            "mapping_length_unchecked": "sub 0 = n is accepted although the entries exceed 64 bits",
+            "payload_not_matching_mapping": "TPDOs carry the mapped objects in reverse order (a single entry one "
+                                            "byte late)",
+            "fixed_mapping_writable": "read-only (fixed) mapping entries accept writes and change",
+            "default_mapping_wrong_length": "the first TPDO mapping entry starts 8 bits longer than its object",
+        },
+    ),
     (  # CAM (CiA 406 6300h-6337h)
         ("test_cam",),
         {

@@ -23,10 +23,10 @@ from dataclasses import dataclass, field, replace
 import pytest
 
 from encoder_conformance.checks import abort_accepted
-from encoder_conformance.cia301 import COB_ID_INVALID
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.pdo_mapping import MappingCustody, apply_mapping, describe, read_mapping
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
 from encoder_conformance.encoder_model import objects as od
 from encoder_conformance.encoder_model.cam import Cam
@@ -518,7 +518,7 @@ class Remapped:
 @pytest.fixture
 def cam_tpdo(cam_channel: CamChannel, evidence: Evidence) -> Iterator[Remapped]:
     """A TPDO mapped with 6300h sub 1 alone, sent on every SYNC; afterwards pre-operational and the mapping back
-    (CiA 301 order: PDO invalid, sub 0 = 0, entries, sub 0)."""
+    (CiA 301 order: PDO invalid, sub 0 = 0, entries, sub 0, COB-ID)."""
     dut, journal = cam_channel.dut, cam_channel.encoder.journal
     state = dut.profile.entry(od.CAM_STATE, CHANNEL)
     if state is None or not state.pdo_mappable:
@@ -535,27 +535,15 @@ def cam_tpdo(cam_channel: CamChannel, evidence: Evidence) -> Iterator[Remapped]:
         pytest.skip(f"not applicable: {mapping:04X}h sub 0/1 or {comm:04X}h.01 not writable")
     for note in choice.notes:
         evidence.note(note)
-    count = dut.read_uint(mapping, 0)
-    original = [dut.read(mapping, sub) for sub in range(1, count + 1)]
-    cob_id = dut.read_uint(comm, 1)
-    u32 = 4
-    journal.write(comm, 1, (cob_id | COB_ID_INVALID).to_bytes(u32, "little"))  # type: ignore[attr-defined]
-    dut.write(mapping, 0, b"\x00")
-    dut.write(mapping, 1, (od.CAM_STATE << 16 | CHANNEL << 8 | 8).to_bytes(u32, "little"))
-    dut.write(mapping, 0, b"\x01")
-    journal.write(comm, 2, bytes([1]))  # type: ignore[attr-defined]
-    journal.write(comm, 1, (cob_id & ~COB_ID_INVALID).to_bytes(u32, "little"))  # type: ignore[attr-defined]
-    evidence.note(f"{mapping:04X}h = [63000{CHANNEL}08h] (6300h.{CHANNEL:02X}, 8 bit), {comm:04X}h.02 = 1, "
-                  f"mapping {count} entries before")
-    yield Remapped(comm, cob_id & 0x7FF)
-    if not dut.usable:
-        return
-    return_to_preoperational(dut)
-    dut.write(comm, 1, (cob_id | COB_ID_INVALID).to_bytes(u32, "little"))
-    dut.write(mapping, 0, b"\x00")
-    for sub, data in enumerate(original, start=1):
-        dut.write(mapping, sub, data)
-    dut.write(mapping, 0, bytes([count]))
+    with MappingCustody(dut, comm):
+        before = read_mapping(dut, comm)
+        journal.write(comm, 2, bytes([1]))  # type: ignore[attr-defined]
+        apply_mapping(dut, comm, [(od.CAM_STATE, CHANNEL, 8)])
+        evidence.note(f"{mapping:04X}h = [63000{CHANNEL}08h] (6300h.{CHANNEL:02X}, 8 bit), {comm:04X}h.02 = 1, "
+                      f"mapping before {describe(before)}")
+        yield Remapped(comm, dut.read_uint(comm, 1) & 0x7FF)
+        if dut.usable:
+            return_to_preoperational(dut)
 
 
 def test_cam_state_in_tpdo_matches_sdo(cam_channel: CamChannel, cam_tpdo: Remapped, evidence: Evidence) -> None:

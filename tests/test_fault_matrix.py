@@ -27,7 +27,7 @@ COMPLEMENT_PROFILES = [
     "faulhaber-mc5005",
     "waycon-sx",
     "siko-wx58m-1212-mt",
-    "tests/data/profiles/cia406-full-pdo.yaml",
+    "tests/data/profiles/cia406-full-pdo.yaml",  # inhibit, SYNC start value, 1019h, dummy mapping
 ]
 
 

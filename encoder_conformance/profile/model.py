@@ -343,6 +343,11 @@ class Capabilities(StrictModel):
         default=None, ge=0, le=64,
         description="PDO mapping granularity in bits (EDS [DeviceInfo] Granularity; 0: the mapping cannot change)",
     )
+    pdo_dummy_mapping: list[Annotated[int, Field(ge=1, le=7)]] = Field(
+        default_factory=list,
+        description="data-type indices a PDO mapping entry may name as a dummy (CiA 301 §7.4.7.1; EDS [DummyUsage] "
+        "DummyNNNN = 1), e.g. [2, 3, 4, 5, 6, 7]; empty: no dummy mapping",
+    )
     lss: list[LssService] = Field(default_factory=list)
     scaling: bool = False
     preset: bool = False

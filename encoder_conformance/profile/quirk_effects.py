@@ -8,7 +8,7 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 
 Adding an effect: write its model here (the docstring says what the device does, each field
 what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 35 effects, one small model
+This module is over 400 lines because it is the catalogue of the 36 effects, one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -505,6 +505,17 @@ class ZeroingObject(ObjectAt):
     duration_ms: float = Field(default=0, ge=0, description="execution time after the write (position frozen)")
 
 
+class MappingLengthDiffers(EffectParams):
+    """A default PDO mapping entry gives another length than the mapped object's size (CiA 301: the length of
+    the object), e.g. a 64-bit object mapped with 32 bits."""
+
+    effect = "mapping_length_differs"
+    entry: ObjectKeyField = Field(description="the mapping entry, e.g. '0x1A02.1'")
+    mapping: int = Field(description="the mapping value the manual gives (index | sub-index | length)")
+    object_bits: Documentation = _doc("the object's size in bits")
+    mapped_bits: Documentation = _doc("the length the mapping gives")
+
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -515,6 +526,6 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         LimitSwitchFlags, FixedTpdoMapping, GuardingHeartbeatExclusive, RestoreExcludes, NmtAutostartObject,
         ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
         UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
-        OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange, ZeroingObject,
+        OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange, ZeroingObject, MappingLengthDiffers,
     )
 }

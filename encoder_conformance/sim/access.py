@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..cia301 import ABORT_FOR_SITUATION
+from ..cia301 import ABORT_FOR_SITUATION, RPDO_MAPPING, TPDO_MAPPING
 from ..cia301 import SdoAbortCode as Abort
 from ..profile import datatypes
 from ..profile import quirk_effects as fx
@@ -198,3 +198,16 @@ class Cia301TransmissionTypes(ObjectAccess):
 class WritesIgnored(ObjectAccess):
     def accept(self, key: Key, value: Value) -> None:
         return  # confirmed, value unchanged
+
+
+@breaks(ObjectAccess, "fixed_mapping_writable")
+class FixedMappingWritable(ObjectAccess):
+    """Read-only PDO mapping entries (a fixed mapping) accept writes and change."""
+
+    def sdo_write(self, index: int, sub: int, data: bytes) -> None:
+        key = (index, sub)
+        entry = self._store.entries.get(key) if self.exists(index) else None
+        if entry is not None and entry.access in ("ro", "const") and (index in TPDO_MAPPING or index in RPDO_MAPPING):
+            self.accept(key, self._store.decode(key, data))
+            return
+        super().sdo_write(index, sub, data)

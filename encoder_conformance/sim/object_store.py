@@ -7,6 +7,7 @@ from collections.abc import Callable
 import canopen
 from canopen.objectdictionary import ODVariable
 
+from ..cia301 import TPDO_MAPPING
 from ..profile import datatypes
 from ..profile.model import DeviceProfile, EntrySpec, resolve_node_id_expression
 from ..profile.od_builder import build_object_dictionary, initial_value
@@ -144,3 +145,16 @@ class WrongDefaults(ObjectStore):
             if (entry.writable and isinstance(value, int) and value == default and entry.type.startswith("UNSIGNED")
                     and key[0] not in (0x1010, 0x1011)):
                 self.values[key] = value + 1
+
+
+@breaks(ObjectStore, "default_mapping_wrong_length")
+class DefaultMappingWrongLength(ObjectStore):
+    """Every reload leaves the first TPDO mapping entry 8 bits longer than its object (e.g. 60040028h)."""
+
+    def reload(self, in_scope: Callable[[int], bool], node_id: int) -> None:
+        super().reload(in_scope, node_id)
+        for mapping in TPDO_MAPPING:
+            value = self.values.get((mapping, 1))
+            if isinstance(value, int) and value and in_scope(mapping):
+                self.values[(mapping, 1)] = (value & ~0xFF) | ((value & 0xFF) + 8) & 0xFF
+                return

@@ -310,6 +310,7 @@ class EventTimerOutsideOperational(TpdoEngine):
 
     def on_sync(self, counter: int | None = None) -> None:
         if not self.left_operational:  # SYNC-driven TPDOs do stop
+<<<<<<< HEAD
             super().on_sync(counter)
 
 
@@ -380,3 +381,17 @@ class ChangeTpdoOutsideOperational(TpdoEngine):
         if not self.outside:
             super().on_sync(counter)
 
+=======
+            super().on_sync()
+
+
+@breaks(TpdoEngine, "payload_not_matching_mapping")
+class PayloadNotMatchingMapping(TpdoEngine):
+    """The mapped objects go out in reverse order; a single entry one byte late."""
+
+    def _payload(self, config: TpdoConfig) -> bytes:
+        if len(config.mapping) > 1:
+            reverse = TpdoConfig(**{**config.__dict__, "mapping": config.mapping[::-1]})
+            return super()._payload(reverse)
+        return (b"\x00" + super()._payload(config))[:8]
+>>>>>>> pdo-mapping

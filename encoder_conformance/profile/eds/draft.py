@@ -194,6 +194,7 @@ def _capabilities(result: EdsImport, todos: list[str]) -> dict[str, Any]:
         "tpdos": _count(objects, 0x1800, 0x19FF),
         "rpdos": _count(objects, 0x1400, 0x15FF),
         "pdo_granularity": _info_number(info, "Granularity"),
+        "pdo_dummy_mapping": result.dummy_usage,
         "lss": list(_LSS_ASSUMED) if lss else [],
         "scaling": cia406 and 0x6000 in objects and (0x6001 in objects or 0x6002 in objects),
         "preset": cia406 and 0x6003 in objects,
@@ -203,6 +204,21 @@ def _capabilities(result: EdsImport, todos: list[str]) -> dict[str, Any]:
     }
     _capability_todos(result, caps, device_type, todos)
     return caps
+
+
+def _mapping_todos(objects: dict[int, dict[str, Any]], todos: list[str]) -> None:
+    """A default PDO mapping naming an object the EDS lacks (an inconsistent EDS): the draft keeps no default
+    for that mapping (the twin maps nothing there, as CiA 301 §7.5.2.36 would refuse the entry) and says so."""
+    for mapping in sorted(i for i in objects if 0x1600 <= i <= 0x17FF or 0x1A00 <= i <= 0x1BFF):
+        subs = objects[mapping].get("subs", {})
+        words = [e.get("default") for sub, e in subs.items() if sub > 0]
+        missing = sorted({w >> 16 for w in words if isinstance(w, int) and w >> 16 >= 8 and w >> 16 not in objects})
+        if not missing:
+            continue
+        for entry in subs.values():
+            entry.pop("default", None)
+        todos.append(f"{mapping:04X}h: the EDS maps {', '.join(f'{i:04X}h' for i in missing)}, which it does not "
+                     "define; the draft gives this mapping no default (the twin maps nothing there)")
 
 
 def _tpdo_todos(objects: dict[int, dict[str, Any]], todos: list[str]) -> None:
@@ -307,6 +323,7 @@ def profile_draft_from_eds(path: Path, profile_id: str | None = None) -> tuple[d
     identity = _identity(result, todos)
     capabilities = _capabilities(result, todos)
     _tpdo_todos(objects, todos)
+    _mapping_todos(objects, todos)
     draft: dict[str, Any] = {
         "schema_version": 1,
         "id": profile_id or _slug(result.path.stem),

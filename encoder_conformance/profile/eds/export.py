@@ -63,6 +63,10 @@ def export_eds(profile: DeviceProfile, path: Path, node_id: int | None = None) -
     info.LSS_supported = bool(profile.capabilities.lss)
     info.order_code = profile.identity.order_code
     info.granularity = profile.capabilities.pdo_granularity
+    for dummy in profile.capabilities.pdo_dummy_mapping:  # written as [DummyUsage] DummyNNNN = 1
+        var = ODVariable(f"Dummy{dummy:04d}", dummy, 0)
+        var.data_type, var.access_type = dummy, "const"
+        od.add_object(var)
     revision = profile.identity.revision
     if revision is not None and revision.min == revision.max:
         info.revision_number = revision.min

@@ -45,6 +45,12 @@ class EdsImport:
     def device_info(self) -> dict[str, str]:
         return self.cleaned.sections.get("DeviceInfo", {})
 
+    @property
+    def dummy_usage(self) -> list[int]:
+        """[DummyUsage] DummyNNNN = 1: the data-type indices the device accepts as dummy mapping entries."""
+        usage = self.cleaned.sections.get("DummyUsage", {})
+        return [i for i in range(1, 8) if parse_number(usage.get(f"Dummy{i:04d}", "")) == 1]
+
 
 def _import_cleaned(cleaned: CleanedEds) -> canopen.ObjectDictionary:
     with tempfile.TemporaryDirectory(prefix="eds-") as tmp:
