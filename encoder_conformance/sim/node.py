@@ -135,12 +135,9 @@ class SimulatedNode:
             self._built(fx.WritesPreopOnly, lambda p: preop_only(p, lambda: self.state, wrong_state, faults)),
             self._built(fx.WritesNeedScalingBit, lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
             self._built(fx.CamLowBelowHigh, self._cam_low_limit_gate),
-<<<<<<< HEAD
             assemble(PdoCobIdRules, faults)(self.read_int),
             assemble(SyncCounterRules, faults)(self.read_int, wrong_state),
-=======
             assemble(MappingRules, faults)(self.profile, self.read_int, codes),
->>>>>>> pdo-mapping
             store_commands,
             self.emcy,
             # the encoder function (position, speed, preset) only where the profile is an encoder: a drive or an

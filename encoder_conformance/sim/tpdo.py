@@ -310,7 +310,6 @@ class EventTimerOutsideOperational(TpdoEngine):
 
     def on_sync(self, counter: int | None = None) -> None:
         if not self.left_operational:  # SYNC-driven TPDOs do stop
-<<<<<<< HEAD
             super().on_sync(counter)
 
 
@@ -381,8 +380,6 @@ class ChangeTpdoOutsideOperational(TpdoEngine):
         if not self.outside:
             super().on_sync(counter)
 
-=======
-            super().on_sync()
 
 
 @breaks(TpdoEngine, "payload_not_matching_mapping")
@@ -394,4 +391,3 @@ class PayloadNotMatchingMapping(TpdoEngine):
             reverse = TpdoConfig(**{**config.__dict__, "mapping": config.mapping[::-1]})
             return super()._payload(reverse)
         return (b"\x00" + super()._payload(config))[:8]
->>>>>>> pdo-mapping
