@@ -200,6 +200,10 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "mapping_accepted_while_valid": "TPDO mapping writes are accepted while the PDO is valid (COB-ID bit 31 "
                                             "clear)",
             "mapping_entries_while_enabled_count": "mapping entries are accepted while sub 0 is not 0",
+            "mapping_change_while_valid_refused": (
+                "quirk mapping_change_while_valid ignored: mapping writes are refused while the PDO is valid (the "
+                "manual's own procedure, e.g. WDGA M §8.5.4, fails)"
+            ),
             "non_mappable_object_accepted": "a mapping entry naming an object that is not PDO-mappable is accepted",
             "missing_object_mapped": "a mapping entry naming an object that does not exist is accepted",
             "mapping_length_unchecked": "sub 0 = n is accepted although the entries exceed 64 bits",
@@ -269,6 +273,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
     "zeroing_ignored": "zeroing_object",
     "preop_only_writes_accepted": "writes_preop_only",
     "zeroing_rearm_ignored": "zeroing_object",
+    "mapping_change_while_valid_refused": "mapping_change_while_valid",
 }
 
 

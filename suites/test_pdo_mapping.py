@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import pytest
 
-from encoder_conformance.checks import assert_abort, expected_aborts
+from encoder_conformance.checks import assert_abort, documented_quirk, expected_aborts
 from encoder_conformance.cia301 import (
     COB_ID_INVALID,
     DUMMY_BITS,
@@ -325,19 +325,52 @@ def test_mapping_entry_refused_while_sub0_not_zero(dut: DeviceUnderTest, variabl
 def test_mapping_refused_while_pdo_valid(dut: DeviceUnderTest, variable_tpdo, evidence: Evidence) -> None:
     """With the PDO valid (COB-ID bit 31 clear), sub 0 = 0 is refused and the mapping stays (CiA 301 §7.5.2.36
     step 1; CTT PDO 23/24). CiA 301 names no code: the code is recorded, not judged."""
+    found = dut.profile.quirk_with_effect(fx.MappingChangeWhileValid.effect)
+    if found is not None:
+        evidence.deviation(found[0], found[1].title)
+        pytest.skip(f"not applicable: the manual's procedure changes the mapping with the PDO valid (quirk "
+                    f"{found[0]}; test_documented_procedure_with_pdo_valid checks it)")
     tpdo, _ = variable_tpdo
     before = read_mapping(dut, tpdo.comm)
+    _make_valid(dut, tpdo, before, evidence)
+    response = _write(dut, tpdo.mapping, 0, 0, 1)
+    evidence.rests_on("cia", PROCEDURE)
+    evidence.note(f"{tpdo.mapping:04X}h.00 = 0 with the PDO valid: {response.describe()}")
+    assert response.is_abort, f"{tpdo.mapping:04X}h.00 = 0 written while {tpdo.comm:04X}h is valid: accepted"
+    _unchanged(dut, tpdo, before, "sub 0 written while the PDO was valid")
+
+
+def _make_valid(dut: DeviceUnderTest, tpdo: VariableMapping, before: list[Entry], evidence: Evidence) -> None:
+    """Clear COB-ID bit 31 where the PDO is invalid (the custody puts it back); skips if it maps nothing."""
     cob_id = dut.read_uint(tpdo.comm, 1)
     if cob_id & COB_ID_INVALID:
         if not before:
             pytest.skip(f"not applicable: {tpdo.comm:04X}h is invalid and maps nothing")
         dut.write_uint(tpdo.comm, 1, cob_id_valid(cob_id), 4)
         evidence.note(f"{tpdo.comm:04X}h.01 bit 31 cleared (PDO valid) for the test")
-    response = _write(dut, tpdo.mapping, 0, 0, 1)
-    evidence.rests_on("cia", PROCEDURE)
-    evidence.note(f"{tpdo.mapping:04X}h.00 = 0 with the PDO valid: {response.describe()}")
-    assert response.is_abort, f"{tpdo.mapping:04X}h.00 = 0 written while {tpdo.comm:04X}h is valid: accepted"
-    _unchanged(dut, tpdo, before, "sub 0 written while the PDO was valid")
+
+
+def test_documented_procedure_with_pdo_valid(dut: DeviceUnderTest, variable_tpdo, evidence: Evidence) -> None:
+    """Documented quirk: the manual's procedure (sub 0 = 0, the entries, sub 0 = n) changes the mapping while the
+    PDO stays valid; every step is accepted and the mapping reads as written."""
+    params = documented_quirk(dut, fx.MappingChangeWhileValid, evidence,
+                              "the CiA 301 procedure makes the PDO invalid first")
+    tpdo, _ = variable_tpdo
+    before = read_mapping(dut, tpdo.comm)
+    _make_valid(dut, tpdo, before, evidence)
+    plan = _plan(dut, tpdo.slots)
+    steps = [(0, 0, 1), *((sub, mapping_word(*entry), 4) for sub, entry in enumerate(plan, start=1)),
+             (0, len(plan), 1)]
+    refused = []
+    for sub, value, size in steps:
+        response = _write(dut, tpdo.mapping, sub, value, size)
+        if response.is_abort:
+            refused.append(f"{tpdo.mapping:04X}h.{sub:02X} = {value:0{2 * size}X}h: {response.describe()}")
+    evidence.rests_on("manual", f"{params.procedure}")
+    evidence.note(f"{tpdo.mapping:04X}h with {tpdo.comm:04X}h valid: {describe(before)} -> {describe(plan)}")
+    assert not refused, "the documented procedure with the PDO valid was refused:\n" + "\n".join(refused)
+    after = read_mapping(dut, tpdo.comm)
+    assert after == plan, f"{tpdo.mapping:04X}h reads {describe(after)} after the procedure, written {describe(plan)}"
 
 
 # -- dummy entries and fixed mappings ---------------------------------------------------------------------

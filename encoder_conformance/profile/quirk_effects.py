@@ -516,6 +516,14 @@ class MappingLengthDiffers(EffectParams):
     mapped_bits: Documentation = _doc("the length the mapping gives")
 
 
+class MappingChangeWhileValid(EffectParams):
+    """The mapping is changed with the PDO valid: sub 0 = 0 alone unlocks the entries (the manual's procedure
+    never sets COB-ID bit 31, CiA 301 §7.5.2.36 step 1), so mapping writes are accepted while the PDO is valid."""
+
+    effect = "mapping_change_while_valid"
+    procedure: Documentation = _doc("the manual's procedure, in its own words")
+
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -527,5 +535,6 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
         UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
         OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange, ZeroingObject, MappingLengthDiffers,
+        MappingChangeWhileValid,
     )
 }

@@ -25,6 +25,7 @@ from ..cia301 import (
     mapping_fields,
 )
 from ..profile.model import DeviceProfile
+from ..profile.quirk_effects import MappingChangeWhileValid
 from .faults import breaks
 from .hooks import NodeHooks, Value
 from .nvm import Key
@@ -44,6 +45,8 @@ class MappingRules:
         self._read = read
         self._no_object = codes["no_object"]
         self._dummies = frozenset(profile.capabilities.pdo_dummy_mapping)
+        # quirk mapping_change_while_valid: the manual's procedure never makes the PDO invalid
+        self._valid_pdo_open = profile.quirk_of(MappingChangeWhileValid) is not None
 
     def register(self, hooks: NodeHooks) -> None:
         hooks.gates.append(self.gate)
@@ -64,7 +67,10 @@ class MappingRules:
             self.check_entry(*mapping_fields(value))
 
     def pdo_valid(self, comm: int) -> bool:
-        """The PDO is valid (COB-ID bit 31 clear) and could be made invalid (its COB-ID is writable)."""
+        """The PDO is valid (COB-ID bit 31 clear) and could be made invalid (its COB-ID is writable), and the
+        profile documents no procedure without invalidating it."""
+        if self._valid_pdo_open:
+            return False
         entry = self._profile.entry(comm, 1)
         cob_id = self._read(comm, 1)
         return entry is not None and entry.writable and cob_id is not None and not cob_id & COB_ID_INVALID
@@ -106,6 +112,13 @@ class MappingRules:
 class AcceptedWhileValid(MappingRules):
     def pdo_valid(self, comm: int) -> bool:
         return False
+
+
+@breaks(MappingRules, "mapping_change_while_valid_refused")
+class DocumentedProcedureRefused(MappingRules):
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._valid_pdo_open = False  # quirk mapping_change_while_valid ignored: the CiA rule after all
 
 
 @breaks(MappingRules, "mapping_entries_while_enabled_count")
