@@ -38,8 +38,10 @@ class TpdoEngine:
         timer_zero_disables_255: bool = False,
         layout: FixedTpdoLayout | None = None,
         repeat: SendRepeatCounters | None = None,
+        response_max_s: float = 0.01,
     ) -> None:
         self._scheduler = scheduler
+        self._response_max_s = response_max_s  # the profile's pdo_response_max_ms (what a late fault exceeds)
         self._repeat = repeat
         self._read = read
         self._mapped_bytes = mapped_bytes
@@ -183,7 +185,7 @@ class TpdoEngine:
                 if config.sync_count >= config.sync_every:
                     config.sync_count = 0
                     if within_sync_limit(config, self._payload(config)):
-                        self._transmit(config)
+                        self.answer_sync(config)
             elif config.acyclic_sync and self._payload(config) != config.last_payload:
                 self._transmit(config)
 
@@ -204,27 +206,38 @@ class TpdoEngine:
                 config.repeats_left -= 1
                 self._transmit(config)
 
+    def answer_sync(self, config: TpdoConfig) -> None:
+        """A SYNC-counted TPDO whose SYNC came: sent at once."""
+        self._transmit(config)
+
     def _payload(self, config: TpdoConfig) -> bytes:
         data = b"".join(self._mapped_bytes(i, s, bits) for i, s, bits in config.mapping)
         return data[:8]
 
     def _transmit(self, config: TpdoConfig, inhibit: bool = True) -> None:
-        """Send now, or, for an event-driven TPDO inside its inhibit time, once that time is over (CiA 301
-        §7.5.2.35: the inhibit time applies to types 254/255 only, and delays a transmission, never drops it)."""
+        """Send now, or, inside the inhibit time, as ``inside_inhibit`` decides."""
         if not self.running:
             return
         now = time.monotonic()
-        wait = config.inhibit_100us / 10000 - (now - config.last_sent)
-        if inhibit and config.inhibit_100us and config.transmission_type in (254, 255) and wait > 0:
-            if not config.delayed:
-                config.delayed = True
-                self._jobs.append(self._scheduler.call_later(wait, lambda: self._send_delayed(config)))
+        wait = self.inhibit_s(config) - (now - config.last_sent)
+        if inhibit and wait > 0:
+            self.inside_inhibit(config, wait)
             return
         payload = self._payload(config)
         config.last_payload = payload
-        config.last_sent = now
         self._send(config.cob_id, payload)
+        config.last_sent = time.monotonic()  # after the frame is stamped: the next one is an inhibit time later
 
+    def inhibit_s(self, config: TpdoConfig) -> float:
+        """The minimum time between two transmissions (CiA 301 §7.5.2.35: sub 3 in 100 us, types 254/255 only)."""
+        return config.inhibit_100us / 10000 if config.transmission_type in (254, 255) else 0.0
+
+    def inside_inhibit(self, config: TpdoConfig, wait: float) -> None:
+        """A transmission inside the inhibit time is delayed, never dropped (CiA 301 §7.5.2.35): one send when the
+        time is over, carrying the values of that moment."""
+        if not config.delayed:
+            config.delayed = True
+            self._jobs.append(self._scheduler.call_later(wait, lambda: self._send_delayed(config)))
 
     def _send_delayed(self, config: TpdoConfig) -> None:
         config.delayed = False
@@ -273,3 +286,22 @@ class EventTimerOutsideOperational(TpdoEngine):
     def on_sync(self) -> None:
         if not self.left_operational:  # SYNC-driven TPDOs do stop
             super().on_sync()
+
+
+@breaks(TpdoEngine, "inhibit_ignored")
+class InhibitIgnored(TpdoEngine):
+    def inhibit_s(self, config: TpdoConfig) -> float:
+        return 0.0  # every change goes out at once, however close to the previous frame
+
+
+@breaks(TpdoEngine, "inhibit_drops_events")
+class InhibitDropsEvents(TpdoEngine):
+    def inside_inhibit(self, config: TpdoConfig, wait: float) -> None:
+        config.last_payload = self._payload(config)  # the change is taken and thrown away: nothing follows it
+
+
+@breaks(TpdoEngine, "sync_tpdo_late")
+class SyncTpdoLate(TpdoEngine):
+    def answer_sync(self, config: TpdoConfig) -> None:
+        delay = 3 * self._response_max_s
+        self._jobs.append(self._scheduler.call_later(delay, lambda: self._transmit(config)))
