@@ -21,6 +21,7 @@ MAIN_PROFILE = "wachendorff-wdga-mt"
 #: type 255 without timer on the WayCon, send-repeat counters and PDO2 disabled at init on the SIKO)
 COMPLEMENT_PROFILES = [
     "tests/data/profiles/minimal-encoder.yaml",
+    "tests/data/profiles/cia406-full-pdo.yaml",  # inhibit time (18xxh sub 3): test_pdo_timing's inhibit tests
     "tests/data/profiles/posital-fast-reboot.yaml",
     "cia406-c3-st",
     "faulhaber-mc5005",

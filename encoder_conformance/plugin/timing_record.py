@@ -63,7 +63,8 @@ class TimingMeasurement:
         if self._png is None:
             from .timing_plot import render_png
 
-            self._png = render_png(self)
+            self._png = render_png(self.name, self.samples, self.nominal, self.low, self.high, self.sample_label,
+                                   self.unit)
         return self._png
 
     def html_table(self) -> str:
