@@ -36,7 +36,7 @@ def test_event_timer_period_within_tolerance(dut, periodic_capture, evidence):
     periodic_capture.judge(periodic_capture.event_timer, evidence, dut.profile.timing.heartbeat_tolerance)
 
 
-def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, evidence):
+def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, twin_lateness, evidence):
     """Transmission type 1: each of 50 SYNCs, 10 ms apart, is answered by one TPDO (CiA 301), within the profile's
     pdo_response_max_ms of the SYNC (inferred: CiA 301 gives no bound). Latency: the TPDO's timestamp minus its
     SYNC's, both from the frame log."""
@@ -54,7 +54,7 @@ def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, evi
     ready = dut.frames.wait_for(is_tpdo, dut.profile.timing.nmt_settle_ms / 1000 + dut.pdo_silence_s, started)
     assert ready is not None, f"no TPDO on {cob_id:03X}h ({comm:04X}h type 1) after NMT start and a SYNC"
     mark = dut.frames.mark()
-    with LatencyProbe() as probe:
+    with LatencyProbe(twin_lateness) as probe:
         for _ in range(SYNCS):
             dut.send_sync()
             dut.frames.quiet_period(lambda m: False, SYNC_SPACING_S)  # the bus cycle: an observation window
@@ -110,7 +110,7 @@ def _inhibited_tpdo(dut, settings_journal, evidence, shaft, inhibit_ms: int) -> 
     return comm, cob_id
 
 
-def test_inhibit_time_spaces_tpdos(dut, settings_journal, back_to_preoperational, shaft, evidence):
+def test_inhibit_time_spaces_tpdos(dut, settings_journal, back_to_preoperational, shaft, twin_lateness, evidence):
     """A change-driven TPDO with inhibit time 20 ms, the position changed right after each frame (inside every
     inhibit time): no two frames closer than 20 ms (>= 50 intervals; tolerance for the tester's clock)."""
     comm, cob_id = _inhibited_tpdo(dut, settings_journal, evidence, shaft, INHIBIT_MS)
@@ -124,7 +124,7 @@ def test_inhibit_time_spaces_tpdos(dut, settings_journal, back_to_preoperational
     reactions: list[float] = []  # ms from a frame to the tester's next position change (inside the inhibit time?)
     wait = (INHIBIT_MS + dut.profile.timing.pdo_response_max_ms) / 1000 + dut.pdo_silence_s
     deadline = time.monotonic() + (SYNCS + 1) * 2 * wait + dut.profile.timing.nmt_settle_ms / 1000
-    with LatencyProbe() as probe:
+    with LatencyProbe(twin_lateness) as probe:
         while len(frames) < SYNCS + 1 and time.monotonic() < deadline:
             after = dut.frames.mark()
             shaft.turn_by(STEP_REV)
