@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import allure
 import pytest
 
 from .cia301 import ABORT_FOR_SITUATION
@@ -60,7 +59,7 @@ def assert_abort(dut: DeviceUnderTest, response: SdoResponse, expected: set[int]
 
 
 def check_periodic(timestamps: list[float], period_ms: float, tolerance: HeartbeatTolerance, what: str,
-                   evidence: Evidence, host: HostLatency | None = None) -> None:
+                   evidence: Evidence, host: HostLatency | None = None, clock: str = "not stated") -> None:
     """Periodic frames: the long-run period (fitted over all frames) within the tolerance, and the frames
     on their schedule.
 
@@ -69,7 +68,8 @@ def check_periodic(timestamps: list[float], period_ms: float, tolerance: Heartbe
     period. With ``host`` (the tester host's own lateness during the capture), a verdict that would fail
     is inconclusive (skipped with the figures) where the host explains it: every frame off the schedule
     came when the host itself ran that late, or the period is off while the host was late throughout.
-    Evidence: the measurements, the host's lateness and the intervals as CSV.
+    Evidence: the measurements, the host's lateness, and the intervals as a timing measurement (statistics and
+    plot, stamped by ``clock``).
     """
     allowed = tolerance.allowed_ms(period_ms)
     stats = interval_stats(timestamps, period_ms)
@@ -80,9 +80,13 @@ def check_periodic(timestamps: list[float], period_ms: float, tolerance: Heartbe
                      period_ms - allowed, period_ms + allowed)
     evidence.measure(f"{what} mean interval", round(stats.mean_ms, 3), "ms")
     evidence.measure(f"{what} frames off schedule by > {allowed:.1f} ms", len(late), "frames", 0, may_be_late)
-    allure.attach(stats.csv(), name=f"{what} intervals.csv", attachment_type=allure.attachment_type.CSV)
-    evidence.note("basis of the tolerance: inferred (CiA 301 sets the period, no tolerance); "
-                  "profile timing.heartbeat_tolerance")
+    basis = ("inferred: CiA 301 sets the period, no tolerance; profile timing.heartbeat_tolerance "
+             f"max({tolerance.abs_ms:g} ms, {tolerance.rel:.0%})")
+    evidence.timing(f"{what} interval", stats.intervals_ms, nominal_ms=period_ms, low_ms=period_ms - allowed,
+                    high_ms=period_ms + allowed, clock=clock, basis=basis,
+                    judged=f"the period fitted over all frames, and at most {may_be_late} frame(s) further than the "
+                           "band's half-width from the fitted schedule (one late frame moves two intervals)")
+    evidence.note(f"basis of the tolerance: {basis}")
     if host is not None:
         evidence.note(f"tester host during the capture: {host.describe()}")
     if late and len(late) <= may_be_late:

@@ -69,7 +69,6 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "sync_tpdo_every_sync": "a TPDO with transmission type n (1..240) is sent on every SYNC, not every n-th",
             "sync_tpdo_off_by_one": "a TPDO with transmission type n (1..240) is sent on every (n+1)-th SYNC",
             "type_255_timer_0_sends": "type 255 with event timer 0 sends on change (quirk says it disables the TPDO)",
-            "event_timer_slow_20pct": "TPDO event timers run 20 % slower than 18xxh sub 5 says",
             "event_timer_outside_operational": "TPDO event timers keep firing after the device left operational "
                                                "(SYNC-driven TPDOs stop)",
             "send_repeat_counter_ignored": (
@@ -104,6 +103,16 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
                                                "change of their mapped value; SYNC TPDOs and timers stop",
             "preop_only_writes_accepted": "quirk writes_preop_only ignored: the listed objects are writable in "
                                           "operational too",
+        },
+    ),
+    (  # PDO timing: SYNC-to-TPDO latency, inhibit time
+        ("test_pdo_timing",),
+        {
+            "event_timer_slow_20pct": "TPDO event timers run 20 % slower than 18xxh sub 5 says",
+            "inhibit_ignored": "a change-driven TPDO (254/255) goes out at once inside its inhibit time (18xxh sub 3)",
+            "inhibit_drops_events": "a change inside a TPDO's inhibit time is dropped instead of sent when the time "
+                                    "is over",
+            "sync_tpdo_late": "SYNC-driven TPDOs go out 3 x the profile's pdo_response_max_ms after their SYNC",
         },
     ),
     (  # heartbeat
@@ -285,6 +294,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #:   CAM2 2049..4095); the fault shows only at the high limit itself.
 #: - change_of_state_ignored: that a 254/255 TPDO with timer 0 is sent on a change of its mapped position is
 #:   our reading of "event-driven" (CiA 301 §7.5.2.35 leaves the event to the manufacturer or profile).
+#: - sync_tpdo_late: CiA 301 bounds no SYNC-to-TPDO latency; the limit is the profile's pdo_response_max_ms,
+#:   our inference unless a manual gives it.
 #: Judged without it (the rule that catches them is documented):
 #: - work_area_flags_swapped: 02h above / 04h below is CiA 406 6400h and WDGA T 6.9; only the edges are
 #:   inferred, and the swap shows at every position outside the area, not only at an edge;
@@ -294,7 +305,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #:   enabled cams can change state"), not only the inferred value 0 of its bit;
 #: - the position, preset, speed and TPDO faults, cam_polarity_ignored, cam_on_unscaled_value and
 #:   cam_low_order_ignored break CiA 406 or the profile's manual directly.
-JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored"})
+JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored", "sync_tpdo_late"})
 
 
 def faults_for(effects: Iterable[str]) -> list[str]:

@@ -1,10 +1,61 @@
-"""Interval statistics for periodic frames (heartbeat, event timers), judged with profile tolerances."""
+"""Timing statistics: intervals of periodic frames (heartbeat, event timers, inhibit spacing) and latencies
+(SYNC to TPDO), summarised the same way and judged with profile tolerances."""
 
 from __future__ import annotations
 
 import itertools
+import math
 import statistics
 from dataclasses import dataclass
+
+
+def percentile(values: list[float] | tuple[float, ...], share: float) -> float:
+    """The ``share`` (0..1) percentile by linear interpolation between the closest ranks (numpy's default),
+    so that p50 is the median and p100 the maximum for any count."""
+    ordered = sorted(values)
+    if not ordered:
+        return math.nan
+    rank = share * (len(ordered) - 1)
+    low = math.floor(rank)
+    high = min(low + 1, len(ordered) - 1)
+    return ordered[low] + (ordered[high] - ordered[low]) * (rank - low)
+
+
+@dataclass(frozen=True)
+class TimingSummary:
+    """Count, mean, p50, p95, p99 and max of timing samples (intervals or latencies, ms), with their error
+    against the nominal value (the period, or 0 for a latency)."""
+
+    count: int
+    mean: float
+    p50: float
+    p95: float
+    p99: float
+    min: float
+    max: float
+    nominal: float
+
+    @classmethod
+    def of(cls, samples: list[float] | tuple[float, ...], nominal: float) -> TimingSummary:
+        if not samples:
+            return cls(0, *(math.nan,) * 6, nominal)
+        return cls(len(samples), statistics.fmean(samples), percentile(samples, 0.5), percentile(samples, 0.95),
+                   percentile(samples, 0.99), min(samples), max(samples), nominal)
+
+    @property
+    def p99_error(self) -> float:
+        """The p99 sample's distance from the nominal value (signed)."""
+        return self.p99 - self.nominal
+
+    @property
+    def worst_error(self) -> float:
+        """The largest distance of any sample from the nominal value (unsigned)."""
+        return max(abs(self.max - self.nominal), abs(self.min - self.nominal))
+
+    def figures(self) -> dict[str, float]:
+        """The figures by name, for tables and properties."""
+        return {"count": self.count, "mean": self.mean, "p50": self.p50, "p95": self.p95, "p99": self.p99,
+                "max": self.max, "min": self.min, "nominal": self.nominal, "worst error": self.worst_error}
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
 from fixtures.dut import return_to_preoperational
-from fixtures.pdo import configurable_tpdo
+from fixtures.tpdo import configurable_tpdo
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.35 (TPDO communication parameter)"), pytest.mark.requires("tpdos")]
 

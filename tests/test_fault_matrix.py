@@ -22,6 +22,7 @@ MAIN_PROFILE = "wachendorff-wdga-mt"
 #: start value and 1019h of the full-PDO self-test variant)
 COMPLEMENT_PROFILES = [
     "tests/data/profiles/minimal-encoder.yaml",
+    "tests/data/profiles/cia406-full-pdo.yaml",  # inhibit time (18xxh sub 3): test_pdo_timing's inhibit tests
     "tests/data/profiles/posital-fast-reboot.yaml",
     "cia406-c3-st",
     "faulhaber-mc5005",

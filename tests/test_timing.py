@@ -90,3 +90,37 @@ def test_probe_measures_wakeups():
     result = probe.result()
     assert result.samples >= 5
     assert 0 <= result.p95_ms <= result.worst_ms
+
+
+def test_timing_summary_percentiles_and_error():
+    from encoder_conformance.timing import TimingSummary
+
+    summary = TimingSummary.of([float(n) for n in range(1, 101)], nominal=50.0)
+    assert (summary.count, summary.p50, summary.max) == (100, 50.5, 100.0)
+    assert summary.p99 == pytest.approx(99.01)
+    assert summary.p99_error == pytest.approx(49.01)
+    assert summary.worst_error == 50.0
+
+
+def test_timing_measurement_gives_junit_figures_csv_and_a_small_png():
+    evidence = Evidence()
+    record = evidence.timing("heartbeat interval", [50.0, 50.2, 49.8, 56.7], nominal_ms=50, low_ms=45, high_ms=55,
+                             clock="host clock", basis="inferred", judged="fitted period")
+    properties = dict(record.properties())
+    assert properties["timing heartbeat interval p50_ms"] == "50.100"
+    assert properties["timing heartbeat interval limits_ms"] == "[45.00 .. 55.00] ms"
+    assert record.outside() == 1
+    assert record.csv().splitlines()[:2] == ["n,interval_ms", "0,50.000"]
+    png = record.png()
+    assert png.startswith(b"\x89PNG")
+    assert len(png) < 60_000
+
+
+def test_frame_clock_says_which_clock_judged():
+    from encoder_conformance.dut.clock import frame_clock
+
+    assert frame_clock({"interface": "pcan"}).hardware
+    virtual = frame_clock({"interface": "virtual"})
+    assert not virtual.hardware
+    assert "no hardware timestamps" in virtual.describe()
+    assert "just before send" in frame_clock({"interface": "remote"}, simulated=True).describe(own_frames_too=True)

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import can
 
 from ..errors import BusLostError
+from .clock import FrameClock
 
 log = logging.getLogger(__name__)
 
@@ -41,6 +42,8 @@ class FrameLog(can.Listener):
         self._cond = threading.Condition()
         self._listeners: list[can.Listener] = []
         self.closed_reason: str | None = None
+        #: what stamps the frames (set where the bus is opened): timing verdicts say which clock judged
+        self.clock = FrameClock("not known (the bus was opened without saying which clock stamps it)", False)
 
     def close(self, reason: str) -> None:
         """The bus is gone: wake every wait (they raise BusLostError from now on)."""

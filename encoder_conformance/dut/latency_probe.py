@@ -12,9 +12,12 @@ from __future__ import annotations
 import statistics
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 TICK_S = 0.005
+#: the simulated twin's own lateness since a time.time(): (when, ms late) of each job its timing thread ran
+TwinLateness = Callable[[float], list[tuple[float, float]]]
 
 
 @dataclass(frozen=True)
@@ -26,14 +29,17 @@ class HostLatency:
     worst_ms: float
     p95_ms: float
     wakeups: tuple[tuple[float, float], ...] = ()  # (time.time(), lateness ms)
+    twin_worst_ms: float | None = None  # the simulated twin's timing thread (same host), where there is one
 
     def worst_near(self, when: float, window_s: float) -> float:
         """The latest wake-up (ms) within ``window_s`` of ``when``."""
         return max((late for t, late in self.wakeups if abs(t - when) <= window_s), default=0.0)
 
     def describe(self) -> str:
+        twin = "" if self.twin_worst_ms is None else \
+            f"; the simulated twin's timing thread ran up to {self.twin_worst_ms:.1f} ms late"
         return f"the tester's own {TICK_S * 1000:.0f} ms timer woke up to {self.worst_ms:.1f} ms late " \
-               f"(p95 {self.p95_ms:.1f} ms, {self.samples} wake-ups)"
+               f"(p95 {self.p95_ms:.1f} ms, {self.samples} wake-ups){twin}"
 
     def sustained(self, tolerance_ms: float) -> bool:
         """True when the host ran later than ``tolerance_ms`` for more than 5 % of the window."""
@@ -41,20 +47,28 @@ class HostLatency:
 
 
 class LatencyProbe:
-    """Context manager: ``with LatencyProbe() as probe: ...; probe.result()``."""
+    """Context manager: ``with LatencyProbe() as probe: ...; probe.result()``. With ``twin`` (the simulator's
+    control channel), the twin's own scheduling lateness on the same host counts too: a twin that ran late
+    sends late frames, and that is the host's doing, not the device's."""
 
-    def __init__(self) -> None:
+    def __init__(self, twin: TwinLateness | None = None) -> None:
+        self._twin = twin
+        self._twin_wakeups: list[tuple[float, float]] | None = None
+        self._started = time.time()
         self._wakeups: list[tuple[float, float]] = []
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="host-latency-probe", daemon=True)
 
     def __enter__(self) -> LatencyProbe:
+        self._started = time.time()
         self._thread.start()
         return self
 
     def __exit__(self, *exc: object) -> None:
         self._stop.set()
         self._thread.join(1.0)
+        if self._twin is not None:
+            self._twin_wakeups = [tuple(entry) for entry in self._twin(self._started)]  # type: ignore[misc]
 
     def _run(self) -> None:
         while True:
@@ -64,9 +78,12 @@ class LatencyProbe:
             self._wakeups.append((time.time(), max(0.0, (time.perf_counter() - due) * 1000)))
 
     def result(self) -> HostLatency:
-        wakeups = tuple(self._wakeups)
-        late = [ms for _, ms in wakeups]
+        """The tester's lateness (samples, worst, p95); ``worst_near`` also sees the twin's."""
+        twin = self._twin_wakeups
+        wakeups = tuple(sorted(self._wakeups + (twin or [])))
+        late = [ms for _, ms in self._wakeups]
+        twin_worst = max((ms for _, ms in twin), default=0.0) if twin is not None else None
         if not late:
-            return HostLatency(0, 0.0, 0.0)
+            return HostLatency(0, 0.0, 0.0, wakeups, twin_worst)
         p95 = statistics.quantiles(late, n=20)[-1] if len(late) >= 20 else max(late)
-        return HostLatency(len(late), max(late), p95, wakeups)
+        return HostLatency(len(late), max(late), p95, wakeups, twin_worst)

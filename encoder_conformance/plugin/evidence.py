@@ -10,8 +10,9 @@ from pathlib import Path
 import pytest
 
 from ..basis import BASES, Basis
+from .timing_record import TimingMeasurement
 
-__all__ = ["BASES", "EVIDENCE", "Basis", "Evidence", "InferredProblem", "Measurement"]
+__all__ = ["BASES", "EVIDENCE", "Basis", "Evidence", "InferredProblem", "Measurement", "TimingMeasurement"]
 
 
 @dataclass(frozen=True)
@@ -60,12 +61,23 @@ class Evidence:
     basis: Basis | None = None  # set where a test knows better than its spec marker (see verdict_basis)
     basis_source: str | None = None  # the clause or manual section the verdict rests on
     inferred: list[InferredProblem] = field(default_factory=list)
+    timings: list[TimingMeasurement] = field(default_factory=list)
 
     def measure(self, name: str, value: float, unit: str, low: float | None = None,
                 high: float | None = None) -> Measurement:
         measurement = Measurement(name, value, unit, low, high)
         self.measurements.append(measurement)
         return measurement
+
+    def timing(self, name: str, samples_ms: list[float] | tuple[float, ...], *, nominal_ms: float,
+               low_ms: float | None, high_ms: float | None, clock: str, basis: str, judged: str,
+               sample_label: str = "interval") -> TimingMeasurement:
+        """A named timing measurement (intervals or latencies in ms) with its band, the clock that stamped the
+        frames and what the limits rest on: shown in the report as statistics and a plot."""
+        record = TimingMeasurement(name, tuple(samples_ms), nominal_ms, low_ms, high_ms, clock, basis, judged,
+                                   sample_label)
+        self.timings.append(record)
+        return record
 
     def deviation(self, quirk_id: str, text: str) -> None:
         """The verdict relies on a documented deviation of the device (a profile quirk)."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import html
 import time
 from pathlib import Path
@@ -155,6 +156,13 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
         rows.append(f"<tr><th>note</th><td>{html.escape(note)}</td></tr>")
     if rows:
         extras.append(html_extras.html(f"<table class='evidence'>{''.join(rows)}</table>"))
+    for timing in evidence.timings:  # statistics and plot, one per timing measurement
+        image = base64.b64encode(timing.png()).decode("ascii")
+        extras.append(html_extras.html(f"<div class='timing'>{timing.html_table()}"
+                                       f"<img src='data:image/png;base64,{image}' alt='{html.escape(timing.name)}'>"
+                                       "</div>"))
+        for name, value in timing.properties():
+            add_property(item, report, name, value)
     folder = report_dir(item.config)
     if evidence.trace_path and evidence.trace_path.exists() and folder:
         relative = evidence.trace_path.relative_to(folder).as_posix()

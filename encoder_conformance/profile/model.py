@@ -384,7 +384,9 @@ class Timing(StrictModel):
         default=50, gt=0, description="LSS request to the slave's answer; CiA 305 gives no bound, so the default "
         "is this suite's inference (each LSS request nobody should answer waits this long)")
     heartbeat_test_period_ms: int = Field(default=50, ge=1, description="1017h value used by the tests")
-    heartbeat_intervals: int = Field(default=20, ge=20, description="intervals measured per check")
+    heartbeat_intervals: int = Field(
+        default=50, ge=50, description="intervals measured per periodic check (heartbeat, event timer): at least 50, "
+        "so that p95/p99 of the intervals mean something")
     heartbeat_tolerance: HeartbeatTolerance = HeartbeatTolerance()
     manual: str | None = None
 

@@ -52,6 +52,10 @@ class ControlApi:
     def describe(self) -> dict[str, Any]:
         return self._call("describe")
 
+    def scheduler_lateness(self, since: float) -> list[tuple[float, float]]:
+        """How late the twin's timing thread ran each job after ``since`` (time.time()): (when, ms late)."""
+        return self._call("scheduler_lateness", since)
+
     def close(self) -> None:
         """Release the channel."""
 
@@ -72,6 +76,7 @@ def _execute(host: SimulatorHost, command: str, node_id: int | None, args: tuple
         "set_speed": node.shaft.set_speed,
         "raise_emcy": node.raise_emcy,
         "describe": node.describe,
+        "scheduler_lateness": host.scheduler.lateness_since,
     }
     if command not in actions:
         raise ValueError(f"unknown command {command!r}; known: {', '.join(sorted(actions))}")

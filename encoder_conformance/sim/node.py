@@ -118,6 +118,7 @@ class SimulatedNode:
             timer_zero_disables_255=profile.has_effect(fx.TransmissionType255Timer0Disables),
             layout=self._built(fx.FixedTpdoMapping, FixedTpdoLayout.from_params),
             repeat=self._built(fx.PdoSendRepeatCounters, SendRepeatCounters.from_params),
+            response_max_s=profile.timing.pdo_response_max_ms / 1000,
         )
         for behaviour in self._behaviours(codes):
             behaviour.register(hooks)

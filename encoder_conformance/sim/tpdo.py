@@ -6,7 +6,9 @@ enters operational or a PDO parameter is written. A FixedTpdoLayout (quirk ``fix
 replaces mapping objects and transmission types the device does not have, and adds RTR answers.
 SendRepeatCounters (quirk ``pdo_send_repeat_counters``) add sends per change and a SYNC send limit.
 A behaviour: it registers for NMT state changes, SYNC, remote frames and writes to PDO parameters;
-faults that break it are the small classes at the bottom.
+faults that break it are the small classes at the bottom. The module is over 400 lines because those 19
+faults (one per PDO check, ~140 lines) sit next to the engine they break, as everywhere in sim/; the engine
+itself is under 300 lines.
 """
 
 from __future__ import annotations
@@ -40,8 +42,10 @@ class TpdoEngine:
         timer_zero_disables_255: bool = False,
         layout: FixedTpdoLayout | None = None,
         repeat: SendRepeatCounters | None = None,
+        response_max_s: float = 0.01,
     ) -> None:
         self._scheduler = scheduler
+        self._response_max_s = response_max_s  # the profile's pdo_response_max_ms (what a late fault exceeds)
         self._repeat = repeat
         self._read = read
         self._mapped_bytes = mapped_bytes
@@ -210,7 +214,7 @@ class TpdoEngine:
                 if config.sync_count >= config.sync_every:
                     config.sync_count = 0
                     if within_sync_limit(config, self._payload(config)):
-                        self._transmit(config)
+                        self.answer_sync(config)
             elif config.acyclic_sync and self.acyclic_due(config):
                 self._transmit(config)
 
@@ -242,27 +246,39 @@ class TpdoEngine:
         """Event-driven types: the mapped value differs from the one last sent."""
         return self._payload(config) != config.last_payload
 
+    def answer_sync(self, config: TpdoConfig) -> None:
+        """A SYNC-counted TPDO whose SYNC came: sent at once."""
+        self._transmit(config)
+
     def _payload(self, config: TpdoConfig) -> bytes:
         data = b"".join(self._mapped_bytes(i, s, bits) for i, s, bits in config.mapping)
         return data[:8]
 
     def _transmit(self, config: TpdoConfig, inhibit: bool = True, payload: bytes | None = None) -> None:
-        """Send now, or, for an event-driven TPDO inside its inhibit time, once that time is over (CiA 301
-        §7.5.2.35: the inhibit time applies to types 254/255 only, and delays a transmission, never drops it)."""
+        """Send now, or, inside the inhibit time, as ``inside_inhibit`` decides (``payload``: values sampled
+        earlier, e.g. at the SYNC of a type 252)."""
         if not self.running:
             return
         now = time.monotonic()
-        wait = config.inhibit_100us / 10000 - (now - config.last_sent)
-        if inhibit and config.inhibit_100us and config.transmission_type in (254, 255) and wait > 0:
-            if not config.delayed:
-                config.delayed = True
-                self._jobs.append(self._scheduler.call_later(wait, lambda: self._send_delayed(config)))
+        wait = self.inhibit_s(config) - (now - config.last_sent)
+        if inhibit and wait > 0:
+            self.inside_inhibit(config, wait)
             return
         payload = self._payload(config) if payload is None else payload
         config.last_payload = payload
-        config.last_sent = now
         self._send(config.cob_id, payload)
+        config.last_sent = time.monotonic()  # after the frame is stamped: the next one is an inhibit time later
 
+    def inhibit_s(self, config: TpdoConfig) -> float:
+        """The minimum time between two transmissions (CiA 301 §7.5.2.35: sub 3 in 100 us, types 254/255 only)."""
+        return config.inhibit_100us / 10000 if config.transmission_type in (254, 255) else 0.0
+
+    def inside_inhibit(self, config: TpdoConfig, wait: float) -> None:
+        """A transmission inside the inhibit time is delayed, never dropped (CiA 301 §7.5.2.35): one send when the
+        time is over, carrying the values of that moment."""
+        if not config.delayed:
+            config.delayed = True
+            self._jobs.append(self._scheduler.call_later(wait, lambda: self._send_delayed(config)))
 
     def _send_delayed(self, config: TpdoConfig) -> None:
         config.delayed = False
@@ -391,3 +407,23 @@ class PayloadNotMatchingMapping(TpdoEngine):
             reverse = TpdoConfig(**{**config.__dict__, "mapping": config.mapping[::-1]})
             return super()._payload(reverse)
         return (b"\x00" + super()._payload(config))[:8]
+
+
+
+@breaks(TpdoEngine, "inhibit_ignored")
+class InhibitIgnored(TpdoEngine):
+    def inhibit_s(self, config: TpdoConfig) -> float:
+        return 0.0  # every change goes out at once, however close to the previous frame
+
+
+@breaks(TpdoEngine, "inhibit_drops_events")
+class InhibitDropsEvents(TpdoEngine):
+    def inside_inhibit(self, config: TpdoConfig, wait: float) -> None:
+        config.last_payload = self._payload(config)  # the change is taken and thrown away: nothing follows it
+
+
+@breaks(TpdoEngine, "sync_tpdo_late")
+class SyncTpdoLate(TpdoEngine):
+    def answer_sync(self, config: TpdoConfig) -> None:
+        delay = 3 * self._response_max_s
+        self._jobs.append(self._scheduler.call_later(delay, lambda: self._transmit(config)))
