@@ -4,7 +4,8 @@ A timing verdict that fails once in twenty runs of a conformant twin is the test
 the device's. This runs the suites (or a ``-k`` selection) ``runs`` times against the twin,
 ``parallel`` at a time, each a separate pytest process parsed from its JUnit XML (as the fault matrix
 does), and lists every test that did not pass every time. Measurements recorded as JUnit properties
-(``measurement:<name>``) are summarised over the runs (worst value seen), so the margin a timing
+(``timing <name> <figure>``, see plugin/timing_record.py) are summarised over the runs (the lowest and
+highest value seen), with the limits each run reported, so the margin a timing
 limit leaves on this machine can be read off.
 """
 
@@ -19,7 +20,7 @@ from pathlib import Path
 from .fault_matrix import RunResult, run_suite
 from .host_load import busy_process
 
-MEASUREMENT_PREFIX = "measurement:"
+MEASUREMENT_PREFIX = "timing "
 
 
 @dataclass
@@ -28,6 +29,7 @@ class RepeatedRuns:
 
     runs: list[RunResult]
     measurements: dict[tuple[str, str], list[float]] = field(default_factory=dict)
+    limits: dict[tuple[str, str], set[str]] = field(default_factory=dict)  # (test, measurement) -> bands seen
 
     def outcomes(self) -> dict[str, Counter[str]]:
         """Test -> how often it passed, failed, skipped or errored."""
@@ -55,12 +57,15 @@ class RepeatedRuns:
             lines.append("measurements over all runs (min / max):")
             for (test, name), values in sorted(self.measurements.items()):
                 lines.append(f"  {test} {name}: {min(values):g} / {max(values):g} ({len(values)} values)")
+            for (test, name), bands in sorted(self.limits.items()):
+                lines.append(f"  {test} {name}: {' | '.join(sorted(bands))}")
         return "\n".join(lines)
 
 
-def _measurements(junit: Path) -> dict[tuple[str, str], float]:
-    """Numeric ``measurement:`` properties of every test case in one JUnit file."""
-    found: dict[tuple[str, str], float] = {}
+def _measurements(junit: Path) -> dict[tuple[str, str], float | str]:
+    """``timing`` properties of every test case in one JUnit file: numbers as float, the rest (limit bands,
+    the clock) as text."""
+    found: dict[tuple[str, str], float | str] = {}
     if not junit.exists():
         return found
     for case in ET.parse(junit).getroot().iter("testcase"):
@@ -68,10 +73,11 @@ def _measurements(junit: Path) -> dict[tuple[str, str], float]:
         for prop in case.iter("property"):
             name, value = prop.get("name", ""), prop.get("value", "")
             if name.startswith(MEASUREMENT_PREFIX):
+                key = (test, name.removeprefix(MEASUREMENT_PREFIX))
                 try:
-                    found[(test, name.removeprefix(MEASUREMENT_PREFIX))] = float(value.split()[0])
-                except (ValueError, IndexError):
-                    continue
+                    found[key] = float(value)
+                except ValueError:
+                    found[key] = value
     return found
 
 
@@ -80,17 +86,21 @@ def repeat_runs(profile: str, runs: int, workdir: Path, select: str | None = Non
     """``runs`` runs of the suites against the ``profile`` twin, ``parallel`` at a time (``busy``: beside a
     process keeping one core busy)."""
 
-    def one(number: int) -> tuple[RunResult, dict[tuple[str, str], float]]:
+    def one(number: int) -> tuple[RunResult, dict[tuple[str, str], float | str]]:
         folder = workdir / f"run-{number:02d}"
         result = run_suite(profile, None, folder, select)
         return result, _measurements(folder / "no-fault" / "junit.xml")
 
     collected = RepeatedRuns([])
     values: dict[tuple[str, str], list[float]] = defaultdict(list)
+    limits: dict[tuple[str, str], set[str]] = defaultdict(set)
     with busy_process(busy), ThreadPoolExecutor(max_workers=parallel) as pool:
         for result, found in pool.map(one, range(runs)):
             collected.runs.append(result)
             for key, value in found.items():
-                values[key].append(value)
-    collected.measurements = dict(values)
+                if isinstance(value, float):
+                    values[key].append(value)
+                elif key[1].endswith(("limits_ms", "limits")):
+                    limits[key].add(value)
+    collected.measurements, collected.limits = dict(values), dict(limits)
     return collected

@@ -12,7 +12,8 @@ from encoder_conformance.repeat_runs import RepeatedRuns, _measurements
 
 JUNIT = """<testsuites><testsuite>
 <testcase classname="suites.test_pdo_timing" name="test_latency">
-  <properties><property name="measurement:latency p99" value="1.25 ms"/><property name="basis" value="cia"/>
+  <properties><property name="timing latency p99_ms" value="1.250"/><property name="basis" value="cia"/>
+  <property name="timing latency limits_ms" value="[.. 10.00] ms"/>
   </properties></testcase>
 <testcase classname="suites.test_pdo" name="test_other"/>
 </testsuite></testsuites>"""
@@ -21,7 +22,8 @@ JUNIT = """<testsuites><testsuite>
 def test_measurements_read_from_junit_properties(tmp_path):
     path = tmp_path / "junit.xml"
     path.write_text(JUNIT, encoding="utf-8")
-    assert _measurements(path) == {("test_pdo_timing::test_latency", "latency p99"): 1.25}
+    assert _measurements(path) == {("test_pdo_timing::test_latency", "latency p99_ms"): 1.25,
+                                   ("test_pdo_timing::test_latency", "latency limits_ms"): "[.. 10.00] ms"}
 
 
 def test_a_test_failing_once_is_failing_and_an_inconclusive_skip_only_unstable():
