@@ -21,6 +21,7 @@ from .fault_matrix import RunResult, run_suite
 from .host_load import busy_process
 
 MEASUREMENT_PREFIX = "timing "
+SHOWN = ("p50", "p99", "max")  # the figures the summary lists per timing measurement
 
 
 @dataclass
@@ -47,6 +48,10 @@ class RepeatedRuns:
         """Tests that failed or errored at least once."""
         return {t: c for t, c in self.outcomes().items() if c["failed"] or c["error"]}
 
+    def _range(self, test: str, key: str) -> str:
+        values = self.measurements.get((test, key))
+        return f"{min(values):.2f}..{max(values):.2f}" if values else "-"
+
     def format(self) -> str:
         lines = [f"{len(self.runs)} runs: return codes {dict(Counter(r.returncode for r in self.runs))}"]
         unstable = self.unstable()
@@ -54,11 +59,11 @@ class RepeatedRuns:
                      f"{len(unstable)}")
         lines += [f"  {test}: {dict(counts)}" for test, counts in sorted(unstable.items())]
         if self.measurements:
-            lines.append("measurements over all runs (min / max):")
-            for (test, name), values in sorted(self.measurements.items()):
-                lines.append(f"  {test} {name}: {min(values):g} / {max(values):g} ({len(values)} values)")
-            for (test, name), bands in sorted(self.limits.items()):
-                lines.append(f"  {test} {name}: {' | '.join(sorted(bands))}")
+            lines.append("timing over all runs (lowest..highest of each run's figure), against the limits:")
+            for test, name in sorted({(t, n.rsplit(" ", 1)[0]) for t, n in self.measurements}):
+                figures = [f"{figure} {self._range(test, f'{name} {figure}_ms')}" for figure in SHOWN]
+                bands = " | ".join(sorted(self.limits.get((test, f"{name} limits_ms"), set()))) or "none"
+                lines.append(f"  {test}: {name}: {', '.join(figures)} ms; limits {bands}")
         return "\n".join(lines)
 
 
