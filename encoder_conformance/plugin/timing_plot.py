@@ -8,6 +8,7 @@ import io
 from collections.abc import Sequence
 
 WIDTH_IN, HEIGHT_IN, DPI = 7.0, 2.4, 80
+HISTOGRAM_BINS = 40
 
 
 def render_png(name: str, samples: Sequence[float], nominal: float, low: float | None, high: float | None,
@@ -41,7 +42,11 @@ def render_png(name: str, samples: Sequence[float], nominal: float, low: float |
     series.set_xlabel(f"{sample_label} #", fontsize=8)
     series.set_ylabel(unit, fontsize=8)
     series.set_title(name, fontsize=9, loc="left")
-    histogram.hist(samples, bins=min(30, max(5, len(samples) // 3)), orientation="horizontal", color="#369")
+    # bins of one width across the whole visible range, so that tight samples pile up into a visible bar
+    # (bins over the samples' own range would be too thin to see against the band)
+    low_edge, high_edge = min(bottom, *samples), max(top, *samples)
+    edges = [low_edge + (high_edge - low_edge) * k / HISTOGRAM_BINS for k in range(HISTOGRAM_BINS + 1)]
+    histogram.hist(samples, bins=edges, orientation="horizontal", color="#369")
     histogram.set_xlabel("count", fontsize=8)
     for axes in (series, histogram):
         axes.tick_params(labelsize=7)
