@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 import sys
 import threading
+import time
 from pathlib import Path
 
 import can
@@ -23,6 +24,7 @@ from .scheduler import DeadlineScheduler
 
 log = logging.getLogger(__name__)
 SERVER_POLL_S = 0.05
+NOTED_RECEIVE_LAG_MS = 1.0  # receive lags below this are the normal cost of a frame (not kept)
 
 
 class SimulatorHost:
@@ -107,6 +109,11 @@ class SimulatorHost:
         return send
 
     def _dispatch(self, msg: can.Message) -> None:
+        # the virtual bus stamps a frame when it is put on the bus: a frame handled much later (the twin's
+        # process stalled on a loaded host) makes the answer late, which is the host's doing, not the device's
+        late_ms = (time.time() - msg.timestamp) * 1000
+        if late_ms > NOTED_RECEIVE_LAG_MS:
+            self.scheduler.note_lateness(late_ms)
         for node in self.nodes:
             try:
                 node.on_frame(msg)

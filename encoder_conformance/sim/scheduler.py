@@ -63,6 +63,10 @@ class DeadlineScheduler:
     def call_later(self, delay: float, action: Callable[[], None], period: float | None = None) -> JobHandle:
         return self.call_at(time.monotonic() + delay, action, period)
 
+    def note_lateness(self, late_ms: float) -> None:
+        """Lateness of the twin met outside this thread (e.g. a received frame handled late)."""
+        self.lateness.append((time.time(), late_ms))
+
     def lateness_since(self, wall_time: float) -> list[tuple[float, float]]:
         """(time.time(), lateness ms) of every job run after ``wall_time``."""
         return [entry for entry in list(self.lateness) if entry[0] >= wall_time]
