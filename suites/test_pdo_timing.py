@@ -15,6 +15,7 @@ import time
 import can
 import pytest
 
+from encoder_conformance.cia301 import SYNC_COB_ID
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
@@ -61,7 +62,7 @@ def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, twi
         # a late device is judged on its latency, not as missing: wait (returns once all are in)
         tpdos = dut.frames.wait_count(is_tpdo, SYNCS, max(0.5, 5 * limit / 1000), mark)
     host = probe.result()
-    syncs = dut.frames.since(mark, lambda m: not m.is_rx and m.arbitration_id == 0x080)
+    syncs = dut.frames.since(mark, lambda m: not m.is_rx and m.arbitration_id == SYNC_COB_ID)
     evidence.measure(f"TPDOs on {cob_id:03X}h for {len(syncs)} SYNCs", len(tpdos), "frames", len(syncs), len(syncs))
     assert len(tpdos) == len(syncs), (
         f"{comm:04X}h.02 = 1: expected one TPDO per SYNC, {len(tpdos)} for {len(syncs)} SYNCs\n"
