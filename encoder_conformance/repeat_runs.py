@@ -31,6 +31,7 @@ class RepeatedRuns:
     runs: list[RunResult]
     measurements: dict[tuple[str, str], list[float]] = field(default_factory=dict)
     limits: dict[tuple[str, str], set[str]] = field(default_factory=dict)  # (test, measurement) -> bands seen
+    messages: dict[str, list[str]] = field(default_factory=dict)  # test -> the first line of each failure
 
     def outcomes(self) -> dict[str, Counter[str]]:
         """Test -> how often it passed, failed, skipped or errored."""
@@ -57,7 +58,9 @@ class RepeatedRuns:
         unstable = self.unstable()
         lines.append(f"tests that failed at least once: {len(self.failing())}; not the same outcome every time: "
                      f"{len(unstable)}")
-        lines += [f"  {test}: {dict(counts)}" for test, counts in sorted(unstable.items())]
+        for test, counts in sorted(unstable.items()):
+            lines.append(f"  {test}: {dict(counts)}")
+            lines += [f"      {message}" for message in self.messages.get(test, [])[:3]]
         if self.measurements:
             lines.append("timing over all runs (lowest..highest of each run's figure), against the limits:")
             for test, name in sorted({(t, n.rsplit(" ", 1)[0]) for t, n in self.measurements}):
@@ -86,22 +89,39 @@ def _measurements(junit: Path) -> dict[tuple[str, str], float | str]:
     return found
 
 
+def _failure_messages(junit: Path) -> dict[str, str]:
+    """Test -> the first line of its failure or error message, in one JUnit file."""
+    found: dict[str, str] = {}
+    if not junit.exists():
+        return found
+    for case in ET.parse(junit).getroot().iter("testcase"):
+        problem = case.find("failure") if case.find("failure") is not None else case.find("error")
+        if problem is not None:
+            test = f"{case.get('classname', '').split('.')[-1]}::{case.get('name')}"
+            text = (problem.get("message") or problem.text or "").strip()
+            found[test] = text.splitlines()[0][:300] if text else "(no message)"
+    return found
+
+
 def repeat_runs(profile: str, runs: int, workdir: Path, select: str | None = None, parallel: int = 2,
                 busy: bool = False) -> RepeatedRuns:
     """``runs`` runs of the suites against the ``profile`` twin, ``parallel`` at a time (``busy``: beside a
     process keeping one core busy)."""
 
-    def one(number: int) -> tuple[RunResult, dict[tuple[str, str], float | str]]:
+    def one(number: int) -> tuple[RunResult, dict[tuple[str, str], float | str], dict[str, str]]:
         folder = workdir / f"run-{number:02d}"
         result = run_suite(profile, None, folder, select)
-        return result, _measurements(folder / "no-fault" / "junit.xml")
+        junit = folder / "no-fault" / "junit.xml"
+        return result, _measurements(junit), _failure_messages(junit)
 
     collected = RepeatedRuns([])
     values: dict[tuple[str, str], list[float]] = defaultdict(list)
     limits: dict[tuple[str, str], set[str]] = defaultdict(set)
     with busy_process(busy), ThreadPoolExecutor(max_workers=parallel) as pool:
-        for result, found in pool.map(one, range(runs)):
+        for result, found, messages in pool.map(one, range(runs)):
             collected.runs.append(result)
+            for test, message in messages.items():
+                collected.messages.setdefault(test, []).append(message)
             for key, value in found.items():
                 if isinstance(value, float):
                     values[key].append(value)

@@ -8,14 +8,14 @@ from collections import Counter
 
 from encoder_conformance.fault_matrix import RunResult
 from encoder_conformance.paths import REPO_ROOT
-from encoder_conformance.repeat_runs import RepeatedRuns, _measurements
+from encoder_conformance.repeat_runs import RepeatedRuns, _failure_messages, _measurements
 
 JUNIT = """<testsuites><testsuite>
 <testcase classname="suites.test_pdo_timing" name="test_latency">
   <properties><property name="timing latency p99_ms" value="1.250"/><property name="basis" value="cia"/>
   <property name="timing latency limits_ms" value="[.. 10.00] ms"/>
   </properties></testcase>
-<testcase classname="suites.test_pdo" name="test_other"/>
+<testcase classname="suites.test_pdo" name="test_other"><failure message="assert 1 == 2&#10;more">x</failure></testcase>
 </testsuite></testsuites>"""
 
 
@@ -24,6 +24,12 @@ def test_measurements_read_from_junit_properties(tmp_path):
     path.write_text(JUNIT, encoding="utf-8")
     assert _measurements(path) == {("test_pdo_timing::test_latency", "latency p99_ms"): 1.25,
                                    ("test_pdo_timing::test_latency", "latency limits_ms"): "[.. 10.00] ms"}
+
+
+def test_failure_messages_keep_their_first_line(tmp_path):
+    path = tmp_path / "junit.xml"
+    path.write_text(JUNIT, encoding="utf-8")
+    assert _failure_messages(path) == {"test_pdo::test_other": "assert 1 == 2"}
 
 
 def test_a_test_failing_once_is_failing_and_an_inconclusive_skip_only_unstable():
