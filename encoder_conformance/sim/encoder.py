@@ -14,6 +14,7 @@ speed, the area state); the faults are the classes at the bottom, each overridin
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable
 from dataclasses import replace
 
@@ -30,7 +31,7 @@ from ..profile.model import DeviceProfile
 from .faults import breaks
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
-from .scheduler import DeadlineScheduler, JobHandle
+from .scheduler import DeadlineScheduler
 from .shaft import Shaft
 
 #: NVM slot (index 0 is no object) for the preset offset (6509h's value, or the internal one without 6509h)
@@ -50,8 +51,11 @@ class EncoderFunction:
         self.freeze_rule = FreezeRule.of(profile)
         self._offset = 0  # preset offset when the profile has no 6509h
         self.reference = EncoderReference(self.settings(), self.description.cam_rules)
+        # the position shown while a write executes, and until when (monotonic): judged by the clock when the
+        # position is read, not by a timer job, so a twin whose timing thread runs late on a loaded host does
+        # not keep its position frozen longer than the manual says
         self._frozen: int | None = None
-        self._thaw_job: JobHandle | None = None
+        self._frozen_until = 0.0
         shaft.listeners.append(self.follow_shaft)
 
     # -- reading the settings from the object store -----------------------------------------
@@ -126,7 +130,10 @@ class EncoderFunction:
     # -- values ------------------------------------------------------------------------------
     def position(self) -> int:
         """The position value (frozen while a write is processed, if the profile says so)."""
-        return self._frozen if self._frozen is not None else self._current().position(self.shaft.turns())
+        if self._frozen is not None and time.monotonic() < self._frozen_until:
+            return self._frozen
+        self._frozen = None
+        return self._current().position(self.shaft.turns())
 
     def raw_counts(self) -> int:
         """The sensor's physical counts (no code sequence, scaling or offset)."""
@@ -191,20 +198,15 @@ class EncoderFunction:
         """A write passed all checks: freeze the position if the profile says so, apply a preset."""
         duration = self.freeze_rule.duration_s(key[0], value) if self.freeze_rule else 0.0
         if duration > 0:
-            if self._frozen is None:
-                self._frozen = self.position()
-            if self._thaw_job is not None:
-                self._thaw_job.cancel()
-            self._thaw_job = self.scheduler.call_later(duration, self.thaw)
+            self._frozen = self.position()  # the value shown now (still the frozen one inside a running freeze)
+            self._frozen_until = max(self._frozen_until, time.monotonic() + duration)
         if key == (self.objects.preset, 0) and isinstance(value, int):
             self.apply_preset(datatypes.as_signed(self.store.entries[key].type, value))
 
     def thaw(self) -> None:
         """End a freeze: the position follows the shaft again."""
-        if self._thaw_job is not None:
-            self._thaw_job.cancel()
-            self._thaw_job = None
         self._frozen = None
+        self._frozen_until = 0.0
 
     # -- persistence of the preset offset --------------------------------------------------
     def reload(self, nvm: NonVolatileMemory) -> None:
