@@ -218,7 +218,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "mapping_length_unchecked": "sub 0 = n is accepted although the entries exceed 64 bits",
             "payload_not_matching_mapping": "TPDOs carry the mapped objects in reverse order (a single entry one "
                                             "byte late)",
-            "fixed_mapping_writable": "read-only (fixed) mapping entries accept writes and change",
+            "fixed_mapping_writable": "read-only (fixed) mapping entries accept writes and change; without mapping "
+                                      "objects (a fixed payload), writes to 1A00h are confirmed",
             "default_mapping_wrong_length": "the first TPDO mapping entry starts 8 bits longer than its object",
         },
     ),

@@ -14,7 +14,7 @@ import can
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.checks import abort_accepted, documented_quirk, expected_aborts
+from encoder_conformance.checks import abort_accepted, expected_aborts
 from encoder_conformance.cia301 import (
     COB_ID_FIXED_WHILE_VALID,
     COB_ID_INVALID,
@@ -454,12 +454,12 @@ def test_sync_counter_overflow_reserved_values_refused(dut, settings_journal, ev
 
 
 # -- writes in pre-operational only (quirk) ----------------------------------------------------------------
-def _other_value(dut, comm: int) -> tuple[int, int, int] | None:
+def _other_value(dut, comm: int, covered) -> tuple[int, int, int] | None:
     """(sub, size, a value other than the current one) of a writable sub of ``comm`` the quirk covers."""
     for sub in (5, 2, 1):
         entry = dut.profile.entry(comm, sub)
         domain = declared_domain(dut.profile, comm, sub)
-        if entry is None or not entry.writable or domain is None:
+        if entry is None or not entry.writable or domain is None or not covered(comm, sub):
             continue
         size = len(dut.read(comm, sub))
         current = int.from_bytes(dut.read(comm, sub), "little")
@@ -472,22 +472,30 @@ def _other_value(dut, comm: int) -> tuple[int, int, int] | None:
 
 
 def test_tpdo_parameters_writable_in_preoperational_only(dut, settings_journal, back_to_preoperational, evidence):
-    """Documented quirk: a write to a listed TPDO communication object is refused in operational (the value stays)
-    and accepted in pre-operational (then put back)."""
-    params = documented_quirk(dut, fx.WritesPreopOnly, evidence, "CiA 301 allows PDO parameter writes in operational")
-    comms = sorted(i for i in params.indices if 0x1800 <= i <= 0x19FF and i in dut.profile.objects)
-    if not comms:
-        pytest.skip("not applicable: the quirk lists no TPDO communication object")
-    evidence.rests_on("manual", dut.profile.quirk_with_effect(fx.WritesPreopOnly.effect)[1].manual)
-    wanted = {params.abort_code} if params.abort_code is not None else expected_aborts(dut, "wrong_state", evidence)
-    changes = [(comm, *found) for comm in comms if (found := _other_value(dut, comm)) is not None]
+    """Documented quirk: a write to a listed TPDO communication object or entry is refused in operational (the
+    value stays) and accepted in pre-operational (then put back). Every quirk with that effect counts (a
+    manual may say it in several sections)."""
+    changes = []  # (comm, sub, size, value, codes wanted)
+    for quirk_id, params in dut.profile.quirks_of(fx.WritesPreopOnly):
+        comms = sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF
+                       and any(params.covers(i, sub) for sub in (1, 2, 5)))
+        found = [(comm, *other) for comm in comms if (other := _other_value(dut, comm, params.covers)) is not None]
+        if not found:
+            continue
+        quirk = dut.profile.quirks[quirk_id]
+        evidence.deviation(quirk_id, quirk.title)
+        evidence.rests_on("manual", quirk.manual)
+        wanted = ({params.abort_code} if params.abort_code is not None
+                  else expected_aborts(dut, "wrong_state", evidence))
+        changes += [(*change, wanted) for change in found]
     if not changes:
-        pytest.skip("not applicable: no listed TPDO object has a writable sub-index the test may change")
-    for comm, sub, _, _ in changes:
+        pytest.skip("not applicable: no quirk writes_preop_only covers a writable TPDO communication entry the test "
+                    "may change")
+    for comm, sub, _, _, _ in changes:
         settings_journal.remember(comm, sub)
     _start(dut)
     problems = []
-    for comm, sub, size, value in changes:
+    for comm, sub, size, value, wanted in changes:
         before = dut.read(comm, sub)
         what = f"{comm:04X}h.{sub:02X} = {value:#x} in operational"
         response = dut.expect_abort(sdo_frames.expedited_download_request(comm, sub, value.to_bytes(size, "little")))
@@ -499,7 +507,7 @@ def test_tpdo_parameters_writable_in_preoperational_only(dut, settings_journal, 
         if dut.read(comm, sub) != before and response.is_abort:
             problems.append(f"{what}: refused, but the value changed")
     return_to_preoperational(dut)
-    for comm, sub, size, value in changes:
+    for comm, sub, size, value, _ in changes:
         dut.write(comm, sub, value.to_bytes(size, "little"))  # raises if refused in pre-operational
     assert not problems, "; ".join(problems)
 

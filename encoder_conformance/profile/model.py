@@ -442,6 +442,11 @@ class DeviceProfile(StrictModel):
                 return quirk_id, quirk
         return None
 
+    def quirks_of(self, params: type[P]) -> list[tuple[str, P]]:
+        """(quirk id, typed params) of every quirk with the effect of the ``params`` model (most effects are
+        declared once; ``writes_preop_only`` may come from several manual sections)."""
+        return [(quirk_id, quirk.params) for quirk_id, quirk in self.quirks.items() if quirk.effect == params.effect]
+
     def quirk_of(self, params: type[P]) -> tuple[str, P] | None:
         """(quirk id, its typed params) of the quirk with the effect of the ``params`` model, if any."""
         found = self.quirk_with_effect(params.effect)

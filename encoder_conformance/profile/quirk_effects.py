@@ -86,10 +86,16 @@ class ObjectList(EffectParams):
 
 
 class WritesPreopOnly(ObjectList):
-    """Writes to the listed objects are refused outside pre-operational."""
+    """Writes to the listed objects (every sub-index) or entries (one sub-index each) are refused outside
+    pre-operational. A profile may have several such quirks (different manual sections, different codes)."""
 
     effect = "writes_preop_only"
+    entries: list[ObjectKeyField] = Field(default_factory=list, description="single entries, e.g. '0x1800.2'")
     abort_code: int | None = Field(default=None, description="the abort sent (default: CiA's wrong-state code)")
+
+    def covers(self, index: int, sub: int) -> bool:
+        """The quirk applies to a write of ``index``/``sub``."""
+        return index in self.indices or ObjectKey(index, sub) in self.entries
 
 
 class WritesNeedScalingBit(ObjectList):

@@ -202,12 +202,16 @@ class WritesIgnored(ObjectAccess):
 
 @breaks(ObjectAccess, "fixed_mapping_writable")
 class FixedMappingWritable(ObjectAccess):
-    """Read-only PDO mapping entries (a fixed mapping) accept writes and change."""
+    """Read-only PDO mapping entries (a fixed mapping) accept writes and change; a device without mapping
+    objects (a fixed payload) confirms writes to them."""
 
     def sdo_write(self, index: int, sub: int, data: bytes) -> None:
         key = (index, sub)
-        entry = self._store.entries.get(key) if self.exists(index) else None
-        if entry is not None and entry.access in ("ro", "const") and (index in TPDO_MAPPING or index in RPDO_MAPPING):
+        mapping = index in TPDO_MAPPING or index in RPDO_MAPPING
+        if mapping and not self.exists(index):
+            return  # confirmed, and nothing there to change
+        entry = self._store.entries.get(key)
+        if entry is not None and entry.access in ("ro", "const") and mapping:
             self.accept(key, self._store.decode(key, data))
             return
         super().sdo_write(index, sub, data)

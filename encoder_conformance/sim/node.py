@@ -133,7 +133,8 @@ class SimulatedNode:
         optional: list[Behaviour | None] = [
             self._built(fx.GuardingHeartbeatExclusive, lambda p: assemble(GuardingHeartbeatExclusion, faults)
                         .from_params(p, self.read_int, self.store.set)),
-            self._built(fx.WritesPreopOnly, lambda p: preop_only(p, lambda: self.state, wrong_state, faults)),
+            *(preop_only(p, lambda: self.state, wrong_state, faults)
+              for _, p in self.profile.quirks_of(fx.WritesPreopOnly)),
             self._built(fx.WritesNeedScalingBit, lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
             self._built(fx.CamLowBelowHigh, self._cam_low_limit_gate),
             assemble(PdoCobIdRules, faults)(self.read_int),

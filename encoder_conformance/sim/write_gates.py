@@ -28,12 +28,22 @@ class ObjectWriteGate:
         hooks.gates.append(self.gate)
 
     def gate(self, key: Key, value: object) -> None:
-        if key[0] in self._objects and not self._allowed():
+        if self.covers(*key) and not self._allowed():
             raise SdoAbort(self._abort)
+
+    def covers(self, index: int, sub: int) -> bool:
+        return index in self._objects
 
 
 class PreopOnlyGate(ObjectWriteGate):
-    """``writes_preop_only``: the listed objects are writable in pre-operational only."""
+    """``writes_preop_only``: the listed objects and entries are writable in pre-operational only."""
+
+    def __init__(self, params: WritesPreopOnly, allowed: Callable[[], bool], default_abort: int) -> None:
+        super().__init__(params, allowed, default_abort)
+        self._params = params
+
+    def covers(self, index: int, sub: int) -> bool:
+        return self._params.covers(index, sub)
 
 
 def preop_only(params: WritesPreopOnly, state: Callable[[], NmtState | None], default_abort: int,
