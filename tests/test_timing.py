@@ -124,3 +124,12 @@ def test_frame_clock_says_which_clock_judged():
     assert not virtual.hardware
     assert "no hardware timestamps" in virtual.describe()
     assert "just before send" in frame_clock({"interface": "remote"}, simulated=True).describe(own_frames_too=True)
+
+
+@pytest.mark.parametrize("samples", [[], [50.0], [49.9, 50.0, 50.1, 72.0]], ids=["none", "one", "one late"])
+def test_timing_plot_renders_any_sample_count(samples):
+    """A PNG for every capture, also one that caught no frame (the report must not break on it)."""
+    from encoder_conformance.plugin.timing_plot import render_png
+
+    png = render_png("heartbeat interval", samples, 50.0, 45.0, 55.0, "interval")
+    assert png.startswith(b"\x89PNG")

@@ -44,7 +44,7 @@ def render_png(name: str, samples: Sequence[float], nominal: float, low: float |
     series.set_title(name, fontsize=9, loc="left")
     # bins of one width across the whole visible range, so that tight samples pile up into a visible bar
     # (bins over the samples' own range would be too thin to see against the band)
-    low_edge, high_edge = min(bottom, *samples), max(top, *samples)
+    low_edge, high_edge = min([bottom, *samples]), max([top, *samples])
     edges = [low_edge + (high_edge - low_edge) * k / HISTOGRAM_BINS for k in range(HISTOGRAM_BINS + 1)]
     histogram.hist(samples, bins=edges, orientation="horizontal", color="#369")
     histogram.set_xlabel("count", fontsize=8)
