@@ -33,7 +33,7 @@ from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
 from fixtures.dut import return_to_preoperational
-from fixtures.tpdo import configurable_tpdo
+from fixtures.tpdo import configurable_tpdo, maps_position
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.35 (TPDO communication parameter)"), pytest.mark.requires("tpdos")]
 
@@ -79,23 +79,6 @@ def _syncs(dut, count: int, cob_id: int, until_first: bool = False) -> list[can.
     return dut.frames.since(mark, _is_tpdo(cob_id))
 
 
-def _position_objects(profile) -> set[int]:
-    """Objects whose value a turning shaft changes: 6004h/6008h, or a manufacturer object standing for one."""
-    found = profile.params_of(fx.ManufacturerEncoderObjects)
-    equivalents = found.equivalents if found is not None else {}
-    return {0x6004, 0x6008} | {obj for obj, cia in equivalents.items() if cia in (0x6004, 0x6008)}
-
-
-def _maps_position(dut, comm: int) -> bool:
-    mapping = comm + 0x200
-    if dut.profile.entry(mapping, 0) is None:
-        found = dut.profile.params_of(fx.FixedTpdoMapping)
-        entries = found.mapping.get(comm, []) if found is not None else []
-        return any(index in _position_objects(dut.profile) for index, _, _ in entries)
-    count = dut.read_uint(mapping, 0)
-    return any(dut.read_uint(mapping, sub) >> 16 in _position_objects(dut.profile) for sub in range(1, count + 1))
-
-
 def _need_shaft(shaft, what: str) -> None:
     if shaft is None:
         pytest.skip(f"not applicable: {what} needs a turning shaft (the twin, or --shaft-drive)")
@@ -118,7 +101,7 @@ def _event_tpdo(dut, evidence, settings_journal, shaft) -> tuple[int, int]:
         evidence.deviation(repeat[0], dut.profile.quirks[repeat[0]].title)
         pytest.skip(f"not applicable: {comm:04X}h's change-driven sending is set by a send-repeat counter "
                     f"(quirk {repeat[0]}; test_pdo_repeat checks it)")
-    if not _maps_position(dut, comm):
+    if not maps_position(dut, comm):
         pytest.skip(f"not applicable: {comm:04X}h maps no position value the shaft could change")
     if dut.profile.entry(comm, 2).writable:
         settings_journal.write(comm, 2, bytes([kind]))
@@ -344,7 +327,7 @@ def test_type_0_sends_on_sync_only_after_change(dut, settings_journal, back_to_p
     evidence.rests_on("cia", "CiA 301 §7.5.2.35 (type 0: synchronous, acyclic: after an event, on the next SYNC)")
     _need_shaft(shaft, "type 0 (a change of the mapped value)")
     comm, _ = _sync_tpdo(dut, evidence, settings_journal, [0])
-    if not _maps_position(dut, comm):
+    if not maps_position(dut, comm):
         pytest.skip(f"not applicable: {comm:04X}h maps no position value the shaft could change")
     cob_id = dut.read_uint(comm, 1) & 0x7FF
     _start(dut)

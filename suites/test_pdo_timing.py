@@ -19,7 +19,7 @@ from encoder_conformance.cia301 import SYNC_COB_ID
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
-from fixtures.tpdo import configurable_tpdo, mapped_bytes_of
+from fixtures.tpdo import configurable_tpdo, mapped_bytes_of, maps_position
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos")]
 
@@ -97,6 +97,9 @@ def _inhibited_tpdo(dut, settings_journal, evidence, shaft, inhibit_ms: int) -> 
     comm, kind = configurable_tpdo(dut, 3, evidence, settings_journal, [254, 255])
     if shaft is None:
         pytest.skip("not available: no shaft drive (--shaft-drive) to change the position inside the inhibit time")
+    if not dut.profile.capabilities.encoder or not maps_position(dut, comm):
+        pytest.skip(f"not applicable: {comm:04X}h maps no position value a turning shaft could change (the changes "
+                    "inside the inhibit time come from the shaft)")
     cob_id = dut.read_uint(comm, 1) & 0x7FF
     if dut.profile.entry(comm, 2).writable:
         settings_journal.write(comm, 2, bytes([kind]))
