@@ -105,6 +105,9 @@ class SdoAbortCode(IntEnum):
     TOGGLE_BIT = 0x05030000
     TIMEOUT = 0x05040000
     COMMAND_SPECIFIER = 0x05040001
+    BLOCK_SIZE = 0x05040002  # invalid block size (block mode only)
+    SEQUENCE_NUMBER = 0x05040003  # invalid sequence number (block mode only)
+    CRC_ERROR = 0x05040004  # CRC error (block mode only)
     UNSUPPORTED_ACCESS = 0x06010000
     READ_WO = 0x06010001
     WRITE_RO = 0x06010002

@@ -46,6 +46,25 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "value_domain_ignored": "writes outside an entry's declared min/max/allowed values are accepted",
         },
     ),
+    (  # SDO protocol, byte-exact: expedited sizes, segmented and block transfer (CiA 301 §7.2.4.3)
+        ("test_sdo_protocol", "test_sdo_block"),
+        {
+            "size_mismatch_accepted": "writes with more or fewer bytes than the data type are confirmed",
+            "toggle_bit_ignored": "segments with a toggle bit that does not alternate are served",
+            "segmented_upload_truncated": "the last segment of a segmented upload lacks its last byte",
+            "segment_size_ignored": "a download segment's n bits are ignored: all 7 bytes are taken as data",
+            "client_abort_ignored": "an abort from the client leaves the transfer open: the next segment continues it",
+            "open_transfer_blocks_requests": "while a segmented transfer is open, initiate requests go unanswered",
+            "initiate_response_wrong_mux": "initiate responses (download confirmations, segmented upload initiates) "
+                                           "carry the next sub-index",
+            "block_initiate_unanswered": "a device without block transfer does not answer a block initiate",
+            "block_crc_wrong": "block transfer CRCs leave out the last byte (upload end frame wrong, right download "
+                               "CRC refused)",
+            "block_crc_unchecked": "a block download with a wrong CRC is written",
+            "block_seqno_unchecked": "block download segments are taken whatever their sequence number",
+            "block_size_unchecked": "a block upload with block size 0 or over 127 is served",
+        },
+    ),
     (  # NMT
         ("test_nmt",),
         {

@@ -86,15 +86,25 @@ class ObjectAccess:
         if entry.access in ("ro", "const"):
             self.write_read_only()
             return
-        size = datatypes.size_bytes(entry.type)
-        if size is not None and len(data) != size:
-            raise SdoAbort(self.codes["length_high"] if len(data) > size else self.codes["length_low"])
+        data = self.sized(key, data)
         value = self._store.decode(key, data)
         if isinstance(value, int):
             self.check_domain(key, value)
         for gate in self._hooks.gates:
             gate(key, value)
         self.accept(key, value)
+
+    def declared_size(self, index: int, sub: int) -> int | None:
+        """Bytes of the entry's data type (None: a string, a domain, or no such entry)."""
+        entry = self._store.entries.get((index, sub))
+        return None if entry is None else datatypes.size_bytes(entry.type)
+
+    def sized(self, key: Key, data: bytes) -> bytes:
+        """The written data, refused (06070012h / 06070013h) where its length is not the data type's."""
+        size = datatypes.size_bytes(self._store.entries[key].type)
+        if size is not None and len(data) != size:
+            raise SdoAbort(self.codes["length_high"] if len(data) > size else self.codes["length_low"])
+        return data
 
     def accept(self, key: Key, value: Value) -> None:
         """The write passed every check: a command consumes it, or it is stored and reacted to."""
@@ -155,6 +165,15 @@ class ShortUploads(ObjectAccess):
         if len(data) == 4 and self._store.entries[key].type not in datatypes.STRING_TYPES:
             return data[:2]
         return data
+
+
+@breaks(ObjectAccess, "size_mismatch_accepted")
+class SizeMismatchAccepted(ObjectAccess):
+    """Writes with more or fewer bytes than the data type are confirmed (cut or zero-padded to its size)."""
+
+    def sized(self, key: Key, data: bytes) -> bytes:
+        size = datatypes.size_bytes(self._store.entries[key].type)
+        return data if size is None else data[:size].ljust(size, b"\x00")
 
 
 @breaks(ObjectAccess, "write_ro_accepted")

@@ -43,6 +43,7 @@ from .pdo_cob_id import PdoCobIdRules
 from .pdo_layout import FixedTpdoLayout
 from .pdo_mapping import MappingRules
 from .scheduler import DeadlineScheduler
+from .sdo_block import BlockEngine
 from .sdo_channel import SdoChannel
 from .sdo_server import SdoServer
 from .send_repeat import SendRepeatCounters
@@ -97,7 +98,8 @@ class SimulatedNode:
         self.values = assemble(ObjectValues, faults)(self.store, hooks)
         codes = situation_codes(profile)
         self.access = assemble(ObjectAccess, faults)(profile, self.store, hooks, self.values.encode, codes)
-        self.sdo = SdoServer(self.access)
+        block = assemble(BlockEngine, faults) if profile.capabilities.block_sdo else None
+        self.sdo = assemble(SdoServer, faults)(self.access, block)
         self.sdo_channel = assemble(SdoChannel, faults)(self.sdo, self._send, lambda: self.state, lambda: self.node_id)
         self.heartbeat = assemble(HeartbeatProducer, faults)(
             scheduler, self._send, self.read_int, lambda: self.state, lambda: self.node_id,

@@ -42,11 +42,10 @@ class SdoChannel:
     def on_request(self, request: bytes) -> None:
         if not self.serves(request):
             return
-        response = self._server.handle(request)
-        if response is not None:
-            response = self.answer(response)
-        if response is not None:
-            self._send(0x580 + self._node_id(), response)
+        for frame in self._server.respond(request):  # one response, none, or a block's segments
+            response = self.answer(frame)
+            if response is not None:
+                self._send(0x580 + self._node_id(), response)
 
 
 @breaks(SdoChannel, "no_sdo_response")

@@ -7,14 +7,17 @@ what a write does is decided by the ``ObjectAccess`` it is given (the simulated 
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
 from ..cia301 import SdoAbortCode
+from .faults import breaks
 
 TOGGLE_NOT_ALTERNATED = SdoAbortCode.TOGGLE_BIT
 COMMAND_INVALID = SdoAbortCode.COMMAND_SPECIFIER
 GENERAL_ERROR = SdoAbortCode.GENERAL_ERROR
+BLOCK_COMMANDS = (5, 6)  # client command specifiers of block upload and block download
 
 
 class SdoAbort(Exception):
@@ -35,6 +38,17 @@ class ObjectAccess(Protocol):
     def sdo_write(self, index: int, sub: int, data: bytes) -> None: ...
 
 
+class BlockEngine(Protocol):
+    """Block transfers (sim/sdo_block.py), where the profile declares them."""
+
+    @property
+    def in_progress(self) -> bool: ...
+
+    def reset(self) -> None: ...
+
+    def handle(self, request: bytes) -> list[bytes]: ...
+
+
 @dataclass
 class _Transfer:
     upload: bool
@@ -52,14 +66,34 @@ def abort_frame(index: int, sub: int, code: int) -> bytes:
 class SdoServer:
     """One SDO server channel. ``handle(request) -> response or None``."""
 
-    def __init__(self, access: ObjectAccess) -> None:
+    def __init__(self, access: ObjectAccess, block: Callable[[ObjectAccess], BlockEngine] | None = None) -> None:
         self._access = access
         self._transfer: _Transfer | None = None
         self._last_multiplexer: tuple[int, int] | None = None  # for aborts during segments
+        self._block = block(access) if block is not None else None  # where the profile declares block transfer
 
     def reset(self) -> None:
         """Drop a transfer in progress (NMT reset, power cycle)."""
         self._transfer = None
+        if self._block is not None:
+            self._block.reset()
+
+    def respond(self, request: bytes) -> list[bytes]:
+        """Every frame the server sends for one request: one response, none, or a block's segments."""
+        if len(request) != 8:
+            return []
+        if self._block is not None and (self._block.in_progress or request[0] >> 5 in BLOCK_COMMANDS):
+            if not self._block.in_progress:
+                self._transfer = None  # a new request ends a segmented transfer left open
+            return self._block.handle(request)
+        if request[0] >> 5 in BLOCK_COMMANDS and not self.answers_block_initiate():
+            return []
+        response = self.handle(request)
+        return [] if response is None else [response]
+
+    def answers_block_initiate(self) -> bool:
+        """Without block transfer, a block initiate is refused with an abort (handle() sends 05040001h)."""
+        return True
 
     def handle(self, request: bytes) -> bytes | None:
         """Answer one request frame; None means no response is sent."""
@@ -68,6 +102,8 @@ class SdoServer:
         ccs = request[0] >> 5
         index, sub = struct.unpack_from("<HB", request, 1)
         self._last_multiplexer = (self._transfer.index, self._transfer.sub) if self._transfer else None
+        if ccs in (1, 2) and self._transfer is not None and not self.serves_while_open():
+            return None
         try:
             if ccs == 1:
                 return self._initiate_download(request, index, sub)
@@ -78,7 +114,7 @@ class SdoServer:
             if ccs == 3:
                 return self._upload_segment(request)
             if ccs == 4:  # abort from the client: forget the transfer, no response
-                self._transfer = None
+                self.client_aborted()
                 return None
             raise SdoAbort(COMMAND_INVALID)  # block transfer (5, 6) and reserved (7)
         except SdoNoReply:
@@ -90,27 +126,59 @@ class SdoServer:
             self._transfer = None
             return abort_frame(index, sub, abort.code)
 
+    def client_aborted(self) -> None:
+        """CiA 301 §7.2.4.3.17: an abort ends the transfer; it is not answered."""
+        self._transfer = None
+
+    def serves_while_open(self) -> bool:
+        """A new initiate request while a segmented transfer is open ends that one and is served."""
+        return True
+
+    def toggle_ok(self, transfer: _Transfer, toggle: int) -> bool:
+        return toggle == transfer.toggle
+
+    def segment_data(self, request: bytes) -> bytes:
+        """The data of a download segment: 7 bytes less the n unused ones its command byte states."""
+        unused = (request[0] >> 1) & 0x07
+        return request[1 : 8 - unused]
+
+    def initiate_response(self, command: int, index: int, sub: int, payload: bytes) -> bytes:
+        """An initiate response: it echoes the request's multiplexer (CiA 301 §7.2.4.3.3, §7.2.4.3.6)."""
+        return struct.pack("<BHB", command, index, sub) + payload.ljust(4, b"\x00")
+
+    def upload_chunk(self, transfer: _Transfer) -> bytes:
+        """The next up to 7 bytes of a segmented upload."""
+        chunk = bytes(transfer.data[:7])
+        del transfer.data[:7]
+        return chunk
+
+    def expedited_length(self, index: int, sub: int) -> int:
+        """Bytes an expedited download without size indicator carries: the object's own size (CiA 301
+        §7.2.4.3.3: e=1, s=0, "d contains unspecified number of bytes"), else all 4."""
+        declared = getattr(self._access, "declared_size", None)
+        size = declared(index, sub) if declared is not None else None
+        return size if size is not None and 1 <= size <= 4 else 4
+
     # -- download (client writes) --------------------------------------------------------
     def _initiate_download(self, request: bytes, index: int, sub: int) -> bytes:
         self._transfer = None
         expedited, size_indicated = bool(request[0] & 0x02), bool(request[0] & 0x01)
         if expedited:
-            length = 4 - ((request[0] >> 2) & 0x03) if size_indicated else 4
+            length = 4 - ((request[0] >> 2) & 0x03) if size_indicated else self.expedited_length(index, sub)
             self._access.sdo_write(index, sub, bytes(request[4 : 4 + length]))
         else:
             size = struct.unpack_from("<I", request, 4)[0] if size_indicated else None
             self._transfer = _Transfer(upload=False, index=index, sub=sub, size=size)
-        return struct.pack("<BHB4x", 0x60, index, sub)
+        return self.initiate_response(0x60, index, sub, b"")
 
     def _download_segment(self, request: bytes) -> bytes:
         transfer = self._transfer
         if transfer is None or transfer.upload:
             raise SdoAbort(COMMAND_INVALID)
         toggle = (request[0] >> 4) & 1
-        if toggle != transfer.toggle:
+        if not self.toggle_ok(transfer, toggle):
             raise SdoAbort(TOGGLE_NOT_ALTERNATED)
-        unused = (request[0] >> 1) & 0x07
-        transfer.data += request[1 : 8 - unused]
+        transfer.data += self.segment_data(request)
         response = bytes([0x20 | (toggle << 4)]) + bytes(7)
         transfer.toggle ^= 1
         if request[0] & 0x01:  # last segment
@@ -128,20 +196,75 @@ class SdoServer:
             command = 0x43 | ((4 - len(data)) << 2)
             return struct.pack("<BHB", command, index, sub) + data.ljust(4, b"\x00")
         self._transfer = _Transfer(upload=True, index=index, sub=sub, data=bytearray(data))
-        return struct.pack("<BHBI", 0x41, index, sub, len(data))
+        return self.initiate_response(0x41, index, sub, struct.pack("<I", len(data)))
 
     def _upload_segment(self, request: bytes) -> bytes:
         transfer = self._transfer
         if transfer is None or not transfer.upload:
             raise SdoAbort(COMMAND_INVALID)
         toggle = (request[0] >> 4) & 1
-        if toggle != transfer.toggle:
+        if not self.toggle_ok(transfer, toggle):
             raise SdoAbort(TOGGLE_NOT_ALTERNATED)
-        chunk = bytes(transfer.data[:7])
-        del transfer.data[:7]
+        chunk = self.upload_chunk(transfer)
         last = not transfer.data
         command = (toggle << 4) | ((7 - len(chunk)) << 1) | int(last)
         transfer.toggle ^= 1
         if last:
             self._transfer = None
         return bytes([command]) + chunk.ljust(7, b"\x00")
+
+
+# -- faults: each breaks one decision above (fault_catalogue group test_sdo_protocol) ---------------
+@breaks(SdoServer, "toggle_bit_ignored")
+class ToggleBitIgnored(SdoServer):
+    def toggle_ok(self, transfer: _Transfer, toggle: int) -> bool:
+        return True
+
+
+@breaks(SdoServer, "segmented_upload_truncated")
+class SegmentedUploadTruncated(SdoServer):
+    """The last segment of an upload lacks its last byte (the initiate response announced them all)."""
+
+    def upload_chunk(self, transfer: _Transfer) -> bytes:
+        chunk = super().upload_chunk(transfer)
+        return chunk if transfer.data or len(chunk) < 2 else chunk[:-1]
+
+
+@breaks(SdoServer, "segment_size_ignored")
+class SegmentSizeIgnored(SdoServer):
+    """A download segment's n bits are ignored: all 7 bytes are taken as data."""
+
+    def segment_data(self, request: bytes) -> bytes:
+        return request[1:8]
+
+
+@breaks(SdoServer, "client_abort_ignored")
+class ClientAbortIgnored(SdoServer):
+    """An abort from the client leaves the transfer open: the next segment request continues it."""
+
+    def client_aborted(self) -> None:
+        return
+
+
+@breaks(SdoServer, "open_transfer_blocks_requests")
+class OpenTransferBlocksRequests(SdoServer):
+    """While a segmented transfer is open, initiate requests go unanswered (the server waits for segments)."""
+
+    def serves_while_open(self) -> bool:
+        return False
+
+
+@breaks(SdoServer, "initiate_response_wrong_mux")
+class InitiateResponseWrongMux(SdoServer):
+    """Initiate responses (download confirmations, segmented upload initiates) carry the next sub-index."""
+
+    def initiate_response(self, command: int, index: int, sub: int, payload: bytes) -> bytes:
+        return super().initiate_response(command, index, (sub + 1) & 0xFF, payload)
+
+
+@breaks(SdoServer, "block_initiate_unanswered")
+class BlockInitiateUnanswered(SdoServer):
+    """A device without block transfer does not answer a block initiate at all (no abort)."""
+
+    def answers_block_initiate(self) -> bool:
+        return False
