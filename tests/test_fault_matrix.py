@@ -29,6 +29,7 @@ COMPLEMENT_PROFILES = [
     "waycon-sx",
     "siko-wx58m-1212-mt",
     "tests/data/profiles/cia406-full-pdo.yaml",  # inhibit, SYNC start value, 1019h, dummy mapping
+    "tests/data/profiles/cia406-block-sdo.yaml",  # SDO block transfer: test_sdo_block
 ]
 
 

@@ -17,10 +17,11 @@ import pytest
 from encoder_conformance.profile.loader import iter_profile_ids, load_profile
 
 REPO = Path(__file__).resolve().parents[1]
-#: every shipped profile, and the self-test variant with the optional PDO features none of them has (inhibit
-#: time, SYNC start value, 1019h, dummy mapping), so that those checks pass against a conformant twin too
+#: every shipped profile, and the self-test variants with the optional PDO features none of them has (inhibit
+#: time, SYNC start value, 1019h, dummy mapping) and with SDO block transfer, so that those checks pass against
+#: a conformant twin too
 PROFILES = [ref.id for ref in iter_profile_ids() if not ref.abstract] + [
-    str(REPO / "tests" / "data" / "profiles" / "cia406-full-pdo.yaml")]
+    str(REPO / "tests" / "data" / "profiles" / name) for name in ("cia406-full-pdo.yaml", "cia406-block-sdo.yaml")]
 
 
 def _expected_cost(profile_id: str) -> float:
