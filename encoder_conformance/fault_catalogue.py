@@ -58,8 +58,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "initiate_response_wrong_mux": "initiate responses (download confirmations, segmented upload initiates) "
                                            "carry the next sub-index",
             "block_initiate_unanswered": "a device without block transfer does not answer a block initiate",
-            "block_crc_wrong": "block transfer CRCs leave out the last byte (upload end frame wrong, right download "
-                               "CRC refused)",
+            "block_crc_wrong": "block transfer CRCs start from FFFFh (upload end frame wrong, right download CRC "
+                               "refused)",
             "block_crc_unchecked": "a block download with a wrong CRC is written",
             "block_seqno_unchecked": "block download segments are taken whatever their sequence number",
             "block_size_unchecked": "a block upload with block size 0 or over 127 is served",

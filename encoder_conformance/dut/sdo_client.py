@@ -221,7 +221,7 @@ class SdoProtocolClient:
         if not self._answered(result, response, f"initiate block upload {index:04X}h.{sub:02X}"):
             return result
         assert response is not None
-        if response.raw[0] & 0xE3 != 0xC0:
+        if response.raw[0] & 0xE1 != 0xC0:  # scs 6, ss 0 (bit 2 sc, bit 1 s)
             result.problems.append(f"initiate block upload: response {response.raw[0]:02X}h is not scs 6, ss 0")
             return result
         if not echoes(request, response.raw):

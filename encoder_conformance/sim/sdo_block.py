@@ -8,6 +8,7 @@ CRC: CRC-16-CCITT (XMODEM), canopen's own ``CrcXmodem`` (the polynomial CiA 301 
 
 from __future__ import annotations
 
+import binascii
 import struct
 from dataclasses import dataclass, field
 from enum import Enum, auto
@@ -192,11 +193,11 @@ class BlockEngine:
 # -- faults (fault_catalogue group test_sdo_protocol) -------------------------------------------
 @breaks(BlockEngine, "block_crc_wrong")
 class BlockCrcWrong(BlockEngine):
-    """The CRC is computed without the last data byte: the upload's end frame carries a wrong one, and a
-    download with the right CRC is refused."""
+    """The CRC starts from FFFFh (CRC-16/CCITT-FALSE, a common mix-up): the upload's end frame carries a
+    wrong one, and a download with the right CRC is refused."""
 
     def crc(self, data: bytes) -> int:
-        return super().crc(data[:-1])
+        return binascii.crc_hqx(data, 0xFFFF)
 
 
 @breaks(BlockEngine, "block_crc_unchecked")

@@ -227,7 +227,7 @@ class SegmentedUploadTruncated(SdoServer):
 
     def upload_chunk(self, transfer: _Transfer) -> bytes:
         chunk = super().upload_chunk(transfer)
-        return chunk if transfer.data or len(chunk) < 2 else chunk[:-1]
+        return chunk if transfer.data else chunk[:-1]
 
 
 @breaks(SdoServer, "segment_size_ignored")
