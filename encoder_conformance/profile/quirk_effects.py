@@ -69,6 +69,14 @@ class TransmissionType255Timer0Disables(NoParams):
     effect = "transmission_type_255_timer_0_disables"
 
 
+class BlockTransferUnconfirmed(NoParams):
+    """The manual mentions SDO block transfer without protocol detail (or against CiA 301) and the profile
+    does not declare it (``block_sdo: false``): a block initiate may be served as CiA 301 describes or
+    refused with 05040001h; either is recorded, neither fails."""
+
+    effect = "block_transfer_unconfirmed"
+
+
 class StoreAutomatic(NoParams):
     """Parameters are stored automatically on every write; 1010h is absent."""
 
@@ -541,6 +549,6 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
         UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
         OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange, ZeroingObject, MappingLengthDiffers,
-        MappingChangeWhileValid,
+        MappingChangeWhileValid, BlockTransferUnconfirmed,
     )
 }

@@ -193,8 +193,7 @@ class SdoServer:
         self._transfer = None
         data = self._access.sdo_read(index, sub)
         if 1 <= len(data) <= 4:
-            command = 0x43 | ((4 - len(data)) << 2)
-            return struct.pack("<BHB", command, index, sub) + data.ljust(4, b"\x00")
+            return self.initiate_response(0x43 | ((4 - len(data)) << 2), index, sub, data)
         self._transfer = _Transfer(upload=True, index=index, sub=sub, data=bytearray(data))
         return self.initiate_response(0x41, index, sub, struct.pack("<I", len(data)))
 
@@ -268,3 +267,11 @@ class BlockInitiateUnanswered(SdoServer):
 
     def answers_block_initiate(self) -> bool:
         return False
+
+
+@breaks(SdoServer, "unsized_download_takes_four_bytes")
+class UnsizedDownloadTakesFourBytes(SdoServer):
+    """An expedited download without size indicator is taken as 4 bytes (so refused for smaller objects)."""
+
+    def expedited_length(self, index: int, sub: int) -> int:
+        return 4
