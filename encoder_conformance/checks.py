@@ -58,6 +58,29 @@ def assert_abort(dut: DeviceUnderTest, response: SdoResponse, expected: set[int]
         raise AssertionError(f"{what}: expected abort {wanted}, observed abort {abort_name(response.abort_code or 0)}")
 
 
+def judge_refusal(dut: DeviceUnderTest, response: SdoResponse | None, expected: set[int], tolerated: set[int],
+                  what: str, evidence: Evidence) -> None:
+    """A request CiA 301 says the server must refuse: no answer or no abort fails (the caller's clause); an abort
+    with ``expected`` (CiA's or the manual's code; its family with --abort-codes family) or with a code the CiA
+    conformance test tool accepts (``tolerated``) passes; any other code is an inferred problem (a warning)."""
+    if response is None:
+        raise AssertionError(f"{what}: no SDO response within {dut.sdo_timeout * 1000:.0f} ms (an abort is due)\n"
+                             f"last frames:\n{format_frames(dut.frames.last(8))}")
+    if not response.is_abort:
+        raise AssertionError(f"{what}: accepted ({response.describe()}), expected an abort")
+    if abort_accepted(dut, response, expected):
+        return
+    code = response.abort_code or 0
+    wanted = " or ".join(abort_name(c) for c in sorted(expected))
+    if code in tolerated:
+        evidence.note(f"{what}: abort {abort_name(code)}, accepted as the CiA conformance test tool does "
+                      f"(CiA 301 names {wanted})")
+        return
+    evidence.inferred_problem(f"{what}: abort {abort_name(code)}, expected {wanted}",
+                              "the abort code: CiA 301 table 22 names the code; the conformance test tool accepts "
+                              + (", ".join(abort_name(c) for c in sorted(tolerated)) or "no other"))
+
+
 def check_periodic(timestamps: list[float], period_ms: float, tolerance: HeartbeatTolerance, what: str,
                    evidence: Evidence, host: HostLatency | None = None, clock: str = "not stated") -> None:
     """Periodic frames: the long-run period (fitted over all frames) within the tolerance, and the frames

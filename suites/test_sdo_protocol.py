@@ -1,0 +1,301 @@
+"""SDO protocol, byte-exact: expedited sizes, size mismatches, segmented transfers step by step.
+
+CiA 301 §7.2.4.3 (SDO protocols), table 22 (abort codes); CTT cases SDO 08/09 (too long / too
+short), 13-18 (segmented, wrong toggle bit). Every request goes out as the frame a step names
+(``dut/sdo_client.py``); every initiate response must echo the request's multiplexer. Abort codes:
+CiA's code (or the manual's), else one the CiA conformance test tool accepts; any other code is a
+warning (inferred), a write that is confirmed is a failure. Only entries that are harmless to write
+are written (heartbeat and guard times, event timers, transmission types), each put back.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.checks import expected_aborts, judge_refusal
+from encoder_conformance.cia301 import SdoAbortCode
+from encoder_conformance.dut.sdo_client import SdoProtocolClient, echoes
+from encoder_conformance.dut.sdo_frames import abort_name, upload_request
+from encoder_conformance.profile import datatypes
+
+pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocols)")
+
+#: entries whose value may be written (and put back) without effect beyond timing: harmless to rewrite
+HARMLESS = [(0x1017, 0), (0x100C, 0), (0x6200, 0), (0x1800, 5), (0x1801, 5), (0x100D, 0), (0x1800, 2),
+            (0x1801, 2), (0x1016, 1)]
+#: the CiA conformance test tool's accepted codes for too long (SDO 08) and too short (SDO 09) data
+CTT_TOO_LONG = {SdoAbortCode.LENGTH_MISMATCH, SdoAbortCode.LENGTH_HIGH, SdoAbortCode.GENERAL_ERROR}
+CTT_TOO_SHORT = {SdoAbortCode.LENGTH_MISMATCH, SdoAbortCode.LENGTH_LOW, SdoAbortCode.GENERAL_ERROR}
+EXPEDITED = "CiA 301 §7.2.4.3.3 (initiate SDO download), §7.2.4.3.6 (initiate SDO upload)"
+SEGMENTED = "CiA 301 §7.2.4.3.4-7 (SDO segment download / upload: toggle bit, n, c)"
+
+
+@pytest.fixture
+def sdo(dut) -> SdoProtocolClient:
+    return SdoProtocolClient(dut)
+
+
+def _harmless(profile, size: int) -> tuple[int, int] | None:
+    """The first harmless entry of ``size`` bytes the profile declares readable and writable."""
+    for index, sub in HARMLESS:
+        entry = profile.entry(index, sub)
+        if entry is not None and entry.writable and entry.readable and datatypes.size_bytes(entry.type) == size:
+            return index, sub
+    return None
+
+
+def _target(dut) -> tuple[int, int]:
+    """A harmless 16-bit entry to write (1017h where declared), or skip."""
+    found = _harmless(dut.profile, 2)
+    if found is None:
+        pytest.skip("not applicable: the profile declares no harmless writable 16-bit entry (1017h, 100Ch, ...)")
+    return found
+
+
+def _new_value(dut, key: tuple[int, int], current: bytes) -> bytes:
+    """A value other than ``current`` within the entry's declared range (1234 where it fits)."""
+    entry = dut.profile.entry(*key)
+    value = 1234 if int.from_bytes(current, "little") != 1234 else 1235
+    if entry.max is not None and value > entry.max:
+        value = int(entry.max) if int.from_bytes(current, "little") != entry.max else int(entry.max) - 1
+    return value.to_bytes(len(current), "little")
+
+
+def _readable_of_size(profile, size: int) -> tuple[int, int] | None:
+    """A readable entry of exactly ``size`` bytes, a static one where there is one."""
+    found = [(e.dynamic, i, s) for i, s, _, e in profile.iter_entries()
+             if e.readable and datatypes.size_bytes(e.type) == size]
+    return min(found)[1:] if found else None
+
+
+def _long_entries(profile) -> list[tuple[int, int, int | None]]:
+    """Readable entries that cannot go expedited (over 4 bytes, strings, domains): (index, sub, size or None)."""
+    return [(i, s, datatypes.size_bytes(e.type)) for i, s, _, e in profile.iter_entries()
+            if e.readable and (datatypes.size_bytes(e.type) or 5) > 4]
+
+
+def _longest(dut) -> tuple[int, int]:
+    longest = [(i, s) for i, s, _ in _long_entries(dut.profile)]
+    if not longest:
+        pytest.skip("not applicable: every object the profile declares fits an expedited transfer (4 bytes)")
+    sizes = {key: len(dut.read(*key)) for key in longest}
+    return max(sizes, key=lambda key: sizes[key])
+
+
+def _unchanged(dut, key: tuple[int, int], before: bytes, what: str) -> None:
+    after = dut.read(*key)
+    assert after == before, f"{what}: {key[0]:04X}h.{key[1]:02X} changed from {before.hex(' ')} to {after.hex(' ')}"
+
+
+# -- expedited --------------------------------------------------------------------------------------
+@pytest.mark.parametrize("size", [1, 2, 4])
+def test_expedited_upload_byte_exact(dut, sdo, size, evidence):
+    """Initiate upload of a 1/2/4-byte entry: scs 2, e=1, the multiplexer echoed, and with s=1 n giving its size."""
+    evidence.rests_on("cia", EXPEDITED)
+    key = _readable_of_size(dut.profile, size)
+    if key is None:
+        pytest.skip(f"not applicable: the profile declares no readable {size}-byte entry")
+    request = upload_request(*key)
+    response = sdo.request(request)
+    assert response is not None, f"no response to the upload of {key[0]:04X}h.{key[1]:02X}"
+    assert not response.is_abort, f"{key[0]:04X}h.{key[1]:02X} declared readable: {response.describe()}"
+    assert response.scs == 2, f"not an upload response: {response.describe()}"
+    assert response.raw[0] & 0x02, f"not an expedited upload response (e=0): {response.describe()}"
+    assert echoes(request, response.raw), f"the response {response.describe()} does not echo {key[0]:04X}h.{key[1]:02X}"
+    if response.raw[0] & 0x01:
+        assert response.expedited_size == size, f"n says {response.expedited_size} bytes, the entry has {size}"
+    else:
+        evidence.note("the device does not indicate the size (s=0); CiA 301 allows it")
+
+
+@pytest.mark.parametrize("size", [1, 2, 4])
+def test_expedited_download_byte_exact(dut, sdo, size, settings_journal, evidence):
+    """Initiate download with e=1, s=1 of a 1/2/4-byte entry: confirmed (60h, the multiplexer echoed), read back."""
+    evidence.rests_on("cia", EXPEDITED)
+    key = _harmless(dut.profile, size)
+    if key is None:
+        pytest.skip(f"not applicable: no harmless writable {size}-byte entry (see HARMLESS)")
+    current = dut.read(*key)
+    value = _new_value(dut, key, current) if size == 2 else current
+    settings_journal.remember(*key, current)
+    response = sdo.expedited_download(*key, value)
+    assert response is not None, f"no response to the expedited download to {key[0]:04X}h.{key[1]:02X}"
+    assert response.raw[0] == 0x60, f"write of {value.hex(' ')} to {key[0]:04X}h.{key[1]:02X}: {response.describe()}"
+    assert echoes(upload_request(*key), response.raw), f"the confirmation {response.describe()} names another entry"
+    assert dut.read(*key) == value
+
+
+def test_expedited_download_without_size_indicator(dut, sdo, settings_journal, evidence):
+    """e=1, s=0 ("d contains an unspecified number of bytes"): the server takes the entry's own size."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.3 (e=1, s=0: d contains unspecified number of bytes)")
+    key = _target(dut)
+    current = dut.read(*key)
+    value = _new_value(dut, key, current)
+    settings_journal.remember(*key, current)
+    response = sdo.expedited_download(*key, value + b"\x00\x00", size_indicated=False)
+    assert response is not None, "no response to an expedited download without size indicator"
+    assert response.raw[0] == 0x60, f"{key[0]:04X}h.{key[1]:02X} with s=0: {response.describe()}"
+    assert dut.read(*key) == value
+
+
+@pytest.mark.parametrize("length", [1, 3, 4])
+def test_expedited_download_size_mismatch_refused(dut, sdo, length, settings_journal, evidence):
+    """A 16-bit entry written with 1, 3 or 4 bytes is refused (06070013h / 06070012h) and keeps its value
+    (CTT SDO 08/09)."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 table 22 (06070010h, 06070012h, 06070013h)")
+    key = _target(dut)
+    current = dut.read(*key)
+    settings_journal.remember(*key, current)
+    situation, tolerated = ("length_high", CTT_TOO_LONG) if length > 2 else ("length_low", CTT_TOO_SHORT)
+    response = sdo.expedited_download(*key, (current * 2)[:length])
+    what = f"{length}-byte write to 16-bit {key[0]:04X}h.{key[1]:02X}"
+    judge_refusal(dut, response, expected_aborts(dut, situation, evidence), tolerated, what, evidence)
+    _unchanged(dut, key, current, what)
+
+
+# -- segmented --------------------------------------------------------------------------------------
+@pytest.mark.requires("segmented_sdo")
+def test_segmented_upload_of_every_long_entry(dut, sdo, evidence):
+    """Every entry over 4 bytes (strings, 64-bit values) uploads segment by segment: toggles alternate from 0, the
+    size announced is the size carried, and the initiate response echoes the multiplexer (CTT SDO 13, 16)."""
+    evidence.rests_on("cia", SEGMENTED)
+    entries = _long_entries(dut.profile)
+    if not entries:
+        pytest.skip("not applicable: every object the profile declares fits an expedited transfer (4 bytes)")
+    problems = []
+    for index, sub, size in entries:
+        result = sdo.upload(index, sub)
+        if result.abort is not None:
+            problems.append(f"{index:04X}h.{sub:02X}: {result.abort.describe()}")
+        problems += [f"{index:04X}h.{sub:02X}: {text}" for text in result.problems]
+        if size is not None and result.abort is None and len(result.data) != size:
+            problems.append(f"{index:04X}h.{sub:02X}: {len(result.data)} bytes, the type has {size}")
+        evidence.note(f"{index:04X}h.{sub:02X}: {len(result.data)} bytes in {len(result.responses) - 1} segment(s)")
+    assert not problems, "\n".join(problems)
+
+
+@pytest.mark.requires("segmented_sdo")
+def test_segmented_upload_wrong_toggle_aborts(dut, sdo, evidence):
+    """An upload segment request whose toggle bit is not 0 (the first) is refused with 05030000h (CTT SDO 17)."""
+    evidence.rests_on("cia", SEGMENTED + "; §7.2.4.3.17 05030000h")
+    key = _longest(dut)
+    first = sdo.initiate_upload(*key)
+    if first is None or first.is_abort or first.raw[0] & 0x02:
+        pytest.skip(f"not applicable: {key[0]:04X}h.{key[1]:02X} came expedited")
+    response = sdo.upload_segment(toggle=1)
+    judge_refusal(dut, response, {SdoAbortCode.TOGGLE_BIT}, set(), "upload segment with toggle bit 1 first", evidence)
+    assert response is not None
+    assert echoes(upload_request(*key), response.raw), f"the abort {response.describe()} names another entry"
+
+
+@pytest.mark.requires("segmented_sdo")
+def test_segmented_download(dut, sdo, settings_journal, evidence):
+    """A 16-bit entry written by segmented download (CTT SDO 15): 60h echoing it, one segment with n=5, c=1
+    confirmed with toggle 0, and the value read back."""
+    evidence.rests_on("cia", SEGMENTED)
+    key = _target(dut)
+    current = dut.read(*key)
+    value = _new_value(dut, key, current)
+    settings_journal.remember(*key, current)
+    result = sdo.download(*key, value)
+    assert result.ok, f"segmented download of {value.hex(' ')} to {key[0]:04X}h.{key[1]:02X}:\n{result.describe()}"
+    assert dut.read(*key) == value
+
+
+@pytest.mark.requires("segmented_sdo")
+def test_segmented_download_wrong_toggle_aborts(dut, sdo, settings_journal, evidence):
+    """A download segment whose toggle bit is not 0 (the first) is refused with 05030000h; nothing is written."""
+    evidence.rests_on("cia", SEGMENTED + "; §7.2.4.3.17 05030000h")
+    key = _target(dut)
+    current = dut.read(*key)
+    settings_journal.remember(*key, current)
+    started = sdo.initiate_download(*key, 2)
+    assert started is not None, "no response to initiate download"
+    assert started.raw[0] == 0x60, f"initiate segmented download refused: {started.describe()}"
+    response = sdo.download_segment(_new_value(dut, key, current), toggle=1, last=True)
+    judge_refusal(dut, response, {SdoAbortCode.TOGGLE_BIT}, set(), "download segment with toggle bit 1 first", evidence)
+    _unchanged(dut, key, current, "download segment with the wrong toggle bit")
+
+
+@pytest.mark.requires("segmented_sdo")
+def test_segmented_download_size_mismatch_refused(dut, sdo, settings_journal, evidence):
+    """A segmented download of 3 bytes (size indicated 3) to a 16-bit entry is refused; the entry keeps its value."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 table 22 (06070010h, 06070012h)")
+    key = _target(dut)
+    current = dut.read(*key)
+    settings_journal.remember(*key, current)
+    started = sdo.initiate_download(*key, 3)
+    assert started is not None, "no response to initiate download"
+    # refused at once from the size indicated, or after the segment
+    response = started if started.is_abort else sdo.download_segment(current + current[:1], toggle=0, last=True)
+    judge_refusal(dut, response, expected_aborts(dut, "length_high", evidence), CTT_TOO_LONG,
+                  f"3 bytes by segmented download to 16-bit {key[0]:04X}h.{key[1]:02X}", evidence)
+    _unchanged(dut, key, current, "segmented download of 3 bytes")
+
+
+# -- transfers interrupted --------------------------------------------------------------------------
+def _open_upload(dut, sdo) -> tuple[int, int]:
+    """A segmented upload of the longest entry, initiated and left open after its first segment."""
+    key = _longest(dut)
+    first = sdo.initiate_upload(*key)
+    assert first is not None, f"no response to the upload of {key[0]:04X}h.{key[1]:02X}"
+    if first.is_abort or first.raw[0] & 0x02:
+        pytest.skip(f"not applicable: {key[0]:04X}h.{key[1]:02X} came as {first.describe()}")
+    segment = sdo.upload_segment(toggle=0)
+    assert segment is not None, "no response to the first upload segment request"
+    return key
+
+
+def _next_initiate_served(dut, sdo, evidence, what: str) -> None:
+    """After an interrupted transfer, an upload of 1000h gets an answer echoing it (CiA 301: every initiate
+    request is answered); that it is served, not refused, is our reading (a warning)."""
+    request = upload_request(0x1000, 0)
+    response = sdo.request(request)
+    assert response is not None, f"{what}: no answer to the upload of 1000h"
+    assert echoes(request, response.raw), f"{what}: the answer {response.describe()} does not echo 1000h.00"
+    if response.is_abort:
+        evidence.inferred_problem(f"{what}: the upload of 1000h was refused ({abort_name(response.abort_code or 0)})",
+                                  "CiA 301 leaves open what a server does with a transfer left open; we expect it "
+                                  "to serve the next initiate request")
+
+
+@pytest.mark.requires("segmented_sdo")
+def test_new_request_while_segmented_transfer_open(dut, sdo, evidence):
+    """An initiate request in the middle of a segmented upload is answered (served, or refused with an abort
+    that echoes it); after a client abort the device serves requests as before."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.6 (every initiate request is confirmed), §7.2.4.3.17")
+    key = _open_upload(dut, sdo)
+    _next_initiate_served(dut, sdo, evidence, "new request during a segmented upload")
+    sdo.abort(*key, SdoAbortCode.GENERAL_ERROR)
+    assert dut.responds(), "the device stopped answering after a new request during a segmented upload"
+
+
+@pytest.mark.requires("segmented_sdo")
+def test_client_abort_ends_segmented_transfer(dut, sdo, evidence):
+    """An abort from the client mid-transfer is not answered and ends the transfer: a further segment request
+    is refused (05040001h), not served, and the next upload is served."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 (abort SDO transfer: unconfirmed, ends the transfer)")
+    key = _open_upload(dut, sdo)
+    mark = sdo.abort(*key, SdoAbortCode.GENERAL_ERROR)
+    answers = sdo.silent_after(mark)
+    assert not answers, f"the client's abort was answered: {[a.hex(' ') for a in answers]}"
+    response = sdo.upload_segment(toggle=1)
+    judge_refusal(dut, response, {SdoAbortCode.COMMAND_SPECIFIER}, {SdoAbortCode.GENERAL_ERROR},
+                  "upload segment request after the client's abort", evidence)
+    _next_initiate_served(dut, sdo, evidence, "after the client's abort")
+
+
+@pytest.mark.requires("segmented_sdo")
+def test_transfer_left_open_does_not_block_the_server(dut, sdo, evidence):
+    """A segmented upload left half-finished: whatever the device does with it (a timeout abort 05040000h naming
+    its entry, or nothing), it serves the next initiate request."""
+    evidence.rests_on("inferred", "CiA 301 leaves open what a server does with a transfer left open; §7.2.4.3.17 "
+                                  "05040000h (SDO protocol timed out)")
+    key = _open_upload(dut, sdo)
+    mark = dut.frames.mark()
+    for raw in sdo.silent_after(mark):
+        named = upload_request(*key)[1:4]
+        assert raw[0] != 0x80 or raw[1:4] == named, f"a timeout abort names another entry: {raw.hex(' ')}"
+        evidence.note(f"the device ended the transfer by itself: {raw.hex(' ').upper()}")
+    _next_initiate_served(dut, sdo, evidence, "after a transfer left open")
+    sdo.abort(*key, SdoAbortCode.TIMEOUT)
