@@ -55,8 +55,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "segment_size_ignored": "a download segment's n bits are ignored: all 7 bytes are taken as data",
             "client_abort_ignored": "an abort from the client leaves the transfer open: the next segment continues it",
             "open_transfer_blocks_requests": "while a segmented transfer is open, initiate requests go unanswered",
-            "initiate_response_wrong_mux": "initiate responses (uploads, download confirmations) carry the next "
-                                           "sub-index",
+            "download_response_wrong_mux": "download confirmations (60h) carry the next sub-index",
+            "expedited_upload_padded": "expedited uploads of 1- and 2-byte entries carry 4 bytes (the size bits say 4)",
             "unsized_download_takes_four_bytes": "an expedited download without size indicator is taken as 4 bytes "
                                                  "(refused for smaller objects)",
             "block_initiate_unanswered": "a device without block transfer does not answer a block initiate",

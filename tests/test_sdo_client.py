@@ -99,7 +99,6 @@ def test_block_download_out_of_order_segment_is_not_acknowledged(client):
 
 @pytest.mark.parametrize(("fault", "problem"), [
     ("segmented_upload_truncated", "announced 8 bytes"),
-    ("initiate_response_wrong_mux", "echo"),
 ])
 def test_upload_names_what_a_faulty_server_breaks(rig, fault, problem):
     result = _client(rig, (fault,)).upload(0x6009, 0)
@@ -109,3 +108,8 @@ def test_upload_names_what_a_faulty_server_breaks(rig, fault, problem):
 def test_block_upload_names_a_wrong_crc(rig):
     result = _client(rig, ("block_crc_wrong",)).block_upload(0x6009, 0)
     assert any("CRC" in text for text in result.problems), result.describe()
+
+
+def test_download_names_a_confirmation_for_another_entry(rig):
+    result = _client(rig, ("download_response_wrong_mux",)).download(0x1017, 0, b"\x01\x02")
+    assert any("echo" in text for text in result.problems), result.describe()

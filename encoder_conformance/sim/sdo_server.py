@@ -146,6 +146,9 @@ class SdoServer:
         """An initiate response: it echoes the request's multiplexer (CiA 301 §7.2.4.3.3, §7.2.4.3.6)."""
         return struct.pack("<BHB", command, index, sub) + payload.ljust(4, b"\x00")
 
+    def upload_data(self, index: int, sub: int) -> bytes:
+        return self._access.sdo_read(index, sub)
+
     def upload_chunk(self, transfer: _Transfer) -> bytes:
         """The next up to 7 bytes of a segmented upload."""
         chunk = bytes(transfer.data[:7])
@@ -191,7 +194,7 @@ class SdoServer:
     # -- upload (client reads) -----------------------------------------------------------
     def _initiate_upload(self, index: int, sub: int) -> bytes:
         self._transfer = None
-        data = self._access.sdo_read(index, sub)
+        data = self.upload_data(index, sub)
         if 1 <= len(data) <= 4:
             return self.initiate_response(0x43 | ((4 - len(data)) << 2), index, sub, data)
         self._transfer = _Transfer(upload=True, index=index, sub=sub, data=bytearray(data))
@@ -224,6 +227,9 @@ class ToggleBitIgnored(SdoServer):
 class SegmentedUploadTruncated(SdoServer):
     """The last segment of an upload lacks its last byte (the initiate response announced them all)."""
 
+    def upload_data(self, index: int, sub: int) -> bytes:
+        return self._access.sdo_read(index, sub)
+
     def upload_chunk(self, transfer: _Transfer) -> bytes:
         chunk = super().upload_chunk(transfer)
         return chunk if transfer.data else chunk[:-1]
@@ -253,12 +259,22 @@ class OpenTransferBlocksRequests(SdoServer):
         return False
 
 
-@breaks(SdoServer, "initiate_response_wrong_mux")
-class InitiateResponseWrongMux(SdoServer):
-    """Initiate responses (download confirmations, segmented upload initiates) carry the next sub-index."""
+@breaks(SdoServer, "download_response_wrong_mux")
+class DownloadResponseWrongMux(SdoServer):
+    """Download confirmations (60h) carry the next sub-index (canopen's client does not check it there)."""
 
     def initiate_response(self, command: int, index: int, sub: int, payload: bytes) -> bytes:
-        return super().initiate_response(command, index, (sub + 1) & 0xFF, payload)
+        return super().initiate_response(command, index, (sub + 1) & 0xFF if command == 0x60 else sub, payload)
+
+
+@breaks(SdoServer, "expedited_upload_padded")
+class ExpeditedUploadPadded(SdoServer):
+    """Expedited uploads of 1- and 2-byte entries carry 4 bytes (n = 0): the size bits say 4."""
+
+    def upload_data(self, index: int, sub: int) -> bytes:
+        data = super().upload_data(index, sub)
+        declared = getattr(self._access, "declared_size", lambda i, s: None)(index, sub)
+        return data.ljust(4, b"\x00") if declared in (1, 2) else data
 
 
 @breaks(SdoServer, "block_initiate_unanswered")
