@@ -64,6 +64,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
                                "refused)",
             "block_crc_unchecked": "a block download with a wrong CRC is written",
             "block_seqno_unchecked": "block download segments are taken whatever their sequence number",
+            "block_upload_truncated": "the end of a block upload says one more unused byte: the data comes one short",
+            "block_end_size_ignored": "the n of end block download is ignored: the padding is taken as data",
             "block_size_unchecked": "a block upload with block size 0 or over 127 is served",
         },
     ),

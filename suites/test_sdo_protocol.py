@@ -145,6 +145,7 @@ def test_expedited_download_without_size_indicator(dut, sdo, settings_journal, e
     response = sdo.expedited_download(*key, value + b"\x00\x00", size_indicated=False)
     assert response is not None, "no response to an expedited download without size indicator"
     assert response.raw[0] == 0x60, f"{key[0]:04X}h.{key[1]:02X} with s=0: {response.describe()}"
+    assert echoes(upload_request(*key), response.raw), f"the confirmation {response.describe()} names another entry"
     assert dut.read(*key) == value
 
 

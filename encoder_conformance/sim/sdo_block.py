@@ -91,6 +91,14 @@ class BlockEngine:
     def seqno_ok(self, block: _Block, seqno: int) -> bool:
         return seqno == block.done + 1
 
+    def unused_in_last(self, size: int) -> int:
+        """n of the end block upload frame: the bytes of the last segment that carry no data."""
+        return (SEGMENT_BYTES - size % SEGMENT_BYTES) % SEGMENT_BYTES
+
+    def data_of_last(self, unused: int) -> int:
+        """How many bytes of the last download segment carry no data (the client's n)."""
+        return unused
+
     def crc_ok(self, block: _Block, received: int) -> bool:
         return not block.crc or received == self.crc(bytes(block.data))
 
@@ -148,7 +156,7 @@ class BlockEngine:
         block.blksize = blksize
         if block.done < len(block.data):
             return self._send_block(block)
-        unused = (SEGMENT_BYTES - len(block.data) % SEGMENT_BYTES) % SEGMENT_BYTES
+        unused = self.unused_in_last(len(block.data))
         block.phase = _Phase.UPLOAD_END_SENT
         crc = self.crc(bytes(block.data)) if block.crc else 0
         return [struct.pack("<BH5x", 0xC1 | unused << 2, crc)]
@@ -179,6 +187,7 @@ class BlockEngine:
         return ack
 
     def _end_download(self, block: _Block, unused: int, crc: int) -> list[bytes]:
+        unused = self.data_of_last(unused)
         if unused:
             del block.data[-unused:]
         if block.size is not None and block.size != len(block.data):
@@ -204,6 +213,14 @@ class BlockCrcWrong(BlockEngine):
 class BlockCrcUnchecked(BlockEngine):
     """A block download with a wrong CRC is written."""
 
+    def unused_in_last(self, size: int) -> int:
+        """n of the end block upload frame: the bytes of the last segment that carry no data."""
+        return (SEGMENT_BYTES - size % SEGMENT_BYTES) % SEGMENT_BYTES
+
+    def data_of_last(self, unused: int) -> int:
+        """How many bytes of the last download segment carry no data (the client's n)."""
+        return unused
+
     def crc_ok(self, block: _Block, received: int) -> bool:
         return True
 
@@ -226,3 +243,19 @@ class BlockSizeUnchecked(BlockEngine):
     def _send_block(self, block: _Block) -> list[bytes]:
         block.blksize = block.blksize if 1 <= block.blksize <= 127 else 127
         return super()._send_block(block)
+
+
+@breaks(BlockEngine, "block_upload_truncated")
+class BlockUploadTruncated(BlockEngine):
+    """The end block upload frame's n says one more unused byte than there is: the data comes one byte short."""
+
+    def unused_in_last(self, size: int) -> int:
+        return min(super().unused_in_last(size) + 1, SEGMENT_BYTES)
+
+
+@breaks(BlockEngine, "block_end_size_ignored")
+class BlockEndSizeIgnored(BlockEngine):
+    """The n of end block download is ignored: the last segment's padding is taken as data (and refused)."""
+
+    def data_of_last(self, unused: int) -> int:
+        return 0
