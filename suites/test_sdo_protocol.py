@@ -149,17 +149,27 @@ def test_expedited_download_without_size_indicator(dut, sdo, settings_journal, e
     assert dut.read(*key) == value
 
 
-@pytest.mark.parametrize("length", [1, 3, 4])
-def test_expedited_download_size_mismatch_refused(dut, sdo, length, settings_journal, evidence):
-    """A 16-bit entry written with 1, 3 or 4 bytes is refused (06070013h / 06070012h) and keeps its value
-    (CTT SDO 08/09)."""
+def _mismatch_target(dut, longer: bool) -> tuple[tuple[int, int], int]:
+    """A harmless entry and a length one byte off its size that still fits an expedited frame (1..4 bytes)."""
+    for index, sub in HARMLESS:
+        entry = dut.profile.entry(index, sub)
+        size = datatypes.size_bytes(entry.type) if entry is not None and entry.writable and entry.readable else None
+        if size is not None and 1 <= size + (1 if longer else -1) <= 4:
+            return (index, sub), size + (1 if longer else -1)
+    pytest.skip("not applicable: no harmless writable entry of a size the test can miss by one byte (see HARMLESS)")
+
+
+@pytest.mark.parametrize("longer", [False, True], ids=["too-short", "too-long"])
+def test_expedited_download_size_mismatch_refused(dut, sdo, longer, settings_journal, evidence):
+    """An entry written with one byte fewer or more than its data type is refused (06070013h / 06070012h) and
+    keeps its value (CTT SDO 08/09)."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 table 22 (06070010h, 06070012h, 06070013h)")
-    key = _target(dut)
+    key, length = _mismatch_target(dut, longer)
     current = dut.read(*key)
     settings_journal.remember(*key, current)
-    situation, tolerated = ("length_high", CTT_TOO_LONG) if length > 2 else ("length_low", CTT_TOO_SHORT)
+    situation, tolerated = ("length_high", CTT_TOO_LONG) if longer else ("length_low", CTT_TOO_SHORT)
     response = sdo.expedited_download(*key, (current * 2)[:length])
-    what = f"{length}-byte write to 16-bit {key[0]:04X}h.{key[1]:02X}"
+    what = f"{length}-byte write to {len(current)}-byte {key[0]:04X}h.{key[1]:02X}"
     judge_refusal(dut, response, expected_aborts(dut, situation, evidence), tolerated, what, evidence)
     _unchanged(dut, key, current, what)
 
