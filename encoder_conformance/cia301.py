@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from enum import IntEnum
 
+from canopen.sdo.base import CrcXmodem
+
 #: 1010h 'save' and 1011h 'load' signatures as U32 (CiA 301 §7.5.2.13, §7.5.2.14): ASCII, little-endian
 SAVE_SIGNATURE = 0x65766173
 LOAD_SIGNATURE = 0x64616F6C
@@ -128,6 +130,14 @@ class SdoAbortCode(IntEnum):
     CANNOT_STORE = 0x08000020
     LOCAL_CONTROL = 0x08000021
     WRONG_STATE = 0x08000022
+
+
+def block_crc(data: bytes) -> int:
+    """CRC of an SDO block transfer (CiA 301 §7.2.4.3.16: CRC-16-CCITT, x^16 + x^12 + x^5 + 1, start 0):
+    canopen's own ``CrcXmodem``, the one its block client uses."""
+    crc = CrcXmodem()
+    crc.process(data)
+    return int(crc.final())
 
 
 #: CiA 301's abort code per situation, as the ``abort_code`` quirk effect names the situations

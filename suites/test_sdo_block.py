@@ -15,8 +15,8 @@ import struct
 import pytest
 
 from encoder_conformance.checks import judge_refusal
-from encoder_conformance.cia301 import SdoAbortCode
-from encoder_conformance.dut.sdo_client import SdoProtocolClient, crc16
+from encoder_conformance.cia301 import SdoAbortCode, block_crc
+from encoder_conformance.dut.sdo_client import SdoProtocolClient
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 
@@ -88,7 +88,7 @@ def test_block_download_wrong_crc_refused(dut, sdo, settings_journal, evidence):
     current = dut.read(*key)
     value = _other_value(current)
     settings_journal.remember(*key, current)
-    result = sdo.block_download(*key, value, crc_value=crc16(value) ^ 0x5A5A)
+    result = sdo.block_download(*key, value, crc_value=block_crc(value) ^ 0x5A5A)
     assert result.abort is not None, f"block download with a wrong CRC, no abort:\n{result.describe()}"
     judge_refusal(dut, result.abort, {SdoAbortCode.CRC_ERROR}, {SdoAbortCode.GENERAL_ERROR},
                   "block download with a wrong CRC", evidence)
@@ -133,7 +133,7 @@ def test_block_download_wrong_sequence_number(dut, sdo, settings_journal, eviden
     ack = sdo.wait_response(sdo.send_block_segment(1, value, last=True))
     assert ack is not None, "no block acknowledgement after the repeated segment"
     assert ack.raw[:2] == b"\xa2\x01", f"the repeated segment 1 is not acknowledged: {ack.describe()}"
-    crc = crc16(value) if started.raw[0] & 0x04 else 0  # both sides support CRC: the data's
+    crc = block_crc(value) if started.raw[0] & 0x04 else 0  # both sides support CRC: the data's
     end = sdo.wait_response(dut.send_sdo(struct.pack("<BH5x", 0xC1 | 5 << 2, crc)))  # n = 5 unused bytes
     assert end is not None, "no response to end block download"
     assert end.raw[0] & 0xE3 == 0xA1, f"end block download after the repeated segment: {end.describe()}"

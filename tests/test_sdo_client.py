@@ -10,9 +10,9 @@ import struct
 
 import pytest
 
-from encoder_conformance.cia301 import SdoAbortCode
+from encoder_conformance.cia301 import SdoAbortCode, block_crc
 from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.sdo_client import SdoProtocolClient, crc16
+from encoder_conformance.dut.sdo_client import SdoProtocolClient
 from encoder_conformance.profile.loader import load_profile
 from tests import sim_rig
 from tests.sim_rig import REPO, Rig
@@ -36,7 +36,7 @@ def client(rig: Rig) -> SdoProtocolClient:
 
 def test_crc_is_ccitt_xmodem():
     """CiA 301 §7.2.4.3.16's CRC: the CCITT check value of '123456789' is 31C3h."""
-    assert crc16(b"123456789") == 0x31C3
+    assert block_crc(b"123456789") == 0x31C3
 
 
 def test_expedited_and_segmented_upload(client):

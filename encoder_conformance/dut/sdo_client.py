@@ -5,7 +5,7 @@ silently and stops at the first surprise. This one sends exactly the frame a ste
 can put a wrong toggle bit, segment size, sequence number or CRC in it), returns the raw answer,
 and its whole transfers (upload, download, block upload, block download) list every deviation
 from CiA 301 they saw: a multiplexer not echoed, a toggle bit not alternated, a size that does not
-add up, a CRC that does not match. Block CRC: canopen's own CRC-16-CCITT (``canopen.sdo.base.CrcXmodem``).
+add up, a CRC that does not match. Block CRC: ``cia301.block_crc`` (canopen's own CRC-16-CCITT).
 """
 
 from __future__ import annotations
@@ -14,9 +14,8 @@ import struct
 from dataclasses import dataclass, field
 
 import can
-from canopen.sdo.base import CrcXmodem
 
-from ..cia301 import SdoAbortCode
+from ..cia301 import SdoAbortCode, block_crc
 from .device import DeviceUnderTest
 from .frames import Mark
 from .sdo_frames import SdoResponse, abort_name, expedited_download_request, upload_request
@@ -25,13 +24,6 @@ SEGMENT_BYTES = 7
 MAX_BLKSIZE = 127
 #: a segmented transfer of unknown size is given up after this many segments (a device that never sets c)
 MAX_SEGMENTS = 4096
-
-
-def crc16(data: bytes) -> int:
-    """CRC-16-CCITT of block transfers (CiA 301 §7.2.4.3.16: x^16 + x^12 + x^5 + 1, start 0)."""
-    crc = CrcXmodem()
-    crc.process(data)
-    return int(crc.final())
 
 
 @dataclass
@@ -109,11 +101,8 @@ class SdoProtocolClient:
         """Upload as CiA 301 §7.2.4.3.4-7 goes, checking the initiate response and every segment."""
         result = Transfer()
         request = upload_request(index, sub)
-        response = self.request(request)
-        if not self._answered(result, response, f"initiate upload {index:04X}h.{sub:02X}"):
-            return result
-        assert response is not None
-        if not self._initiate_ok(result, request, response, expected_scs=2):
+        response = self._initiate(result, request, expected_scs=2)
+        if response is None:
             return result
         command = response.raw[0]
         if command & 0x02:  # expedited: the data is in the initiate response
@@ -153,12 +142,7 @@ class SdoProtocolClient:
     def download(self, index: int, sub: int, data: bytes) -> Transfer:
         """Segmented download with the size indicated (CiA 301 §7.2.4.3.2-5), checking every response."""
         result = Transfer()
-        request = struct.pack("<BHBI", 0x21, index, sub, len(data))
-        response = self.request(request)
-        if not self._answered(result, response, f"initiate download {index:04X}h.{sub:02X}"):
-            return result
-        assert response is not None
-        if not self._initiate_ok(result, request, response, expected_scs=3):
+        if self._initiate(result, struct.pack("<BHBI", 0x21, index, sub, len(data)), expected_scs=3) is None:
             return result
         chunks = [data[i : i + SEGMENT_BYTES] for i in range(0, len(data), SEGMENT_BYTES)] or [b""]
         for number, chunk in enumerate(chunks):
@@ -184,16 +168,20 @@ class SdoProtocolClient:
             return False
         return True
 
-    @staticmethod
-    def _initiate_ok(result: Transfer, request: bytes, response: SdoResponse, expected_scs: int) -> bool:
+    def _initiate(self, result: Transfer, request: bytes, expected_scs: int) -> SdoResponse | None:
+        """Send an initiate request; its response where the transfer may go on (a wrong multiplexer is noted)."""
+        response = self.request(request)
+        if not self._answered(result, response, f"initiate {request.hex(' ').upper()}"):
+            return None
+        assert response is not None
         if response.scs != expected_scs:
             result.problems.append(f"initiate: server command {response.raw[0]:02X}h, expected scs {expected_scs}")
-            return False
+            return None
         if not echoes(request, response.raw):
             result.problems.append(f"initiate response for {response.index:04X}h.{response.sub:02X}: it does not "
                                    f"echo the request's multiplexer {request[2]:02X}{request[1]:02X}h.{request[3]:02X} "
                                    "(CiA 301 §7.2.4.3)")
-        return True
+        return response
 
     # -- block transfer (CiA 301 §7.2.4.3.9-16) ------------------------------------------------
     def block_upload_initiate(self, index: int, sub: int, blksize: int, crc: bool = True,
@@ -244,12 +232,8 @@ class SdoProtocolClient:
             mark = self.dut.send_sdo(struct.pack("<BBB5x", 0xA2, len(segments), blksize))
             if segments[-1][0] & 0x80:
                 break
-        end = self.wait_response(mark)
-        if not self._answered(result, end, "end block upload"):
-            return result
-        assert end is not None
-        if end.raw[0] & 0xE3 != 0xC1:
-            result.problems.append(f"end block upload: {end.raw.hex(' ').upper()} is not scs 6, ss 1")
+        end = self._block_frame(result, mark, 0xC1, "end block upload (scs 6, ss 1)")
+        if end is None:
             return result
         unused = (end.raw[0] >> 2) & 0x07
         result.data = bytes(data[: len(data) - unused])
@@ -258,9 +242,9 @@ class SdoProtocolClient:
             result.problems.append(f"the initiate response announced {size} bytes, the sub-blocks carried "
                                    f"{len(result.data)}")
         received = struct.unpack_from("<H", end.raw, 1)[0]
-        if crc and server_crc and received != crc16(result.data):
+        if crc and server_crc and received != block_crc(result.data):
             result.problems.append(f"end block upload CRC {received:04X}h, the data's CRC is "
-                                   f"{crc16(result.data):04X}h (CiA 301 §7.2.4.3.16)")
+                                   f"{block_crc(result.data):04X}h (CiA 301 §7.2.4.3.16)")
         return result
 
     def _sub_block(self, result: Transfer, mark: Mark, blksize: int) -> list[bytes] | None:
@@ -318,12 +302,18 @@ class SdoProtocolClient:
                 return result
             done, blksize = done + ack.raw[1], ack.raw[2]
         unused = (SEGMENT_BYTES - len(data) % SEGMENT_BYTES) % SEGMENT_BYTES
-        value = crc16(data) if crc_value is None else crc_value
+        value = block_crc(data) if crc_value is None else crc_value
         end = struct.pack("<BH5x", 0xC1 | unused << 2, value if crc and server_crc else 0)
-        response = self.wait_response(self.dut.send_sdo(end))  # its bytes 1-2 are the CRC, not a multiplexer
-        if not self._answered(result, response, "end block download"):
-            return result
-        assert response is not None
-        if response.raw[0] & 0xE3 != 0xA1:
-            result.problems.append(f"end block download: {response.raw.hex(' ').upper()} is not scs 5, ss 1")
+        self._block_frame(result, self.dut.send_sdo(end), 0xA1, "end block download response (scs 5, ss 1)")
         return result
+
+    def _block_frame(self, result: Transfer, mark: Mark, command: int, what: str) -> SdoResponse | None:
+        """The next response after ``mark`` where it is the block frame ``command`` (scs and ss, mask E3h)."""
+        response = self.wait_response(mark)
+        if not self._answered(result, response, what):
+            return None
+        assert response is not None
+        if response.raw[0] & 0xE3 != command:
+            result.problems.append(f"{what}: got {response.raw.hex(' ').upper()}")
+            return None
+        return response

@@ -3,7 +3,7 @@
 Used only where ``capabilities.block_sdo`` is true; otherwise the SDO server refuses block
 initiates with 05040001h. The engine owns the SDO channel while a block transfer runs: during a
 block download every frame is a segment (its first byte is a sequence number, not a command).
-CRC: CRC-16-CCITT (XMODEM), canopen's own ``CrcXmodem`` (the polynomial CiA 301 names).
+CRC: ``cia301.block_crc`` (CRC-16-CCITT, canopen's own implementation).
 """
 
 from __future__ import annotations
@@ -13,21 +13,13 @@ import struct
 from dataclasses import dataclass, field
 from enum import Enum, auto
 
-from canopen.sdo.base import CrcXmodem
-
-from ..cia301 import SdoAbortCode
+from ..cia301 import SdoAbortCode, block_crc
 from .faults import breaks
 from .sdo_server import ObjectAccess, SdoAbort, abort_frame
 
 #: the block size this server asks the client for in a block download (CiA 301: 1..127 segments)
 DOWNLOAD_BLKSIZE = 127
 SEGMENT_BYTES = 7
-
-
-def crc16(data: bytes) -> int:
-    crc = CrcXmodem()
-    crc.process(data)
-    return int(crc.final())
 
 
 class _Phase(Enum):
@@ -83,7 +75,7 @@ class BlockEngine:
 
     # -- decisions the faults change ---------------------------------------------------------
     def crc(self, data: bytes) -> int:
-        return crc16(data)
+        return block_crc(data)
 
     def blksize_ok(self, blksize: int) -> bool:
         return 1 <= blksize <= 127
