@@ -154,7 +154,11 @@ def test_block_initiate_refused_without_block_transfer(dut, sdo, evidence):
     initiates = {"block upload": lambda: sdo.block_upload_initiate(*key, 127),
                  "block download": lambda: sdo.block_download_initiate(*key, 4)}
     for what, initiate in initiates.items():
+        mark = dut.frames.mark()
         response = initiate()
+        others = [bytes(m.data).hex(" ").upper() for m in dut.frames.since(mark, sdo.is_response)]
+        assert response is not None or not others, f"{what} initiate answered with {others} (neither a block " \
+                                                   "response nor an abort for 1000h.00)"
         if response is not None and not response.is_abort:
             sdo.abort(*key, SdoAbortCode.GENERAL_ERROR)
             if unconfirmed is not None:
