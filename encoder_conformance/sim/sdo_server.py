@@ -38,7 +38,7 @@ class ObjectAccess(Protocol):
     def sdo_write(self, index: int, sub: int, data: bytes) -> None: ...
 
 
-class BlockEngine(Protocol):
+class BlockTransfers(Protocol):
     """Block transfers (sim/sdo_block.py), where the profile declares them."""
 
     @property
@@ -66,7 +66,7 @@ def abort_frame(index: int, sub: int, code: int) -> bytes:
 class SdoServer:
     """One SDO server channel. ``handle(request) -> response or None``."""
 
-    def __init__(self, access: ObjectAccess, block: Callable[[ObjectAccess], BlockEngine] | None = None) -> None:
+    def __init__(self, access: ObjectAccess, block: Callable[[ObjectAccess], BlockTransfers] | None = None) -> None:
         self._access = access
         self._transfer: _Transfer | None = None
         self._last_multiplexer: tuple[int, int] | None = None  # for aborts during segments
