@@ -1,0 +1,76 @@
+"""Is the device still itself while it is fuzzed: NMT state, heartbeat, no EMCY (CiA 301 §7.2.7, §7.2.8.3.2).
+
+Cheap per example: it only looks at the frames the example's window already holds (a heartbeat reporting
+another state or a boot-up, an EMCY); it never waits. Over the whole test it checks that the heartbeat
+kept coming: no gap of ``GAP_PERIODS`` periods (a device that stalled or restarted), and one more heartbeat
+after the last example.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import can
+
+from ..cia301 import NmtState
+from ..dut.device import TESTER_MARGIN_S, DeviceUnderTest
+from ..dut.frames import Mark, format_frames
+
+#: heartbeat periods without a heartbeat that count as a stalled producer (not a timing verdict: those are
+#: test_heartbeat's; this one survives a busy tester)
+GAP_PERIODS = 4
+
+
+class DeviceWatch:
+    """Watches the heartbeat state and EMCY frames of one node while a fuzz test runs."""
+
+    def __init__(self, dut: DeviceUnderTest, heartbeat_ms: int, emcy_cob_id: int | None) -> None:
+        self.dut = dut
+        self.period_s = heartbeat_ms / 1000
+        self.emcy_cob_id = emcy_cob_id
+        self.state: int | None = None
+        self.start: Mark = dut.frames.mark()
+
+    def begin(self) -> str | None:
+        """Note the NMT state from the next heartbeat; a problem if none comes while 1017h says it should."""
+        self.start = self.dut.frames.mark()
+        if not self.period_s:
+            return None
+        beat = self.dut.wait_heartbeat(self.start, GAP_PERIODS * self.period_s + TESTER_MARGIN_S)
+        if beat is None:
+            return f"no heartbeat within {GAP_PERIODS} periods of {self.period_s * 1000:.0f} ms before the examples"
+        self.state = beat.data[0]
+        return None
+
+    def _emcy(self, msg: can.Message) -> bool:
+        return msg.is_rx and msg.arbitration_id == self.emcy_cob_id and not msg.is_remote_frame
+
+    def problems(self, since: Mark) -> list[str]:
+        """What the frames after ``since`` show: a boot-up, another NMT state, an EMCY."""
+        found = []
+        for msg in self.dut.frames.since(since, lambda m: self.dut.is_heartbeat(m) or self._emcy(m)):
+            if self._emcy(msg):
+                found.append(f"EMCY {msg.data.hex(' ').upper()} after the requests (nothing in them is an error "
+                             "of the device)")
+            elif msg.data and msg.data[0] == NmtState.BOOT_UP:
+                found.append("boot-up message: the device restarted")
+            elif self.state is not None and msg.data and msg.data[0] != self.state:
+                found.append(f"heartbeat reports NMT state {msg.data[0]:02X}h, {self.state:02X}h before the requests")
+        return found
+
+    def finish(self) -> list[str]:
+        """The heartbeat kept coming over the whole test, and comes once more now."""
+        if not self.period_s:
+            return []
+        limit = GAP_PERIODS * self.period_s + TESTER_MARGIN_S
+        end = self.dut.frames.mark()
+        if self.dut.wait_heartbeat(end, limit) is None:
+            return [f"the heartbeat stopped: none within {limit * 1000:.0f} ms after the last example"]
+        beats = [m for m in self.dut.frames.since(self.start, self.dut.is_heartbeat) if m.data]
+        gaps = [(b.timestamp - a.timestamp, a, b) for a, b in itertools.pairwise(beats)]
+        late = [(gap, a, b) for gap, a, b in gaps if gap > limit]
+        if not late:
+            return []
+        gap, a, b = max(late, key=lambda item: item[0])
+        return [f"{len(late)} heartbeat gap(s) over {limit * 1000:.0f} ms while fuzzed, the longest "
+                f"{gap * 1000:.0f} ms:\n{format_frames([a, b])}"]
