@@ -46,6 +46,19 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "value_domain_ignored": "writes outside an entry's declared min/max/allowed values are accepted",
         },
     ),
+    (  # SDO fuzzing: what only odd request sequences show
+        ("test_sdo_fuzz",),
+        {
+            "dead_after_short_frame": "after an SDO frame shorter than 8 bytes the SDO server never answers again",
+            "double_abort": "every SDO abort frame is sent twice",
+            "answers_short_frame_with_garbage": "an SDO frame shorter than 8 bytes is answered with its own bytes "
+                                                "padded to 8",
+            "answers_client_abort": "a client's abort transfer request is answered (with the same frame)",
+            "crashes_on_interleaved_initiate": "an initiate request while a segmented transfer is open stops the SDO "
+                                               "server until a reset",
+            "emcy_on_unknown_command": "an abort for an unknown SDO command specifier also sends an EMCY (8100h)",
+        },
+    ),
     (  # NMT
         ("test_nmt",),
         {

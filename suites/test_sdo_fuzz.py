@@ -13,7 +13,7 @@ refuse them, or open a segmented transfer that is never completed. ``--fuzz-budg
 from __future__ import annotations
 
 import random
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import pytest
 from hypothesis import HealthCheck, Phase, given, seed, settings
@@ -69,31 +69,37 @@ def targets(dut, evidence) -> fz.Targets:
 
 
 @pytest.fixture
-def fuzz(dut, settings_journal, evidence, pytestconfig) -> Iterator[FuzzRunner]:
+def fuzz(dut, settings_journal, evidence, request) -> FuzzRunner:
     """A runner with the device's heartbeat and EMCY watched; the figures go into the evidence."""
     watch = DeviceWatch(dut, _heartbeat_ms(dut, settings_journal), _emcy_cob_id(dut))
     problem = watch.begin()
     assert problem is None, problem
     if not watch.period_s:
         evidence.note("no heartbeat producer: the NMT state is watched through boot-up messages only")
-    runner = FuzzRunner(dut, watch, pytestconfig.getoption("--fuzz-budget"))
-    yield runner
-    evidence.measure("fuzz examples", runner.examples, "examples")
-    evidence.measure("fuzz exchanges per second", round(runner.rate), "exchanges/s")
-    evidence.note(f"{runner.examples} examples, {runner.exchanges} request/reply exchanges in {runner.busy_s:.2f} s "
-                  f"({runner.rate:.0f}/s; 1000h read and heartbeat/EMCY checked after every example)"
-                  + (f"; --fuzz-budget spent, {runner.skipped} examples not sent" if runner.skipped else ""))
+    runner = FuzzRunner(dut, watch, request.config.getoption("--fuzz-budget"))
+    return runner
 
 
-def _how_to_rerun(pytestconfig, chosen: int | None) -> str:
+def _figures(fuzz: FuzzRunner, evidence) -> None:
+    evidence.measure("fuzz examples", fuzz.examples, "examples")
+    evidence.measure("fuzz exchanges per second", round(fuzz.rate), "exchanges/s")
+    evidence.note(f"{fuzz.examples} examples, {fuzz.exchanges} request/reply exchanges in {fuzz.busy_s:.2f} s "
+                  f"({fuzz.rate:.0f}/s; 1000h read and heartbeat/EMCY checked after every example, the heartbeat's "
+                  "continuity over the whole test)"
+                  + (f"; --fuzz-budget spent, {fuzz.skipped} examples not sent" if fuzz.skipped else ""))
+
+
+def _how_to_rerun(request, chosen: int | None) -> str:
     profile = settings.get_current_profile_name()
     if chosen is None:
         return (f"hypothesis profile {profile}: derandomized, every run sends the same examples in the same order "
                 "(run it again to repeat; --hypothesis-seed has no effect)")
-    return f"rerun: HYPOTHESIS_PROFILE={profile} pytest ... --hypothesis-seed={chosen}"
+    device = request.getfixturevalue("dut").profile.id
+    return (f"rerun: HYPOTHESIS_PROFILE={profile} encoder-conformance run --profile {device} -- "
+            f"-k {request.node.name} --hypothesis-seed={chosen}")
 
 
-def _fuzz(fuzz: FuzzRunner, strategy: st.SearchStrategy[fz.Example], evidence, pytestconfig,
+def _fuzz(fuzz: FuzzRunner, strategy: st.SearchStrategy[fz.Example], evidence, request,
           extra: Callable[[fz.Example], list[str]] | None = None) -> None:
     """Run ``strategy``'s examples through ``fuzz``; on failure the replay goes into the message and evidence."""
 
@@ -107,7 +113,7 @@ def _fuzz(fuzz: FuzzRunner, strategy: st.SearchStrategy[fz.Example], evidence, p
 
     chosen = None
     if not settings.default.derandomize:
-        forced = pytestconfig.getoption("--hypothesis-seed", None)
+        forced = request.config.getoption("--hypothesis-seed", None)
         chosen = int(forced) if forced is not None else random.getrandbits(64)
         check = seed(chosen)(check)
     try:
@@ -119,20 +125,22 @@ def _fuzz(fuzz: FuzzRunner, strategy: st.SearchStrategy[fz.Example], evidence, p
         if failure is None:
             raise
         text = replay.describe(0x600 + fuzz.dut.node_id, failure.requests, failure.window, failure.before,
-                               _how_to_rerun(pytestconfig, chosen))
+                               _how_to_rerun(request, chosen))
         evidence.note(text)
         raise AssertionError("\n".join(failure.problems) + "\n" + text) from exc
+    finally:
+        _figures(fuzz, evidence)
 
 
-def test_initiate_requests_answered_once(fuzz, targets, evidence, pytestconfig):
+def test_initiate_requests_answered_once(fuzz, targets, evidence, request):
     """Upload and download initiates with any index, sub-index and size bits: one reply each, echoing the
     multiplexer; a write to a read-only entry or a reserved index aborted."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.3-§7.2.4.3.9 (initiate SDO download/upload), §7.2.4.3.17 (abort)")
     examples = st.lists(fz.initiates(targets), min_size=1, max_size=3).map(tuple)
-    _fuzz(fuzz, examples, evidence, pytestconfig)
+    _fuzz(fuzz, examples, evidence, request)
 
 
-def test_reserved_command_specifiers_abort(fuzz, targets, evidence, pytestconfig):
+def test_reserved_command_specifiers_abort(fuzz, targets, evidence, request):
     """Reserved command specifiers (and block transfer where the profile has none) are aborted with 05040001h
     (CTT SDO 07), once, echoing nothing else."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 (abort: command specifier not valid or unknown)")
@@ -146,25 +154,25 @@ def test_reserved_command_specifiers_abort(fuzz, targets, evidence, pytestconfig
                     f"{reply.describe() if reply else 'no reply'}"]
         return []
 
-    _fuzz(fuzz, st.tuples(fz.reserved_commands(targets)), evidence, pytestconfig, extra=right_code)
+    _fuzz(fuzz, st.tuples(fz.reserved_commands(targets)), evidence, request, extra=right_code)
 
 
-def test_short_frames_ignored_or_aborted(fuzz, targets, evidence, pytestconfig):
+def test_short_frames_ignored_or_aborted(fuzz, targets, evidence, request):
     """A frame shorter than 8 bytes is not answered, or answered with one abort; the device goes on serving."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.1 (SDO frames carry 8 data bytes)")
     harmless = st.one_of(fz.initiates(targets), fz.reserved_commands(targets))
-    _fuzz(fuzz, st.tuples(fz.truncated(harmless)), evidence, pytestconfig)
+    _fuzz(fuzz, st.tuples(fz.truncated(harmless)), evidence, request)
 
 
-def test_segments_out_of_order_aborted(fuzz, targets, evidence, pytestconfig):
+def test_segments_out_of_order_aborted(fuzz, targets, evidence, request):
     """Segments without an open transfer, of the other direction, with the toggle bit not alternated, or after
     the client's abort are aborted; in-order segments are answered with the toggle bit echoed."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.4-§7.2.4.3.10 (segments, toggle bit), §7.2.4.3.17 (abort)")
-    _fuzz(fuzz, fz.segment_sequences(targets), evidence, pytestconfig)
+    _fuzz(fuzz, fz.segment_sequences(targets), evidence, request)
 
 
-def test_interleaved_transfers_answered_once(fuzz, targets, evidence, pytestconfig):
+def test_interleaved_transfers_answered_once(fuzz, targets, evidence, request):
     """A second initiate while a segmented transfer is open, then segments meant for the first: one reply to
     each, and segments the open transfer cannot take are aborted."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3 (one transfer per SDO channel), §7.2.4.3.17 (abort)")
-    _fuzz(fuzz, fz.interleaved_transfers(targets), evidence, pytestconfig)
+    _fuzz(fuzz, fz.interleaved_transfers(targets), evidence, request)

@@ -35,7 +35,8 @@ def python_snippet(cob_id: int, requests: Sequence[Request]) -> str:
 def describe(cob_id: int, requests: Sequence[Request], window: list[can.Message], before: list[can.Message],
              how_to_rerun: str) -> str:
     """The report text of a failing example."""
-    parts = [f"failing example: {len(requests)} request frame(s) to {cob_id:03X}h, then the liveness read of 1000h",
+    parts = [f"failing example: {len(requests)} request frames to {cob_id:03X}h (the example; an abort transfer "
+             "request where it may have opened one; the read of 1000h that ends every example)",
              "bus during the example:", format_frames(window)]
     if before:
         parts += ["bus during the example before it (a late reply to it shows in this one):", format_frames(before)]
