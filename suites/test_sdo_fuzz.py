@@ -83,9 +83,10 @@ def fuzz(dut, settings_journal, evidence, request) -> FuzzRunner:
 def _figures(fuzz: FuzzRunner, evidence) -> None:
     evidence.measure("fuzz examples", fuzz.examples, "examples")
     evidence.measure("fuzz exchanges per second", round(fuzz.rate), "exchanges/s")
-    evidence.note(f"{fuzz.examples} examples, {fuzz.exchanges} request/reply exchanges in {fuzz.busy_s:.2f} s "
-                  f"({fuzz.rate:.0f}/s; 1000h read and heartbeat/EMCY checked after every example, the heartbeat's "
-                  "continuity over the whole test)"
+    evidence.note(f"{fuzz.examples} examples: {fuzz.exchanges} request frames ({fuzz.round_trips} waited for a reply) "
+                  f"in {fuzz.busy_s:.2f} s of sending, {fuzz.rate:.0f} exchanges/s ({fuzz.wall_rate:.0f}/s over the "
+                  "test's wall-clock, example generation included); 1000h read and heartbeat/EMCY checked after every "
+                  "example, the heartbeat's continuity over the whole test"
                   + (f"; --fuzz-budget spent, {fuzz.skipped} examples not sent" if fuzz.skipped else ""))
 
 

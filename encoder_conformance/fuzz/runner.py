@@ -45,7 +45,8 @@ class FuzzRunner:
     budget_s: float | None = None
     started: float = field(default_factory=time.monotonic)
     examples: int = 0
-    exchanges: int = 0  # request/reply round trips, the 1000h reads included
+    exchanges: int = 0  # request frames sent, each judged with what it drew (the 1000h reads included)
+    round_trips: int = 0  # of which requests that owed a reply and were waited for
     busy_s: float = 0.0  # time spent sending examples
     skipped: int = 0  # examples after the budget was spent
     failure: Failure | None = None
@@ -58,8 +59,14 @@ class FuzzRunner:
 
     @property
     def rate(self) -> float:
-        """Exchanges per second while sending."""
+        """Exchanges per second while sending (hypothesis's own time between examples not counted)."""
         return self.exchanges / self.busy_s if self.busy_s else 0.0
+
+    @property
+    def wall_rate(self) -> float:
+        """Exchanges per second of the test's wall-clock so far (example generation included)."""
+        elapsed = time.monotonic() - self.started
+        return self.exchanges / elapsed if elapsed else 0.0
 
     def run(self, example: Example) -> list[str]:
         """Send ``example`` and judge it; the problems found (empty: it passed)."""
@@ -72,9 +79,10 @@ class FuzzRunner:
         for request in requests:
             if reply_required(request.frame):
                 self.dut.sdo_request(request.frame)
-                self.exchanges += 1
+                self.round_trips += 1
             else:
                 self.dut.send_sdo(request.frame)
+            self.exchanges += 1
         self.examples += 1
         window = self.dut.frames.since(mark, self._is_sdo_or_watched)
         problems = self._judge(requests, window) + self.watch.problems(mark)

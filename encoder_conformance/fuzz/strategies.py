@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass
+from functools import cache
 
 from hypothesis import strategies as st
 
@@ -81,11 +82,13 @@ class Targets:
         return index not in self.forbidden and (index, sub) not in self.self_storing
 
 
+@cache  # strategies are built once per profile: building one per draw costs more than the draw
 def _reserved_mux() -> st.SearchStrategy[Mux]:
     areas = [st.integers(low, high) for low, high in RESERVED_AREAS]
     return st.tuples(st.one_of(areas), st.integers(0, 0xFF))
 
 
+@cache
 def _any_mux(targets: Targets) -> st.SearchStrategy[Mux]:
     return st.one_of(
         st.sampled_from(targets.declared),
@@ -94,6 +97,7 @@ def _any_mux(targets: Targets) -> st.SearchStrategy[Mux]:
     )
 
 
+@cache
 def _refusing_mux(targets: Targets) -> st.SearchStrategy[Mux]:
     return st.one_of(_reserved_mux(), *([st.sampled_from(targets.refusing)] if targets.refusing else []))
 
@@ -102,18 +106,21 @@ def _frame(command: int, mux: Mux, tail: bytes) -> bytes:
     return struct.pack("<BHB", command, *mux) + tail
 
 
+@cache
 def upload_initiates(targets: Targets) -> st.SearchStrategy[Request]:
     """ccs 2 with any reserved bits, any multiplexer, any reserved bytes."""
     return st.builds(lambda low, mux, tail: Request(_frame(0x40 | low, mux, tail)),
                      st.integers(0, 0x1F), _any_mux(targets), st.binary(min_size=4, max_size=4))
 
 
+@cache
 def expedited_downloads(targets: Targets) -> st.SearchStrategy[Request]:
     """ccs 1 with e=1 and any n/s bits, to entries that must refuse the write."""
     return st.builds(lambda n, s, mux, data: Request(_frame(0x22 | n << 2 | s, mux, data), refused=True),
                      st.integers(0, 3), st.integers(0, 1), _refusing_mux(targets), st.binary(min_size=4, max_size=4))
 
 
+@cache
 def segmented_download_initiates(targets: Targets) -> st.SearchStrategy[Request]:
     """ccs 1 with e=0 (any n/s bits, any size): opens a transfer, writes nothing yet."""
     muxes = st.one_of(_refusing_mux(targets), *([st.sampled_from(targets.writable)] if targets.writable else []))
@@ -121,11 +128,13 @@ def segmented_download_initiates(targets: Targets) -> st.SearchStrategy[Request]
                      st.integers(0, 3), st.integers(0, 1), muxes, st.binary(min_size=4, max_size=4))
 
 
+@cache
 def initiates(targets: Targets) -> st.SearchStrategy[Request]:
     """Any initiate request the fuzzer may send."""
     return st.one_of(upload_initiates(targets), expedited_downloads(targets), segmented_download_initiates(targets))
 
 
+@cache
 def reserved_commands(targets: Targets) -> st.SearchStrategy[Request]:
     """ccs 7 (and 5, 6 where the profile has no block transfer) with any other bytes."""
     ccs = [7] if targets.block_sdo else [5, 6, 7]
@@ -150,13 +159,22 @@ def _segment(upload: bool, toggle: int, low: int, data: bytes, last_allowed: boo
     return Request(bytes([toggle << 4 | (low & 0x0E) | last]) + data)
 
 
+@cache
+def _long_mux(targets: Targets) -> st.SearchStrategy[Mux]:
+    return st.sampled_from(targets.long) if targets.long else _any_mux(targets)
+
+
+OPENINGS = st.sampled_from(["none", "upload", "download"])
+BITS, NIBBLES, SEGMENT_DATA = st.integers(0, 1), st.integers(0, 0x0F), st.binary(min_size=7, max_size=7)
+
+
 @st.composite
-def _opening(draw: st.DrawFn, targets: Targets) -> tuple[Request | None, bool]:
+def _opening(draw: st.DrawFn, targets: Targets, choices: st.SearchStrategy[str] = OPENINGS
+             ) -> tuple[Request | None, bool]:
     """A transfer-opening initiate (or none), and whether its download segments may carry the last bit."""
-    choice = draw(st.sampled_from(["none", "upload", "download"]))
+    choice = draw(choices)
     if choice == "upload":
-        mux = draw(st.sampled_from(targets.long) if targets.long else _any_mux(targets))
-        return Request(_frame(0x40, mux, bytes(4))), True
+        return Request(_frame(0x40, draw(_long_mux(targets)), bytes(4))), True
     if choice == "download":
         initiate = draw(segmented_download_initiates(targets))
         mux = struct.unpack_from("<HB", initiate.frame, 1)
@@ -165,8 +183,11 @@ def _opening(draw: st.DrawFn, targets: Targets) -> tuple[Request | None, bool]:
 
 
 def _segments(draw: st.DrawFn, last_allowed: bool, count: st.SearchStrategy[int]) -> list[Request]:
-    return [_segment(draw(st.booleans()), draw(st.integers(0, 1)), draw(st.integers(0, 0x0F)),
-                     draw(st.binary(min_size=7, max_size=7)), last_allowed) for _ in range(draw(count))]
+    return [_segment(bool(draw(BITS)), draw(BITS), draw(NIBBLES), draw(SEGMENT_DATA), last_allowed)
+            for _ in range(draw(count))]
+
+
+SEGMENT_COUNT, INTERLEAVED_COUNT = st.integers(1, 4), st.integers(1, 3)
 
 
 @st.composite
@@ -174,20 +195,23 @@ def segment_sequences(draw: st.DrawFn, targets: Targets) -> Example:
     """Segments without an initiate, of the wrong direction, with toggles out of order, or after an abort."""
     opening, last_allowed = draw(_opening(targets))
     steps = [opening] if opening else []
-    steps += _segments(draw, last_allowed, st.integers(1, 4))
-    if draw(st.booleans()) and opening:
+    steps += _segments(draw, last_allowed, SEGMENT_COUNT)
+    if draw(BITS) and opening:
         mux = struct.unpack_from("<HB", opening.frame, 1)
-        steps.insert(draw(st.integers(1, len(steps))), client_abort(mux, draw(st.integers(0, 0xFFFFFFFF))))
+        position = draw(st.integers(1, len(steps)))
+        steps.insert(position, client_abort(mux, int.from_bytes(draw(SEGMENT_DATA)[:4], "little")))
     return tuple(steps)
+
+
+TRANSFERS = st.sampled_from(["upload", "download"])
 
 
 @st.composite
 def interleaved_transfers(draw: st.DrawFn, targets: Targets) -> Example:
     """Two initiates, then segments meant for the first one (toggle from 0, in order)."""
-    first, last_allowed = draw(_opening(targets).filter(lambda pair: pair[0] is not None))
+    first, last_allowed = draw(_opening(targets, TRANSFERS))
     second = draw(initiates(targets))
     assert first is not None
     upload = first.frame[0] >> 5 == 2
-    segments = [_segment(upload, n % 2, 0, draw(st.binary(min_size=7, max_size=7)), last_allowed)
-                for n in range(draw(st.integers(1, 3)))]
+    segments = [_segment(upload, n % 2, 0, draw(SEGMENT_DATA), last_allowed) for n in range(draw(INTERLEAVED_COUNT))]
     return (first, second, *segments)
