@@ -12,17 +12,16 @@ refuse them, or open a segmented transfer that is never completed. ``--fuzz-budg
 
 from __future__ import annotations
 
-import random
 from collections.abc import Callable
 
 import pytest
-from hypothesis import HealthCheck, Phase, given, seed, settings
+from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from encoder_conformance.checks import abort_accepted
 from encoder_conformance.cia301 import COB_ID_INVALID, SdoAbortCode
 from encoder_conformance.dut import sdo_frames
-from encoder_conformance.fuzz import exclusions, replay
+from encoder_conformance.fuzz import exclusions, replay, rounds
 from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.runner import FuzzRunner
 from encoder_conformance.fuzz.watch import DeviceWatch
@@ -90,35 +89,36 @@ def _figures(fuzz: FuzzRunner, evidence) -> None:
                   + (f"; --fuzz-budget spent, {fuzz.skipped} examples not sent" if fuzz.skipped else ""))
 
 
-def _how_to_rerun(request, chosen: int | None) -> str:
+def _how_to_rerun(request, base: int | None, budget_s: float | None) -> str:
     profile = settings.get_current_profile_name()
-    if chosen is None:
+    if FUZZ_SETTINGS.derandomize:
         return (f"hypothesis profile {profile}: derandomized, every run sends the same examples in the same order "
                 "(run it again to repeat; --hypothesis-seed has no effect)")
     device = request.getfixturevalue("dut").profile.id
+    budget = f" --fuzz-budget {budget_s:g}" if budget_s is not None else ""
     return (f"rerun: HYPOTHESIS_PROFILE={profile} encoder-conformance run --profile {device} -- "
-            f"-k {request.node.name} --hypothesis-seed={chosen}")
+            f"-k {request.node.name} --hypothesis-seed={base}{budget}")
 
 
 def _fuzz(fuzz: FuzzRunner, strategy: st.SearchStrategy[fz.Example], evidence, request,
           extra: Callable[[fz.Example], list[str]] | None = None) -> None:
     """Run ``strategy``'s examples through ``fuzz``; on failure the replay goes into the message and evidence."""
 
-    @FUZZ_SETTINGS
-    @given(strategy)
-    def check(example: fz.Example) -> None:
-        problems = fuzz.run(example)
-        if not problems and extra is not None:
-            problems = extra(example)
-        assert not problems, "\n".join(problems)
+    def make_test(max_examples: int) -> Callable[[], None]:
+        @settings(FUZZ_SETTINGS, max_examples=max_examples)
+        @given(strategy)
+        def check(example: fz.Example) -> None:
+            problems = fuzz.run(example)
+            if not problems and extra is not None:
+                problems = extra(example)
+            assert not problems, "\n".join(problems)
 
-    chosen = None
-    if not settings.default.derandomize:
-        forced = request.config.getoption("--hypothesis-seed", None)
-        chosen = int(forced) if forced is not None else random.getrandbits(64)
-        check = seed(chosen)(check)
+        return check
+
+    forced = request.config.getoption("--hypothesis-seed", None)
+    base = rounds.base_seed(FUZZ_SETTINGS, None if forced is None else int(forced), fuzz.budget_s)
     try:
-        check()
+        rounds.run_rounds(make_test, FUZZ_SETTINGS.max_examples, base, fuzz.budget_s, lambda: fuzz.spent)
         problems = fuzz.final_check()
         assert not problems, "\n".join(problems)
     except AssertionError as exc:
@@ -126,7 +126,7 @@ def _fuzz(fuzz: FuzzRunner, strategy: st.SearchStrategy[fz.Example], evidence, r
         if failure is None:
             raise
         text = replay.describe(0x600 + fuzz.dut.node_id, failure.requests, failure.window, failure.before,
-                               _how_to_rerun(request, chosen))
+                               _how_to_rerun(request, base, fuzz.budget_s))
         evidence.note(text)
         raise AssertionError("\n".join(failure.problems) + "\n" + text) from exc
     finally:
