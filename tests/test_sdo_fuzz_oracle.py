@@ -203,3 +203,13 @@ def test_hypothesis_profiles_registered():
     hypothesis_profiles.register()
     assert settings.get_profile("ci").derandomize
     assert settings.get_profile("soak").max_examples > settings.get_profile("bench").max_examples
+
+
+def test_a_short_frames_answer_that_looks_like_the_next_requests_is_given_back():
+    """The short frame's echo arrives after the next request went out and fits it: the device answers in
+    order, so the first of the two replies belongs to the short frame."""
+    short = UPLOAD_1000[:3]
+    echo = UPLOAD_1000
+    exchanges, _ = attribute(_requests(short, UPLOAD_1000),
+                             [(True, short), (True, UPLOAD_1000), (False, echo), (False, ANSWER_1000)])
+    assert [e.replies for e in exchanges] == [[echo], [ANSWER_1000]]

@@ -5,7 +5,8 @@ not before the request the previous reply answered. Among those, a reply goes to
 request it can only be the answer to (its command and, for initiates, its multiplexer: ``oracle.fits``);
 else to the earliest that may draw an odd answer (a short frame, a client's abort, a reserved command);
 requests still without a reply first. A reply that fits only answered requests is counted against the
-earliest of them: that is how two replies to one request show.
+earliest of them: that is how two replies to one request show, unless an earlier short frame or abort
+request went without one (then the first of the two was its answer).
 """
 
 from __future__ import annotations
@@ -55,4 +56,17 @@ def attribute(requests: Sequence[Request], events: Sequence[Event]) -> tuple[lis
         target = _target(exchanges, range(first_open, sent), data)
         exchanges[target].replies.append(data)
         first_open = target
+    _give_back_to_unanswered(exchanges)
     return exchanges, stray
+
+
+def _give_back_to_unanswered(exchanges: list[Exchange]) -> None:
+    """Two replies that fit one request, and an earlier short frame or abort request without one: the first
+    reply was the answer to that frame (the device answers in order, and a frame cut short can look like the
+    next request)."""
+    for i, exchange in enumerate(exchanges):
+        if len(exchange.replies) < 2:
+            continue
+        earlier = next((e for e in reversed(exchanges[:i]) if not e.replies and _loose(e.request.frame)), None)
+        if earlier is not None:
+            earlier.replies.append(exchange.replies.pop(0))

@@ -85,7 +85,7 @@ class FuzzRunner:
             self.exchanges += 1
         self.examples += 1
         window = self.dut.frames.since(mark, self._is_sdo_or_watched)
-        problems = self._judge(requests, window) + self.watch.problems(mark)
+        problems = self._judge(requests, window) + self.watch.problems()
         self.busy_s += time.monotonic() - begun
         if problems and self.failure is None:
             self.failure = Failure(requests, problems, window, self._before)
@@ -123,7 +123,6 @@ class FuzzRunner:
 
     def final_check(self) -> list[str]:
         """After the last example: no late SDO reply, and the heartbeat kept coming."""
-        mark = self.dut.frames.mark()
         late = self.dut.frames.quiet_period(lambda m: self._is_sdo(m) and m.is_rx, self.dut.sdo_silence_s)
         problems = [f"SDO reply {bytes(m.data).hex(' ').upper()} after the last example's answers" for m in late]
-        return problems + self.watch.problems(mark) + self.watch.finish()
+        return problems + self.watch.problems() + self.watch.finish()

@@ -1,6 +1,6 @@
 """Is the device still itself while it is fuzzed: NMT state, heartbeat, no EMCY (CiA 301 §7.2.7, §7.2.8.3.2).
 
-Cheap per example: it only looks at the frames the example's window already holds (a heartbeat reporting
+Cheap per example: it only looks at the frames that came since it last looked (a heartbeat reporting
 another state or a boot-up, an EMCY); it never waits. Over the whole test it checks that the heartbeat
 kept coming: no gap of ``GAP_PERIODS`` periods (a device that stalled or restarted), and one more heartbeat
 after the last example.
@@ -30,10 +30,11 @@ class DeviceWatch:
         self.emcy_cob_id = emcy_cob_id
         self.state: int | None = None
         self.start: Mark = dut.frames.mark()
+        self._cursor: Mark = self.start  # frames up to here were looked at
 
     def begin(self) -> str | None:
         """Note the NMT state from the next heartbeat; a problem if none comes while 1017h says it should."""
-        self.start = self.dut.frames.mark()
+        self.start = self._cursor = self.dut.frames.mark()
         if not self.period_s:
             return None
         beat = self.dut.wait_heartbeat(self.start, GAP_PERIODS * self.period_s + TESTER_MARGIN_S)
@@ -45,9 +46,11 @@ class DeviceWatch:
     def _emcy(self, msg: can.Message) -> bool:
         return msg.is_rx and msg.arbitration_id == self.emcy_cob_id and not msg.is_remote_frame
 
-    def problems(self, since: Mark) -> list[str]:
-        """What the frames after ``since`` show: a boot-up, another NMT state, an EMCY."""
+    def problems(self) -> list[str]:
+        """What the frames since the last look show (also those between examples): a boot-up, another NMT
+        state, an EMCY."""
         found = []
+        since, self._cursor = self._cursor, self.dut.frames.mark()
         for msg in self.dut.frames.since(since, lambda m: self.dut.is_heartbeat(m) or self._emcy(m)):
             if self._emcy(msg):
                 found.append(f"EMCY {msg.data.hex(' ').upper()} after the requests (nothing in them is an error "
