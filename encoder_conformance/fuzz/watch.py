@@ -16,9 +16,10 @@ from ..cia301 import NmtState
 from ..dut.device import TESTER_MARGIN_S, DeviceUnderTest
 from ..dut.frames import Mark, format_frames
 
-#: heartbeat periods without a heartbeat that count as a stalled producer (not a timing verdict: those are
-#: test_heartbeat's; this one survives a busy tester)
+#: heartbeat periods without a heartbeat that count as a stalled producer, and at least GAP_FLOOR_S (not a
+#: timing verdict: those are test_heartbeat's, with the tester's own lateness; this one survives a busy tester)
 GAP_PERIODS = 4
+GAP_FLOOR_S = 0.5
 
 
 class DeviceWatch:
@@ -37,11 +38,15 @@ class DeviceWatch:
         self.start = self._cursor = self.dut.frames.mark()
         if not self.period_s:
             return None
-        beat = self.dut.wait_heartbeat(self.start, GAP_PERIODS * self.period_s + TESTER_MARGIN_S)
+        beat = self.dut.wait_heartbeat(self.start, self.gap_limit_s)
         if beat is None:
-            return f"no heartbeat within {GAP_PERIODS} periods of {self.period_s * 1000:.0f} ms before the examples"
+            return f"no heartbeat within {self.gap_limit_s * 1000:.0f} ms (1017h: {self.period_s * 1000:.0f} ms)"
         self.state = beat.data[0]
         return None
+
+    @property
+    def gap_limit_s(self) -> float:
+        return max(GAP_PERIODS * self.period_s, GAP_FLOOR_S) + TESTER_MARGIN_S
 
     def _emcy(self, msg: can.Message) -> bool:
         return msg.is_rx and msg.arbitration_id == self.emcy_cob_id and not msg.is_remote_frame
@@ -65,7 +70,7 @@ class DeviceWatch:
         """The heartbeat kept coming over the whole test, and comes once more now."""
         if not self.period_s:
             return []
-        limit = GAP_PERIODS * self.period_s + TESTER_MARGIN_S
+        limit = self.gap_limit_s
         end = self.dut.frames.mark()
         if self.dut.wait_heartbeat(end, limit) is None:
             return [f"the heartbeat stopped: none within {limit * 1000:.0f} ms after the last example"]
