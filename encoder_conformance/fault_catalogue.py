@@ -310,6 +310,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #:   our reading of "event-driven" (CiA 301 §7.5.2.35 leaves the event to the manufacturer or profile).
 #: - sync_tpdo_late: CiA 301 bounds no SYNC-to-TPDO latency; the limit is the profile's pdo_response_max_ms,
 #:   our inference unless a manual gives it.
+#: - emcy_on_unknown_command: that a refused SDO request draws no EMCY is our reading of CiA 301 §7.2.7.1.
 #: Judged without it (the rule that catches them is documented):
 #: - work_area_flags_swapped: 02h above / 04h below is CiA 406 6400h and WDGA T 6.9; only the edges are
 #:   inferred, and the swap shows at every position outside the area, not only at an edge;
@@ -319,7 +320,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #:   enabled cams can change state"), not only the inferred value 0 of its bit;
 #: - the position, preset, speed and TPDO faults, cam_polarity_ignored, cam_on_unscaled_value and
 #:   cam_low_order_ignored break CiA 406 or the profile's manual directly.
-JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored", "sync_tpdo_late"})
+JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored", "sync_tpdo_late",
+                                             "emcy_on_unknown_command"})
 
 
 def faults_for(effects: Iterable[str]) -> list[str]:

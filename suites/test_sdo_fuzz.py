@@ -4,10 +4,11 @@ CiA 301 §7.2.4.3 (SDO protocol). Each example is a few request frames: initiate
 sub-index and size bits, reserved command specifiers, frames shorter than 8 bytes, segments without
 or out of order, interleaved transfers. After every example (``encoder_conformance.fuzz``): one reply
 to each request that owes one and none to a client's abort, DLC 8, the server command that answers the
-request or an abort, the multiplexer echoed, 1000h still readable, the heartbeat's NMT state unchanged,
-no EMCY; over the whole test the heartbeat keeps coming. Downloads never reach the exclusion list (store,
-restore, node-ID, bit rate, preset; ``fuzz.exclusions``) and write nothing: they go to entries that must
-refuse them, or open a segmented transfer that is never completed. ``--fuzz-budget`` bounds each test.
+request or an abort, the multiplexer echoed, 1000h still readable, the heartbeat's NMT state unchanged
+(an EMCY is a warning: ``watch.EMCY_RULE``); over the whole test the heartbeat keeps coming. Downloads
+never reach the exclusion list (store, restore, node-ID, bit rate, preset, self-storing entries:
+``fuzz.exclusions``) and write nothing: they go to entries that must refuse them, or open a segmented
+transfer that is never completed. ``--fuzz-budget`` bounds each test.
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ from encoder_conformance.cia301 import COB_ID_INVALID, SdoAbortCode
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.fuzz import exclusions, replay, rounds
 from encoder_conformance.fuzz import strategies as fz
-from encoder_conformance.fuzz.runner import FuzzRunner
-from encoder_conformance.fuzz.watch import DeviceWatch
+from encoder_conformance.fuzz.runner import Failure, FuzzRunner
+from encoder_conformance.fuzz.watch import EMCY_RULE, DeviceWatch
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocol)")
 
@@ -117,20 +118,35 @@ def _fuzz(fuzz: FuzzRunner, strategy: st.SearchStrategy[fz.Example], evidence, r
 
     forced = request.config.getoption("--hypothesis-seed", None)
     base = rounds.base_seed(FUZZ_SETTINGS, None if forced is None else int(forced), fuzz.budget_s)
+    rerun = _how_to_rerun(request, base, fuzz.budget_s)
     try:
         rounds.run_rounds(make_test, FUZZ_SETTINGS.max_examples, base, fuzz.budget_s, lambda: fuzz.spent)
         problems = fuzz.final_check()
         assert not problems, "\n".join(problems)
     except AssertionError as exc:
-        failure = fuzz.failure
-        if failure is None:
+        if fuzz.failure is None:
             raise
-        text = replay.describe(0x600 + fuzz.dut.node_id, failure.requests, failure.window, failure.before,
-                               _how_to_rerun(request, base, fuzz.budget_s))
-        evidence.note(text)
-        raise AssertionError("\n".join(failure.problems) + "\n" + text) from exc
+        text = _replay(fuzz, fuzz.failure, evidence, rerun)
+        raise AssertionError("\n".join(fuzz.failure.problems) + "\n" + text) from exc
     finally:
         _figures(fuzz, evidence)
+    if fuzz.first_emcy is not None:  # the replay goes into a note, the warning stays one line
+        _replay(fuzz, fuzz.first_emcy, evidence, rerun)
+        sent = ", ".join(str(r) for r in fuzz.first_emcy.requests)
+        evidence.inferred_problem(f"{len(fuzz.watch.emcy)} EMCY frame(s) while fuzzed, the first "
+                                  f"({fuzz.first_emcy.problems[0]}) after {sent}", EMCY_RULE)
+
+
+def _replay(fuzz: FuzzRunner, failure: Failure, evidence, rerun: str) -> str:
+    """The failing example as text (also a note) and, next to the bus trace, as a file canplayer takes."""
+    cob_id = 0x600 + fuzz.dut.node_id
+    text = replay.describe(cob_id, failure.requests, failure.window, failure.before, rerun)
+    if evidence.trace_path is not None:
+        path = evidence.trace_path.with_suffix(".replay.log")
+        path.write_text(replay.candump_lines(cob_id, failure.requests) + "\n", encoding="utf-8")
+        text += f"\nrequests as a canplayer file: {path}"
+    evidence.note(text)
+    return text
 
 
 def test_initiate_requests_answered_once(fuzz, targets, evidence, request):

@@ -47,13 +47,20 @@ def test_fault_free_examples_pass(rig):
     ("answers_client_abort", (UPLOAD_1000,), "abort transfer request"),
     ("crashes_on_interleaved_initiate", (fz.Request(bytes.fromhex("21 00 F0 00 09 00 00 00")), UPLOAD_1000),
      "no reply"),
-    ("emcy_on_unknown_command", (RESERVED,), "EMCY"),
 ])
 def test_each_fault_is_reported(rig, fault, example, words):
     runner, _ = _runner(rig, (fault,))
     problems = runner.run(example)
     assert any(words in p for p in problems), problems
     assert runner.failure is not None
+
+
+def test_an_emcy_is_kept_as_a_warning(rig):
+    runner, _ = _runner(rig, ("emcy_on_unknown_command",))
+    assert runner.run((RESERVED,)) == []
+    assert runner.first_emcy is not None
+    assert runner.first_emcy.requests[0] == RESERVED
+    assert len(runner.watch.emcy) == 1
 
 
 def test_another_nmt_state_is_noticed(rig):

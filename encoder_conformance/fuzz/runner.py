@@ -50,6 +50,7 @@ class FuzzRunner:
     busy_s: float = 0.0  # time spent sending examples
     skipped: int = 0  # examples after the budget was spent
     failure: Failure | None = None
+    first_emcy: Failure | None = None  # the example after which the first EMCY came (a warning, not a failure)
     last_exchanges: list[Exchange] = field(default_factory=list)  # the last example's, for checks of a test
     _before: list[can.Message] = field(default_factory=list)
 
@@ -85,10 +86,14 @@ class FuzzRunner:
             self.exchanges += 1
         self.examples += 1
         window = self.dut.frames.since(mark, self._is_sdo_or_watched)
+        emcy_before = len(self.watch.emcy)
         problems = self._judge(requests, window) + self.watch.problems()
         self.busy_s += time.monotonic() - begun
         if problems and self.failure is None:
             self.failure = Failure(requests, problems, window, self._before)
+        if len(self.watch.emcy) > emcy_before and self.first_emcy is None:
+            self.first_emcy = Failure(requests, [f"EMCY {bytes(self.watch.emcy[emcy_before].data).hex(' ').upper()}"],
+                                      window, self._before)
         self._before = window
         return problems
 
