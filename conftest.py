@@ -6,25 +6,16 @@ profile once, selects tests by capability, and sets up the report outputs.
 
 from __future__ import annotations
 
-import os
-
 import pytest
-from hypothesis import HealthCheck, settings
 
 from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
-from encoder_conformance.plugin import lifecycle, reporting, selection, verdicts
+from encoder_conformance.plugin import hypothesis_profiles, lifecycle, reporting, selection, verdicts
 from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence",
                   "fixtures.lss", "fixtures.encoder"]
 
-settings.register_profile(
-    "ci", max_examples=50, deadline=None, derandomize=True, database=None, print_blob=True,
-    suppress_health_check=[HealthCheck.too_slow],
-)
-settings.register_profile("bench", max_examples=500, deadline=None, stateful_step_count=30)
-settings.register_profile("dev", max_examples=30, deadline=None)
-settings.load_profile(os.getenv("HYPOTHESIS_PROFILE", "ci" if os.getenv("CI") else "dev"))
+hypothesis_profiles.load()  # ci, bench, soak, dev (HYPOTHESIS_PROFILE)
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

@@ -69,6 +69,19 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "block_size_unchecked": "a block upload with block size 0 or over 127 is served",
         },
     ),
+    (  # SDO fuzzing: what only odd request sequences show
+        ("test_sdo_fuzz",),
+        {
+            "dead_after_short_frame": "after an SDO frame shorter than 8 bytes the SDO server never answers again",
+            "double_abort": "every SDO abort frame is sent twice",
+            "answers_short_frame_with_garbage": "an SDO frame shorter than 8 bytes is answered with its own bytes "
+                                                "padded to 8",
+            "answers_client_abort": "a client's abort transfer request is answered (with the same frame)",
+            "crashes_on_interleaved_initiate": "an initiate request while a segmented transfer is open stops the SDO "
+                                               "server until a reset",
+            "emcy_on_unknown_command": "an abort for an unknown SDO command specifier also sends an EMCY (8100h)",
+        },
+    ),
     (  # NMT
         ("test_nmt",),
         {
@@ -322,6 +335,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #:   our inference unless a manual gives it.
 #: - unsized_download_takes_four_bytes: that a server takes an entry's own size for an expedited download without
 #:   size indicator (rather than refusing it) is our reading of CiA 301 §7.2.4.3.3 ("unspecified number of bytes").
+#: - emcy_on_unknown_command: that a refused SDO request draws no EMCY is our reading of CiA 301 §7.2.7.1.
 #: Judged without it (the rule that catches them is documented):
 #: - work_area_flags_swapped: 02h above / 04h below is CiA 406 6400h and WDGA T 6.9; only the edges are
 #:   inferred, and the swap shows at every position outside the area, not only at an edge;
@@ -332,7 +346,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #: - the position, preset, speed and TPDO faults, cam_polarity_ignored, cam_on_unscaled_value and
 #:   cam_low_order_ignored break CiA 406 or the profile's manual directly.
 JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored", "sync_tpdo_late",
-                                             "unsized_download_takes_four_bytes"})
+                                             "unsized_download_takes_four_bytes",
+                                             "emcy_on_unknown_command"})
 
 
 def faults_for(effects: Iterable[str]) -> list[str]:

@@ -1,127 +1,195 @@
-"""SDO robustness under generated requests (hypothesis): one well-formed answer per request, never a crash.
+"""SDO robustness under generated requests (hypothesis): at most one well-formed answer, never a crash.
 
-CiA 301 §7.2.4.3 (SDO protocol): every initiate request gets exactly one response from the
-server, an abort echoes the request's multiplexer, and an unknown command specifier aborts with
-05040001h. Only harmless requests are generated: uploads of anything, and downloads to objects
-that must refuse them (absent objects, read-only entries), so the device keeps its settings.
+CiA 301 §7.2.4.3 (SDO protocol). Each example is a few request frames: initiates with any index,
+sub-index and size bits, reserved command specifiers, frames shorter than 8 bytes, segments without
+or out of order, interleaved transfers. After every example (``encoder_conformance.fuzz``): one reply
+to each request that owes one and none to a client's abort, DLC 8, the server command that answers the
+request or an abort, the multiplexer echoed, 1000h still readable, the heartbeat's NMT state unchanged
+(an EMCY is a warning: ``watch.EMCY_RULE``); over the whole test the heartbeat keeps coming. Downloads
+never reach the exclusion list (store, restore, node-ID, bit rate, preset, self-storing entries:
+``fuzz.exclusions``) and write nothing: they go to entries that must refuse them, or open a segmented
+transfer that is never completed. ``--fuzz-budget`` bounds each test.
 """
 
 from __future__ import annotations
 
-import struct
+from collections.abc import Callable
 
 import pytest
-from hypothesis import HealthCheck, Phase, given, note, settings
+from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from encoder_conformance.checks import abort_accepted
-from encoder_conformance.cia301 import SdoAbortCode
+from encoder_conformance.cia301 import COB_ID_INVALID, SdoAbortCode
 from encoder_conformance.dut import sdo_frames
+from encoder_conformance.fuzz import exclusions, replay, rounds
+from encoder_conformance.fuzz import strategies as fz
+from encoder_conformance.fuzz.runner import Failure, FuzzRunner
+from encoder_conformance.fuzz.watch import EMCY_RULE, DeviceWatch
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocol)")
 
-#: No shrinking: against a device that stops answering, every shrink step costs an SDO timeout, and
-#: the first failing request (shown with note()) is already a single frame.
+#: No shrinking: against a device that stopped answering, every shrink step costs an SDO timeout, and
+#: the failing example (a few frames, shown as a replay) is short already.
 FUZZ_SETTINGS = settings(
-    suppress_health_check=[HealthCheck.function_scoped_fixture],
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow, HealthCheck.filter_too_much],
     deadline=None,
     phases=[Phase.explicit, Phase.reuse, Phase.generate],
     report_multiple_bugs=False,
 )
 
 
-def _declared(profile) -> list[tuple[int, int]]:
-    return [(index, sub) for index, sub, _, _ in profile.iter_entries()]
+def _emcy_cob_id(dut) -> int | None:
+    """The EMCY COB-ID the device uses (1014h where declared), None without a valid EMCY."""
+    if not dut.profile.capabilities.emcy:
+        return None
+    if dut.profile.entry(0x1014, 0) is None:
+        return 0x80 + dut.node_id
+    value = dut.read_uint(0x1014, 0)
+    return None if value & COB_ID_INVALID else value & 0x7FF
 
 
-def _read_only(profile) -> list[tuple[int, int]]:
-    return [(i, s) for i, s, _, e in profile.iter_entries() if e.access in ("ro", "const")]
-
-
-def _absent_indices(profile) -> st.SearchStrategy[int]:
-    return st.integers(0x1000, 0xFFFF).filter(lambda index: index not in profile.objects)
-
-
-def _multiplexers(profile) -> st.SearchStrategy[tuple[int, int]]:
-    declared = _declared(profile)
-    return st.one_of(
-        st.sampled_from(declared),
-        st.tuples(st.sampled_from(sorted(profile.objects)), st.integers(0, 0xFF)),
-        st.tuples(st.integers(0x0000, 0xFFFF), st.integers(0, 0xFF)),
-    )
-
-
-def _check_reply(dut, request: bytes, response, allowed_scs: set[int]) -> None:
-    note(f"request {request.hex(' ')} -> {response.describe() if response else 'no response'}")
-    assert response is not None, f"no SDO response to {request.hex(' ').upper()}"
-    assert len(response.raw) == 8, f"SDO response with DLC {len(response.raw)}: {response.raw.hex(' ')}"
-    if response.is_abort:
-        assert response.raw[1:4] == request[1:4], (
-            f"abort for {response.index:04X}h.{response.sub:02X} does not echo the request's "
-            f"{request[2]:02X}{request[1]:02X}h.{request[3]:02X}"
-        )
-        return
-    assert response.scs in allowed_scs, f"unexpected server command {response.raw[0]:02X}h to {request.hex(' ')}"
-    assert response.raw[1:4] == request[1:4], "response does not echo the request's index/sub-index"
+def _heartbeat_ms(dut, settings_journal) -> int:
+    """The heartbeat period the watch checks: the running one, else the profile's test period (put back after)."""
+    if not dut.profile.capabilities.heartbeat_producer:
+        return 0
+    period = dut.read_uint(0x1017, 0)
+    if period == 0:
+        period = dut.profile.timing.heartbeat_test_period_ms
+        settings_journal.write(0x1017, 0, period.to_bytes(2, "little"))
+    return period
 
 
 @pytest.fixture
-def alive_after(dut):
-    """After the examples, the device still answers a plain read of 1000h."""
-    yield
-    assert dut.responds(), "the device stopped answering SDO after the generated requests"
+def targets(dut, evidence) -> fz.Targets:
+    """What the fuzzer may address; the exclusion list goes into the evidence."""
+    excluded, self_storing = exclusions.never_write(dut.profile), exclusions.self_storing(dut.profile)
+    evidence.note("never written by the fuzzer:\n" + exclusions.describe(excluded, self_storing))
+    return fz.Targets.of(dut.profile, excluded, self_storing)
 
 
-def test_uploads_of_any_object_answered(dut, alive_after):
-    """Any upload request (declared or not) gets one response: data or an abort echoing the multiplexer."""
-
-    @FUZZ_SETTINGS
-    @given(_multiplexers(dut.profile))
-    def check(mux):
-        request = sdo_frames.upload_request(*mux)
-        response = dut.sdo_request(request)
-        _check_reply(dut, request, response, {2})
-        if response.segmented_size is not None:  # a segmented upload was started: end it politely
-            dut.send_sdo(struct.pack("<BHBI", 0x80, *mux, SdoAbortCode.TIMEOUT))
-
-    check()
+@pytest.fixture
+def fuzz(dut, settings_journal, evidence, request) -> FuzzRunner:
+    """A runner with the device's heartbeat and EMCY watched; the figures go into the evidence."""
+    watch = DeviceWatch(dut, _heartbeat_ms(dut, settings_journal), _emcy_cob_id(dut))
+    problem = watch.begin()
+    assert problem is None, problem
+    if not watch.period_s:
+        evidence.note("no heartbeat producer: the NMT state is watched through boot-up messages only")
+    runner = FuzzRunner(dut, watch, request.config.getoption("--fuzz-budget"))
+    return runner
 
 
-def test_refused_downloads_answered_with_abort(dut, alive_after):
-    """Expedited writes to absent objects or read-only entries always abort, echoing the multiplexer."""
-    read_only = _read_only(dut.profile)
-    targets = st.one_of(
-        st.tuples(_absent_indices(dut.profile), st.integers(0, 0xFF)),
-        *([st.sampled_from(read_only)] if read_only else []),
-    )
-
-    @FUZZ_SETTINGS
-    @given(targets, st.binary(min_size=1, max_size=4))
-    def check(mux, data):
-        request = sdo_frames.expedited_download_request(*mux, data)
-        response = dut.sdo_request(request)
-        _check_reply(dut, request, response, set())
-
-    check()
+def _figures(fuzz: FuzzRunner, evidence) -> None:
+    evidence.measure("fuzz examples", fuzz.examples, "examples")
+    evidence.measure("fuzz exchanges per second", round(fuzz.rate), "exchanges/s")
+    evidence.note(f"{fuzz.examples} examples: {fuzz.exchanges} request frames ({fuzz.round_trips} waited for a reply) "
+                  f"in {fuzz.busy_s:.2f} s of sending, {fuzz.rate:.0f} exchanges/s ({fuzz.wall_rate:.0f}/s over the "
+                  "test's wall-clock, example generation included); 1000h read and heartbeat/EMCY checked after every "
+                  "example, the heartbeat's continuity over the whole test"
+                  + (f"; --fuzz-budget spent, {fuzz.skipped} examples not sent" if fuzz.skipped else ""))
 
 
-def test_unknown_command_specifiers_abort(dut, alive_after):
-    """Reserved command specifiers and orphan segments are refused with abort 05040001h (CTT SDO 07)."""
-    block = dut.profile.capabilities.block_sdo
+def _how_to_rerun(request, base: int | None, budget_s: float | None) -> str:
+    profile = settings.get_current_profile_name()
+    if FUZZ_SETTINGS.derandomize:
+        return (f"hypothesis profile {profile}: derandomized, every run sends the same examples in the same order "
+                "(run it again to repeat; --hypothesis-seed has no effect)")
+    device = request.getfixturevalue("dut").profile.id
+    budget = f" --fuzz-budget {budget_s:g}" if budget_s is not None else ""
+    return (f"rerun: HYPOTHESIS_PROFILE={profile} encoder-conformance run --profile {device} -- "
+            f"-k {request.node.name} --hypothesis-seed={base}{budget}")
 
-    @FUZZ_SETTINGS
-    @given(
-        st.sampled_from([0, 3, 7] if block else [0, 3, 5, 6, 7]),
-        st.integers(0, 0x1F),
-        st.binary(min_size=7, max_size=7),
-    )
-    def check(ccs, low_bits, rest):
-        request = bytes([(ccs << 5) | low_bits]) + rest
-        response = dut.sdo_request(request)
-        note(f"request {request.hex(' ')} -> {response.describe() if response else 'no response'}")
-        assert response is not None, f"no response to command specifier {ccs} ({request.hex(' ').upper()})"
-        expected = f"command specifier {ccs}: expected abort {sdo_frames.abort_name(SdoAbortCode.COMMAND_SPECIFIER)}"
-        assert response.is_abort, f"{expected}, got {response.describe()}"
-        assert abort_accepted(dut, response, {SdoAbortCode.COMMAND_SPECIFIER}), f"{expected}, got {response.describe()}"
 
-    check()
+def _fuzz(fuzz: FuzzRunner, strategy: st.SearchStrategy[fz.Example], evidence, request,
+          extra: Callable[[fz.Example], list[str]] | None = None) -> None:
+    """Run ``strategy``'s examples through ``fuzz``; on failure the replay goes into the message and evidence."""
+
+    def make_test(max_examples: int) -> Callable[[], None]:
+        @settings(FUZZ_SETTINGS, max_examples=max_examples)
+        @given(strategy)
+        def check(example: fz.Example) -> None:
+            problems = fuzz.run(example)
+            if not problems and extra is not None:
+                problems = extra(example)
+            assert not problems, "\n".join(problems)
+
+        return check
+
+    forced = request.config.getoption("--hypothesis-seed", None)
+    base = rounds.base_seed(FUZZ_SETTINGS, None if forced is None else int(forced), fuzz.budget_s)
+    rerun = _how_to_rerun(request, base, fuzz.budget_s)
+    try:
+        rounds.run_rounds(make_test, FUZZ_SETTINGS.max_examples, base, fuzz.budget_s, lambda: fuzz.spent)
+        problems = fuzz.final_check()
+        assert not problems, "\n".join(problems)
+    except AssertionError as exc:
+        if fuzz.failure is None:
+            raise
+        text = _replay(fuzz, fuzz.failure, evidence, rerun)
+        raise AssertionError("\n".join(fuzz.failure.problems) + "\n" + text) from exc
+    finally:
+        _figures(fuzz, evidence)
+    if fuzz.first_emcy is not None:  # the replay goes into a note, the warning stays one line
+        _replay(fuzz, fuzz.first_emcy, evidence, rerun)
+        sent = ", ".join(str(r) for r in fuzz.first_emcy.requests)
+        evidence.inferred_problem(f"{len(fuzz.watch.emcy)} EMCY frame(s) while fuzzed, the first "
+                                  f"({fuzz.first_emcy.problems[0]}) after {sent}", EMCY_RULE)
+
+
+def _replay(fuzz: FuzzRunner, failure: Failure, evidence, rerun: str) -> str:
+    """The failing example as text (also a note) and, next to the bus trace, as a file canplayer takes."""
+    cob_id = 0x600 + fuzz.dut.node_id
+    text = replay.describe(cob_id, failure.requests, failure.window, failure.before, rerun)
+    if evidence.trace_path is not None:
+        path = evidence.trace_path.with_suffix(".replay.log")
+        path.write_text(replay.candump_lines(cob_id, failure.requests) + "\n", encoding="utf-8")
+        text += f"\nrequests as a canplayer file: {path}"
+    evidence.note(text)
+    return text
+
+
+def test_initiate_requests_answered_once(fuzz, targets, evidence, request):
+    """Upload and download initiates with any index, sub-index and size bits: one reply each, echoing the
+    multiplexer; a write to a read-only entry or a reserved index aborted."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.3-§7.2.4.3.9 (initiate SDO download/upload), §7.2.4.3.17 (abort)")
+    examples = st.lists(fz.initiates(targets), min_size=1, max_size=3).map(tuple)
+    _fuzz(fuzz, examples, evidence, request)
+
+
+def test_reserved_command_specifiers_abort(fuzz, targets, evidence, request):
+    """Reserved command specifiers (and block transfer where the profile has none) are aborted with 05040001h
+    (CTT SDO 07), once, echoing nothing else."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 (abort: command specifier not valid or unknown)")
+    dut = fuzz.dut
+
+    def right_code(example: fz.Example) -> list[str]:
+        replies = fuzz.last_exchanges[0].replies
+        reply = sdo_frames.SdoResponse(replies[0]) if replies else None
+        if reply is None or not abort_accepted(dut, reply, {SdoAbortCode.COMMAND_SPECIFIER}):
+            return [f"{example[0]}: expected abort {sdo_frames.abort_name(SdoAbortCode.COMMAND_SPECIFIER)}, got "
+                    f"{reply.describe() if reply else 'no reply'}"]
+        return []
+
+    _fuzz(fuzz, st.tuples(fz.reserved_commands(targets)), evidence, request, extra=right_code)
+
+
+def test_short_frames_ignored_or_aborted(fuzz, targets, evidence, request):
+    """A frame shorter than 8 bytes is not answered, or answered with one abort; the device goes on serving."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.1 (SDO frames carry 8 data bytes)")
+    harmless = st.one_of(fz.initiates(targets), fz.reserved_commands(targets))
+    _fuzz(fuzz, st.tuples(fz.truncated(harmless)), evidence, request)
+
+
+def test_segments_out_of_order_aborted(fuzz, targets, evidence, request):
+    """Segments without an open transfer, of the other direction, with the toggle bit not alternated, or after
+    the client's abort are aborted; in-order segments are answered with the toggle bit echoed."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.4-§7.2.4.3.10 (segments, toggle bit), §7.2.4.3.17 (abort)")
+    _fuzz(fuzz, fz.segment_sequences(targets), evidence, request)
+
+
+def test_interleaved_transfers_answered_once(fuzz, targets, evidence, request):
+    """A second initiate while a segmented transfer is open, then segments meant for the first: one reply to
+    each, and segments the open transfer cannot take are aborted."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3 (one transfer per SDO channel), §7.2.4.3.17 (abort)")
+    _fuzz(fuzz, fz.interleaved_transfers(targets), evidence, request)

@@ -185,14 +185,18 @@ class DeviceUnderTest:
         mark = self.frames.mark()
         self.network.send_message(0x600 + self.node_id, request)
         wait = self.sdo_timeout if timeout is None else timeout
-        earlier = [bytes(m.data) for m in self.frames.before(mark, self._is_sdo_request)][-STALE_REQUESTS:]
+        earlier: list[bytes] = []  # the requests before this one, read from the log only for a reply that does not fit
 
         def is_answer(msg: can.Message) -> bool:
             if not self._is_sdo_response(msg):
                 return False
             data = bytes(msg.data)
-            # a reply that fits this request, or that fits no earlier one (the device's own, wrong answer)
-            return sdo_frames.answers(request, data) or not any(sdo_frames.answers(e, data) for e in earlier)
+            if sdo_frames.answers(request, data):
+                return True
+            if not earlier:
+                earlier[:] = [bytes(m.data) for m in self.frames.before(mark, self._is_sdo_request)][-STALE_REQUESTS:]
+            # a reply that fits no earlier request is the device's own, wrong answer to this one
+            return not any(sdo_frames.answers(e, data) for e in earlier)
 
         reply = self.frames.wait_for(is_answer, wait, after=mark)
         if reply is None:

@@ -104,6 +104,9 @@ def add_options(parser: pytest.Parser) -> None:
     group.addoption("--budget", default=1.0, type=float, metavar="SECONDS",
                     help="wall-clock time each property test (hypothesis sequences against the device) may spend "
                          "generating examples (default 1 s; raise it for long bench runs)")
+    group.addoption("--fuzz-budget", default=None, type=float, metavar="SECONDS",
+                    help="wall-clock time each SDO fuzz test may spend sending examples; once spent, it stops "
+                         "(default: no limit, the hypothesis profile's example count decides; set it on a bench)")
     group.addoption("--allure", action="store_true", default=False,
                     help="also write allure-pytest results (allure-results/ in the report folder; render with "
                          "`npx allure generate`). Off by default: about 3,400 files and 3 s of a 14 s WDGA run")

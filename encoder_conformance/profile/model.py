@@ -417,6 +417,11 @@ class DeviceProfile(StrictModel):
     objects: dict[int, ObjectSpec] = Field(default_factory=dict)
     quirks: dict[str, Quirk] = Field(default_factory=dict)
     simulator: SimulatorSpec = SimulatorSpec()
+    sdo_fuzz_never_write: dict[int, str] = Field(
+        default_factory=dict,
+        description="object index -> why the SDO fuzzer must never send a download to it (beyond 1010h/1011h, "
+        "the preset and the node-ID, bit-rate, store and zeroing objects its quirks declare)",
+    )
     todo: list[str] = Field(
         default_factory=list,
         description="assumptions not yet confirmed against the manual (e.g. a draft from an EDS); runs with the "

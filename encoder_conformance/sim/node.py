@@ -23,6 +23,7 @@ from ..profile import quirk_effects as fx
 from ..profile.datatypes import as_signed
 from ..profile.model import DeviceProfile
 from ..profile.od_builder import initial_value
+from . import sdo_fuzz_faults  # noqa: F401  (registers the SDO fuzzing faults)
 from .access import ObjectAccess, situation_codes
 from .autostart import Autostart
 from .cam_gate import CamLowLimitGate

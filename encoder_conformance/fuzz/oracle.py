@@ -1,0 +1,168 @@
+"""What a device's SDO answers to a fuzz example must look like (CiA 301 §7.2.4.3): a pure judge, no I/O.
+
+Per request: a DLC-8 request other than an abort (ccs 4) gets exactly one reply; a client's abort gets
+none; a frame shorter than 8 bytes gets none or one abort. Every reply has DLC 8 and the server command
+specifier that answers the request, or is an abort (command byte 80h). Initiate requests (ccs 1, 2) are
+answered, also when aborted, with their multiplexer; an abort during a segmented transfer carries the
+transfer's multiplexer. Segments outside a transfer, of the other direction or with the toggle bit not
+alternated are aborted; a segment response echoes the toggle bit.
+
+The judge follows the transfer the device has open, as far as its answers tell. Where they do not
+(an initiate aborted while a transfer was open: the device may go on with the old one), the state is
+unknown and segments are judged only as frames.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..dut.sdo_frames import ABORT_SCS, ANSWER_SCS, answers
+from .strategies import Request
+
+ABORT = 0x80
+SEGMENT_CCS = (0, 3)
+INITIATE_CCS = (1, 2)
+
+
+@dataclass(frozen=True)
+class Transfer:
+    """A segmented transfer the device has open: its direction, multiplexer and the next toggle bit."""
+
+    upload: bool
+    mux: bytes
+    toggle: int = 0
+
+
+UNKNOWN = "unknown"  # the device's transfer state cannot be told from its answers
+
+
+@dataclass
+class Exchange:
+    """A request and every reply attributed to it."""
+
+    request: Request
+    replies: list[bytes] = field(default_factory=list)
+
+
+def _ccs(frame: bytes) -> int | None:
+    return frame[0] >> 5 if frame else None
+
+
+def reply_required(frame: bytes) -> bool:
+    return len(frame) == 8 and _ccs(frame) != 4
+
+
+def no_reply_expected(frame: bytes) -> bool:
+    """A client's abort or a short frame: nothing (or, for a short frame, an abort) comes back."""
+    return not reply_required(frame)
+
+
+def fits(frame: bytes, reply: bytes) -> bool:
+    """A reply that can only be the answer to this request (a known command and, for initiates, its multiplexer)."""
+    return len(frame) == 8 and _ccs(frame) in ANSWER_SCS and answers(frame, reply)
+
+
+def _hex(data: bytes) -> str:
+    return data.hex(" ").upper() or "(no data)"
+
+
+class Judge:
+    """Judges the exchanges of one example after another, carrying the device's transfer state."""
+
+    def __init__(self, block_sdo: bool = False) -> None:
+        self.block_sdo = block_sdo
+        self.transfer: Transfer | str | None = None
+
+    def judge(self, exchanges: list[Exchange]) -> list[str]:
+        problems: list[str] = []
+        for exchange in exchanges:
+            problems += [f"request {_hex(exchange.request.frame)}: {p}" for p in self._one(exchange)]
+        return problems
+
+    def _one(self, exchange: Exchange) -> list[str]:
+        frame, replies = exchange.request.frame, exchange.replies
+        if _ccs(frame) == 4:
+            self.transfer = None
+            return [f"{len(replies)} repl{'y' if len(replies) == 1 else 'ies'} to an abort transfer request, which "
+                    f"CiA 301 leaves unconfirmed: {', '.join(map(_hex, replies))}"] if replies else []
+        if len(frame) < 8:
+            return self._short(replies)
+        if not replies:
+            return ["no reply (CiA 301: every SDO request but an abort is confirmed)"]
+        problems = [f"{len(replies)} replies to one request: {', '.join(map(_hex, replies))}"][: len(replies) - 1]
+        return problems + self._reply(exchange.request, replies[0])
+
+    def _short(self, replies: list[bytes]) -> list[str]:
+        if not replies:
+            return []
+        if len(replies) > 1:
+            return [f"{len(replies)} replies to a frame shorter than 8 bytes: {', '.join(map(_hex, replies))}"]
+        reply = replies[0]
+        if len(reply) != 8 or reply[0] != ABORT:
+            return [f"a frame shorter than 8 bytes is answered with {_hex(reply)}: CiA 301 SDO frames have 8 data "
+                    "bytes; a shorter one is ignored or aborted"]
+        self.transfer = None
+        return []
+
+    def _reply(self, request: Request, reply: bytes) -> list[str]:
+        frame = request.frame
+        ccs = frame[0] >> 5
+        if len(reply) != 8:
+            self.transfer = UNKNOWN
+            return [f"reply {_hex(reply)} has DLC {len(reply)}, not 8"]
+        if reply[0] >> 5 == ABORT_SCS:
+            return self._abort(frame, ccs, reply)
+        expected = ANSWER_SCS.get(ccs) if ccs in (*SEGMENT_CCS, *INITIATE_CCS) else None
+        if expected is None or reply[0] >> 5 != expected:
+            self.transfer = UNKNOWN
+            return [f"reply {_hex(reply)}: server command {reply[0] >> 5} does not answer client command {ccs}"
+                    + (" (only an abort does)" if expected is None else f" (expected {expected} or an abort)")]
+        if request.refused:
+            self.transfer = None
+            return [f"confirmed ({_hex(reply)}) a write CiA 301 says must be refused (read-only or no object)"]
+        if ccs in INITIATE_CCS:
+            return self._initiated(frame, reply)
+        return self._segment(frame, ccs, reply)
+
+    def _abort(self, frame: bytes, ccs: int, reply: bytes) -> list[str]:
+        problems = [f"abort {_hex(reply)}: the command byte of an abort is 80h"] if reply[0] != ABORT else []
+        transfer = self.transfer
+        if ccs in INITIATE_CCS:
+            if reply[1:4] != frame[1:4]:
+                problems.append(f"abort {_hex(reply)} does not echo the request's multiplexer {_hex(frame[1:4])}")
+            self.transfer = UNKNOWN if transfer is not None else None  # the open transfer may go on
+        elif ccs in SEGMENT_CCS and isinstance(transfer, Transfer) and reply[1:4] != transfer.mux:
+            problems.append(f"abort {_hex(reply)} during the transfer of {_hex(transfer.mux)} does not carry its "
+                            "multiplexer")
+            self.transfer = None
+        else:
+            self.transfer = None
+        return problems
+
+    def _initiated(self, frame: bytes, reply: bytes) -> list[str]:
+        if reply[1:4] != frame[1:4]:
+            self.transfer = UNKNOWN
+            return [f"reply {_hex(reply)} does not echo the request's multiplexer {_hex(frame[1:4])}"]
+        upload = frame[0] >> 5 == 2
+        segmented = not reply[0] & 0x02 if upload else not frame[0] & 0x02
+        self.transfer = Transfer(upload, reply[1:4]) if segmented else None
+        return []
+
+    def _segment(self, frame: bytes, ccs: int, reply: bytes) -> list[str]:
+        transfer, toggle = self.transfer, (frame[0] >> 4) & 1
+        if transfer == UNKNOWN:
+            return []
+        if not isinstance(transfer, Transfer) or transfer.upload != (ccs == 3):
+            self.transfer = UNKNOWN
+            what = "no transfer is open" if transfer is None else "the open transfer goes the other way"
+            return [f"segment answered with {_hex(reply)} although {what} (expected an abort)"]
+        if toggle != transfer.toggle:
+            self.transfer = UNKNOWN
+            return [f"segment with toggle {toggle} (expected {transfer.toggle}) answered with {_hex(reply)}, not "
+                    "aborted (CiA 301: toggle bit not alternated)"]
+        if (reply[0] >> 4) & 1 != toggle:
+            self.transfer = UNKNOWN
+            return [f"segment response {_hex(reply)} does not echo the toggle bit {toggle}"]
+        last = reply[0] & 1 if transfer.upload else frame[0] & 1
+        self.transfer = None if last else Transfer(transfer.upload, transfer.mux, toggle ^ 1)
+        return []
