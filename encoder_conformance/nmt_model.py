@@ -46,6 +46,7 @@ class Tracked:
     forced_bits: int = 0  # set at the init events in ``forced_at`` (documented quirk)
     forced_at: frozenset[str] = frozenset()
     preop_only: bool = False  # writes refused outside pre-operational (documented quirk)
+    auto_stored: bool = False  # the device stores every write itself (persisted_by auto)
 
     @property
     def label(self) -> str:
@@ -113,7 +114,10 @@ class NmtModel:
         return self.sdo_answered and (not self.values[key].preop_only or self.state is NmtState.PRE_OPERATIONAL)
 
     def write(self, key: tuple[int, int], value: int) -> None:
-        self.values[key].current = value
+        tracked = self.values[key]
+        tracked.current = value
+        if tracked.auto_stored:
+            tracked.stored = value
 
     def expected(self, key: tuple[int, int]) -> int:
         return self.values[key].current
