@@ -11,9 +11,15 @@ state change, and come back to what the device has stored after reset communicat
 reset node, everything), no SDO answer in stopped, and a SYNC-driven TPDO in operational.
 
 "Stored" is what the device held when the test began: between tests the device's values are its
-stored configuration (a customer's, on a bench). Nothing is stored (1010h) or restored (1011h).
-The counts follow the hypothesis profile, capped (see SETTINGS); resets spend a time budget, so a
-device that takes seconds to boot (POSITAL, about 4 s) gets one reset per test.
+stored configuration (a customer's, on a bench). Nothing is stored (1010h) or restored (1011h); a
+value the device stores by itself on every write (persisted_by auto) is followed only for 1017h,
+which the heartbeat tests write too, and its written value counts as stored.
+
+A fixed tour (TOUR) walks every transition and check once; then hypothesis generates sequences, as
+many as the active profile's counts allow, capped (SETTINGS). The tour's two resets are always made;
+the generated ones spend RESET_BUDGET_S, so a device that takes seconds to boot (POSITAL, about 4 s)
+gets no more than the tour's. Without a heartbeat producer (POSITAL) the state shows in the services:
+SDO answered or not, and the SYNC TPDO in operational.
 """
 
 from __future__ import annotations
