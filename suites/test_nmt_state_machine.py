@@ -235,6 +235,7 @@ def test_nmt_sequences_follow_the_cia301_model(dut, settings_journal, back_to_pr
                              "§7.2.8.3.1 (NMT addressing), §7.2.8.3.2.2 (heartbeat state byte)")
     found = DeviceValues(dut, evidence)
     budget = ResetBudget(RESET_BUDGET_S)
+    steps: list[int] = []  # steps of each machine run (the tour's first)
     other = _other_node(dut)
     writes = found.writes or [None]
     keys = sorted(found.stored) or [(0x1000, 0)]
@@ -250,6 +251,7 @@ def test_nmt_sequences_follow_the_cia301_model(dut, settings_journal, back_to_pr
             self.quiet_since: Mark | None = None  # since when no TPDO may come (not operational, settled)
             self.settled = dut.frames.mark()  # since when every heartbeat must carry the model's state
             self.checked = self.settled  # the last heartbeat check
+            steps.append(0)
             self._start()
 
         # -- set-up: pre-operational, values as stored, heartbeat on ------------------------
@@ -269,6 +271,7 @@ def test_nmt_sequences_follow_the_cia301_model(dut, settings_journal, back_to_pr
 
         def _say(self, text: str, mark: Mark) -> None:
             self.step += 1
+            steps[-1] += 1
             seen = format_frames(dut.frames.since(mark)[-8:])
             line = f"step {self.step}: {text} -> model {STATE_NAMES[self.model.heartbeat_byte]}\n{seen}"
             self.log.append(line)
@@ -459,4 +462,6 @@ def test_nmt_sequences_follow_the_cia301_model(dut, settings_journal, back_to_pr
     budget.left = RESET_BUDGET_S  # the tour's resets are owed in any case; the budget is for the generated ones
     run_state_machine_as_test(NmtMachine, settings=SETTINGS)
     evidence.measure("state-machine run", time.monotonic() - started, "s")
-    evidence.note(f"{budget.done} resets within a {RESET_BUDGET_S:g} s reset budget; other node-ID {other}")
+    evidence.note(f"fixed tour: {steps[0]} steps; generated: {len(steps) - 1} sequences, {sum(steps[1:])} steps "
+                  f"(set-up and steps that sent something); {budget.done} resets in all, the generated ones within "
+                  f"a {RESET_BUDGET_S:g} s budget; other node-ID {other}")
