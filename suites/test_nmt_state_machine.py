@@ -51,6 +51,7 @@ _active = settings()
 SETTINGS = settings(
     max_examples=max(2, _active.max_examples // 25), stateful_step_count=min(_active.stateful_step_count, 20),
     deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+    report_multiple_bugs=False,  # one shrunk sequence is enough to read; each replay costs device time
 )
 #: seconds of NMT resets per test beyond the fixed tour's two: a twin boots in milliseconds, a device that takes
 #: 300 ms gets a few more, the POSITAL (about 4 s) none
