@@ -83,7 +83,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
         },
     ),
     (  # NMT
-        ("test_nmt",),
+        ("test_nmt", "test_nmt_state_machine"),
         {
             "no_bootup_after_reset": "no boot-up message after reset node / reset communication",
             "ignore_start": "NMT start remote node is ignored",
@@ -97,6 +97,16 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "wrong_heartbeat_state": "the heartbeat reports operational (05h) while pre-operational",
             "respond_to_other_node": "NMT commands addressed to another node-id are obeyed",
             "autostart_ignored": "the device stays pre-operational although its autostart object says start",
+            "heartbeat_state_stale": "the heartbeat keeps the state byte of its (re)start (boot-up or 1017h write) "
+                                     "after NMT state changes",
+            "reset_comm_keeps_comm_values": "NMT reset communication boots again but reloads nothing (1000h-1FFFh keep "
+                                            "their unstored changes)",
+            "reset_comm_reloads_application": "NMT reset communication also reloads the application area (as reset "
+                                              "node does)",
+            "preop_reloads_communication": "entering pre-operational from operational or stopped reloads "
+                                           "1000h-1FFFh (a plain state change loses unstored changes)",
+            "tpdo_not_resumed_after_stopped": "after NMT stop the TPDOs stay silent in operational until the next "
+                                              "reset",
         },
     ),
     (  # PDO

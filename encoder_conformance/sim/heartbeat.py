@@ -112,3 +112,17 @@ class HeartbeatIgnoresZero(HeartbeatProducer):
     def on_write(self, key: Key, value: Value) -> None:
         if value != 0:
             super().on_write(key, value)
+
+
+@breaks(HeartbeatProducer, "heartbeat_state_stale")
+class HeartbeatStateStale(HeartbeatProducer):
+    """The state byte is the state at the producer's (re)start (boot-up, 1017h write), not the present one."""
+
+    _shown: NmtState | None = None
+
+    def restart(self) -> None:
+        self._shown = self._state()
+        super().restart()
+
+    def payload(self, state: NmtState) -> bytes:
+        return super().payload(self._shown or state)

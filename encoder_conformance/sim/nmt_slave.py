@@ -117,11 +117,16 @@ class NmtSlave:
     def reset_reloads_everything(self, node: bool) -> bool:
         return node
 
+    def reset_reloads(self, node: bool) -> Callable[[int], bool]:
+        """The object indices a reset loads from NVM (or defaults)."""
+        return _everything if self.reset_reloads_everything(node) else _communication_area
+
     def reset(self, node: bool) -> None:
         """NMT reset node (everything) or reset communication (1000h-1FFFh) and boot again."""
         self._halt()
         self.state = NmtState.INITIALISING
-        self._reload(ReloadEvent("nmt_81h" if node else "nmt_82h", self.reset_reloads_everything(node)))
+        self._reload(ReloadEvent("nmt_81h" if node else "nmt_82h", self.reset_reloads_everything(node)),
+                     self.reset_reloads(node))
         self._schedule_boot(power_on=False)
 
     def enter(self, state: NmtState) -> None:
@@ -133,9 +138,9 @@ class NmtSlave:
     def sends_bootup(self, power_on: bool) -> bool:
         return True
 
-    def _reload(self, event: ReloadEvent) -> None:
+    def _reload(self, event: ReloadEvent, area: Callable[[int], bool] | None = None) -> None:
         self.node_id = self._node_id_for(event)
-        self._store.reload(_everything if event.everything else _communication_area, self.node_id)
+        self._store.reload(area or (_everything if event.everything else _communication_area), self.node_id)
         self._hooks.emit_reload(event)
 
     def _halt(self) -> None:
@@ -212,6 +217,30 @@ class ObeysAnyNode(NmtSlave):
 class ResetNodeKeepsValues(NmtSlave):
     def reset_reloads_everything(self, node: bool) -> bool:
         return False
+
+
+@breaks(NmtSlave, "reset_comm_keeps_comm_values")
+class ResetCommKeepsValues(NmtSlave):
+    """Reset communication boots again without loading 1000h-1FFFh."""
+
+    def reset_reloads(self, node: bool) -> Callable[[int], bool]:
+        return super().reset_reloads(node) if node else (lambda index: False)
+
+
+@breaks(NmtSlave, "reset_comm_reloads_application")
+class ResetCommReloadsApplication(NmtSlave):
+    def reset_reloads_everything(self, node: bool) -> bool:
+        return True
+
+
+@breaks(NmtSlave, "preop_reloads_communication")
+class PreopReloadsCommunication(NmtSlave):
+    """Entering pre-operational from operational or stopped loads 1000h-1FFFh again."""
+
+    def enter(self, state: NmtState) -> None:
+        if state is NmtState.PRE_OPERATIONAL and self.state in (NmtState.OPERATIONAL, NmtState.STOPPED):
+            self._reload(ReloadEvent("nmt_82h", everything=False))
+        super().enter(state)
 
 
 @breaks(NmtSlave, "lss_unconfigured_boots")

@@ -315,6 +315,27 @@ class SendsOutsideOperational(TpdoEngine):
         return True
 
 
+@breaks(TpdoEngine, "tpdo_not_resumed_after_stopped")
+class NotResumedAfterStopped(TpdoEngine):
+    """Once stopped, the TPDOs stay silent (also in operational) until a reset halts the node."""
+
+    was_stopped = False
+
+    def register(self, hooks: NodeHooks) -> None:
+        super().register(hooks)
+        hooks.halted.append(self._forget_stop)
+
+    def _forget_stop(self) -> None:
+        self.was_stopped = False
+
+    def on_state(self, state: NmtState) -> None:
+        self.was_stopped = self.was_stopped or state is NmtState.STOPPED
+        if self.was_stopped:
+            self.stop()
+        else:
+            super().on_state(state)
+
+
 @breaks(TpdoEngine, "event_timer_outside_operational")
 class EventTimerOutsideOperational(TpdoEngine):
     left_operational = False
