@@ -16,6 +16,7 @@ from encoder_conformance.plugin import lifecycle, reporting, selection, verdicts
 from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence",
+                  "fixtures.emcy",
                   "fixtures.lss", "fixtures.encoder"]
 
 settings.register_profile(

@@ -4,13 +4,14 @@ A behaviour: writing 0 to 1003h sub 0 clears the history (any other value is ref
 starts with no history. An error is recorded in 1001h and 1003h whatever the NMT state; its EMCY
 goes out in pre-operational and operational only (CiA 301 §7.3.2.2; in stopped too where the profile's
 quirk says so), on the 1014h COB-ID while bit 31 is clear, no sooner than the 1015h inhibit time after
-the previous one (an EMCY inside it is dropped). The faults that break it are the small classes at
-the bottom.
+the previous one: an EMCY inside it waits (up to QUEUE_DEPTH of them, as CANopenNode's FIFO; more are
+dropped) and goes out when the time is over. The faults that break it are the small classes at the bottom.
 """
 
 from __future__ import annotations
 
 import struct
+import threading
 import time
 from collections.abc import Callable
 
@@ -30,7 +31,10 @@ from .faults import breaks
 from .hooks import NodeHooks, ReloadEvent
 from .nvm import Key
 from .object_store import ObjectStore
+from .scheduler import DeadlineScheduler, JobHandle
 from .sdo_server import SdoAbort
+
+QUEUE_DEPTH = 8
 
 
 class EmcyProducer:
@@ -39,6 +43,7 @@ class EmcyProducer:
     def __init__(
         self,
         store: ObjectStore,
+        scheduler: DeadlineScheduler,
         send: Callable[[int, bytes], None],
         allowed: Callable[[], bool],
         node_id: Callable[[], int],
@@ -51,11 +56,16 @@ class EmcyProducer:
         self._node_id = node_id
         self._without_generic_bit = without_generic_bit
         self._keeps_first = history_keeps_first
+        self._scheduler = scheduler
         self._last_sent = -1e9
+        self._waiting: list[bytes] = []  # EMCYs held back by the inhibit time
+        self._flush: JobHandle | None = None
+        self._lock = threading.RLock()  # the scheduler's thread sends the waiting EMCYs
 
     def register(self, hooks: NodeHooks) -> None:
         hooks.commands.append(self._clear_history_command)
         hooks.reload.append(self._on_reload)
+        hooks.halted.append(self._forget_waiting)
 
     def _clear_history_command(self, key: Key, value: object) -> bool:
         """1003h sub 0 = 0 clears the error history; other values are refused (CiA 301 §7.5.2, 1003h)."""
@@ -130,14 +140,42 @@ class EmcyProducer:
                 self._store.set(key, 0)
 
     def _emit(self, code: int, register: int, info: bytes) -> None:
+        if self._cob_id() is None or not self.may_send():
+            return
+        frame = struct.pack("<HB", code, register) + info[:5].ljust(5, b"\x00")
+        with self._lock:
+            due = self._last_sent + self.inhibit_s()
+            if not self._waiting and time.monotonic() >= due:
+                self._transmit(frame)
+                return
+            if len(self._waiting) < QUEUE_DEPTH:
+                self._waiting.append(frame)
+            if self._flush is None:
+                self._flush = self._scheduler.call_at(due, self._send_waiting)
+
+    def _transmit(self, frame: bytes) -> None:
         cob_id = self._cob_id()
         if cob_id is None or not self.may_send():
             return
-        now = time.monotonic()
-        if now - self._last_sent < self.inhibit_s():
-            return
-        self._last_sent = now
-        self._send(cob_id, struct.pack("<HB", code, register) + info[:5].ljust(5, b"\x00"))
+        self._last_sent = time.monotonic()
+        self._send(cob_id, frame)
+
+    def _send_waiting(self) -> None:
+        """The inhibit time is over: the oldest waiting EMCY goes out, the next one an inhibit time later."""
+        with self._lock:
+            self._flush = None
+            if not self._waiting:
+                return
+            self._transmit(self._waiting.pop(0))
+            if self._waiting:
+                self._flush = self._scheduler.call_at(self._last_sent + self.inhibit_s(), self._send_waiting)
+
+    def _forget_waiting(self) -> None:
+        with self._lock:
+            self._waiting.clear()
+            if self._flush is not None:
+                self._flush.cancel()
+                self._flush = None
 
     def may_send(self) -> bool:
         """The NMT state allows an EMCY (the node says which states do)."""
@@ -171,7 +209,7 @@ class EmcyWithoutGenericBit(EmcyProducer):
 
 
 @breaks(EmcyProducer, "emcy_inhibit_ignored")
-class EmcyInhibitIgnored(EmcyProducer):
+class EmcyInhibitIgnored(EmcyProducer):  # every EMCY at once
     def inhibit_s(self) -> float:
         return 0.0
 

@@ -107,7 +107,7 @@ class SimulatedNode:
             enabled=profile.capabilities.heartbeat_producer,
         )
         self.emcy = assemble(EmcyProducer, faults)(
-            self.store, self._send,
+            self.store, scheduler, self._send,
             allowed=lambda: self.state in self._emcy_states(),
             node_id=lambda: self.node_id,
             without_generic_bit=profile.has_effect(fx.ErrorRegisterWithoutGenericBit),
