@@ -129,7 +129,7 @@ class SyncLengthError(EmcyTrigger):
         self._dut = dut
         write(SYNC_COUNTER_OVERFLOW, 0, bytes([SYNC_OVERFLOW]))
         cob_id = dut.read_uint(SYNC_COB_ID_OBJECT) if dut.profile.entry(SYNC_COB_ID_OBJECT, 0) else SYNC_COB_ID
-        self._cob_id = cob_id & 0x7FF
+        self.sync_cob_id = cob_id & 0x7FF
 
     @staticmethod
     def available(dut: DeviceUnderTest) -> str | None:
@@ -140,7 +140,7 @@ class SyncLengthError(EmcyTrigger):
         return None
 
     def fire(self) -> Mark:
-        return self._dut.send(self._cob_id, b"")
+        return self._dut.send(self.sync_cob_id, b"")
 
 
 class HeartbeatTimeout(EmcyTrigger):
@@ -149,6 +149,7 @@ class HeartbeatTimeout(EmcyTrigger):
     def __init__(self, dut: DeviceUnderTest, write: Write) -> None:
         self._dut = dut
         self.producer = 0x7F if dut.node_id != 0x7F else 0x7E  # a node-ID the tester plays
+        self.timeout_ms = HEARTBEAT_TIMEOUT_MS
         self.name = (f"a heartbeat-consumer time-out: 1016h.01 watches node {self.producer} for "
                      f"{HEARTBEAT_TIMEOUT_MS} ms, the tester sends one heartbeat of it")
         found = dut.profile.quirk_of(fx.HeartbeatConsumerEmcy)
