@@ -41,6 +41,7 @@ from .frames import Mark
 Write = Callable[[int, int, bytes], None]
 BENCH_CODE = 0x4200  # device temperature (CiA 301 table 21), as the WDGA sends it
 BENCH_REGISTER_BITS = 0x08  # 1001h bit 3: temperature
+BENCH_OTHER_CODE = 0x5000  # device hardware (CiA 301 table 21)
 SYNC_OVERFLOW = 8  # 1019h while the SYNC-length trigger is prepared
 HEARTBEAT_TIMEOUT_MS = 50  # 1016h time of the watched producer
 EMCY_WINDOW_S = 0.5  # how long an EMCY may take after its cause (the wait ends when it comes)
@@ -108,9 +109,10 @@ class BenchError(EmcyTrigger):
         self._dut = dut
         self._stimulus = stimulus
 
-    def fire(self) -> Mark:
+    def fire(self, code: int = BENCH_CODE) -> Mark:
+        """One error (``code``: another than the usual one, e.g. to tell entries of the history apart)."""
         mark = self._dut.frames.mark()
-        self._stimulus.raise_emcy(BENCH_CODE, BENCH_REGISTER_BITS)
+        self._stimulus.raise_emcy(code, BENCH_REGISTER_BITS)
         return mark
 
     def clear(self) -> Mark:
