@@ -186,7 +186,7 @@ def test_emcy_on_sync_length(dut, emcy, settings_journal, evidence):
     wrong = dut.frames.quiet_period(lambda m: cob_id.matches(m) and emcy_code(m) == trigger.code,
                                     trigger.window_s(), right)
     assert not wrong, f"EMCY 8240h after a SYNC with counter 1 (1019h = 8)\n{format_frames(wrong)}"
-    emcy.wait(trigger.fire(), trigger, f"after {trigger.name}")
+    emcy.wait(trigger.fire(), trigger, f"after {trigger.name}", judged=True)
 
 
 def test_emcy_on_heartbeat_consumer_timeout(dut, emcy, settings_journal, evidence):
@@ -198,7 +198,7 @@ def test_emcy_on_heartbeat_consumer_timeout(dut, emcy, settings_journal, evidenc
     trigger = HeartbeatTimeout(dut, settings_journal.write)
     evidence.rests_on(*trigger.basis)
     beat = trigger.fire()
-    frame = emcy.wait(beat, trigger, f"after {trigger.name}")
+    frame = emcy.wait(beat, trigger, f"after {trigger.name}", judged=True)
     sent = dut.frames.since(beat, lambda m: m.arbitration_id == 0x700 + trigger.producer)
     after_ms = (frame.timestamp - sent[0].timestamp) * 1000 if sent else None
     if after_ms is not None:
