@@ -24,6 +24,7 @@ from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.value_domain import declared_domain
 from fixtures.tpdo import configurable_tpdo
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2 object 1005h (COB-ID SYNC)"), pytest.mark.requires("sync_consumer")]
@@ -50,10 +51,15 @@ def _write(dut, value: int) -> SdoResponse:
     return dut.expect_abort(sdo_frames.expedited_download_request(SYNC_COB_ID_OBJECT, 0, value.to_bytes(4, "little")))
 
 
-def _judge_code(dut, response: SdoResponse, what: str, evidence) -> None:
-    if not abort_accepted(dut, response, {SdoAbortCode.VALUE_INVALID}):
-        evidence.inferred_problem(f"{what}: aborted with {abort_name(response.abort_code or 0)}, expected 06090030h",
-                                  CODE_BASIS)
+def _judge_code(dut, response: SdoResponse, value: int, what: str, evidence) -> None:
+    """06090030h; also 06090031h/06090032h for a value outside the range the profile declares for 1005h."""
+    wanted = {SdoAbortCode.VALUE_INVALID}
+    domain = declared_domain(dut.profile, SYNC_COB_ID_OBJECT, 0)
+    if domain is not None and value not in domain:
+        wanted |= {SdoAbortCode.VALUE_HIGH, SdoAbortCode.VALUE_LOW}
+    if not abort_accepted(dut, response, wanted):
+        evidence.inferred_problem(f"{what}: aborted with {abort_name(response.abort_code or 0)}, expected "
+                                  + " or ".join(abort_name(c) for c in sorted(wanted)), CODE_BASIS)
 
 
 def test_sync_generate_bit_refused(dut, sync_cob_id, evidence):
@@ -64,7 +70,7 @@ def test_sync_generate_bit_refused(dut, sync_cob_id, evidence):
     what = f"1005h = {value:08X}h (bit 30: generate SYNC)"
     response = _write(dut, value)
     assert response.is_abort, f"{what}: accepted ({response.describe()}); the device cannot produce SYNC"
-    _judge_code(dut, response, what, evidence)
+    _judge_code(dut, response, value, what, evidence)
     after = dut.read_uint(SYNC_COB_ID_OBJECT)
     assert after == sync_cob_id, f"after the refused {what}: 1005h reads {after:08X}h"
 
@@ -85,7 +91,7 @@ def test_sync_restricted_can_id_refused(dut, sync_cob_id, evidence):
             accepted.append(what)
             dut.write(SYNC_COB_ID_OBJECT, 0, sync_cob_id.to_bytes(4, "little"))
         else:
-            _judge_code(dut, response, what, evidence)
+            _judge_code(dut, response, value, what, evidence)
     if found is not None:
         evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
         evidence.note(f"quirk {found[0]}: {len(accepted)} of {len(RESTRICTED_PROBES)} restricted CAN-IDs accepted "
@@ -102,6 +108,10 @@ def test_sync_taken_on_its_cob_id(dut, sync_cob_id, settings_journal, back_to_pr
     CAN-ID."""
     evidence.rests_on("cia", CLAUSE + " (bits 0-10: the CAN-ID of the SYNC the device consumes)")
     assert not is_restricted_can_id(OTHER_SYNC_CAN_ID)
+    other = (sync_cob_id & ~0x7FF) | OTHER_SYNC_CAN_ID
+    domain = declared_domain(dut.profile, SYNC_COB_ID_OBJECT, 0)
+    if domain is not None and other not in domain:
+        pytest.skip(f"not applicable: the profile declares 1005h in {domain}, without {other:08X}h")
     comm, kind = configurable_tpdo(dut, 2, evidence, settings_journal, [1, *range(2, 241)])
     if kind != 1:
         pytest.skip(f"not applicable: {comm:04X}h is sent on every {kind}th SYNC only (fixed), not on each")
@@ -109,7 +119,7 @@ def test_sync_taken_on_its_cob_id(dut, sync_cob_id, settings_journal, back_to_pr
         settings_journal.write(comm, 2, b"\x01")
     tpdo = dut.read_uint(comm, 1) & 0x7FF
     old = sync_cob_id & 0x7FF
-    settings_journal.write(SYNC_COB_ID_OBJECT, 0, ((sync_cob_id & ~0x7FF) | OTHER_SYNC_CAN_ID).to_bytes(4, "little"))
+    settings_journal.write(SYNC_COB_ID_OBJECT, 0, other.to_bytes(4, "little"))
     dut.nmt("start")
     assert dut.responds(), "no SDO answer after NMT start"
     window = dut.pdo_silence_s + dut.profile.timing.nmt_settle_ms / 1000
