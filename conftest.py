@@ -13,6 +13,7 @@ from encoder_conformance.plugin import hypothesis_profiles, lifecycle, reporting
 from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence",
+                  "fixtures.emcy",
                   "fixtures.lss", "fixtures.encoder"]
 
 hypothesis_profiles.load()  # ci, bench, soak, dev (HYPOTHESIS_PROFILE)

@@ -146,6 +146,13 @@ def _inconclusive_if_host_explains(timestamps: list[float], period_ms: float, al
                 + (", ".join(f"#{n}: {o:+.1f} ms" for n, o in late[:8]) or "none"))
 
 
+def inconclusive_if_host_late(when: list[float], excess_ms: list[float], host: HostLatency, what: str) -> None:
+    """Skip as inconclusive where the tester's host was itself that late at each moment a figure is off."""
+    if all(host.worst_near(t, 0.05) >= ms for t, ms in zip(when, excess_ms, strict=True)):
+        pytest.skip(f"inconclusive: {what} cannot be judged, the tester's host was overloaded at each sample "
+                    f"off the limit: {host.describe()}")
+
+
 def describe_value(value: object) -> str:
     if isinstance(value, int):
         return f"{value} (0x{value:X})"

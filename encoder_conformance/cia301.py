@@ -39,6 +39,27 @@ RESTRICTED_CAN_IDS: tuple[range, ...] = (
 SYNC_COUNTER_OVERFLOW = 0x1019  # 0: SYNC without counter; 2..240: the counter's overflow (CiA 301 §7.5.2.18)
 COMMUNICATION_CYCLE_PERIOD = 0x1006  # 1019h is writable only while it is 0 (CiA 301 §7.5.2.18)
 SYNC_COUNTER_OVERFLOW_VALID = frozenset({0, *range(2, 241)})  # 1 and 241..255 are reserved
+#: 1005h bit 30: the device generates SYNC; refused (06090030h) by a device that cannot (CiA 301 §7.5.2, 1005h)
+COB_ID_SYNC_GENERATE = 0x40000000
+SYNC_COB_ID_OBJECT = 0x1005
+#: EMCY objects (CiA 301 §7.2.7, §7.5.2): error register, error history, COB-ID, inhibit time (100 us units)
+ERROR_REGISTER = 0x1001
+ERROR_REGISTER_GENERIC = 0x01  # 1001h bit 0: set whenever any error is present
+ERROR_HISTORY = 0x1003  # sub 0 the count (writing 0 clears, other values refused 06090030h), sub 1 the newest
+EMCY_COB_ID = 0x1014
+EMCY_INHIBIT_TIME = 0x1015
+EMCY_BASE = 0x080  # + node-id: the default EMCY COB-ID (CiA 301 §7.3.5 pre-defined connection set)
+HEARTBEAT_CONSUMER = 0x1016  # sub n: bits 16-23 producer node-id, bits 0-15 time in ms
+
+
+class EmcyCode(IntEnum):
+    """EMCY error codes (CiA 301 §7.2.7.1 table 21) the simulator and the suites name."""
+
+    ERROR_RESET = 0x0000  # error reset or no error
+    HEARTBEAT = 0x8130  # life guard error or heartbeat error
+    SYNC_LENGTH = 0x8240  # unexpected SYNC data length
+
+
 TPDO_COMMUNICATION = range(0x1800, 0x1A00)
 TPDO_MAPPING = range(0x1A00, 0x1C00)
 RPDO_COMMUNICATION = range(0x1400, 0x1600)

@@ -219,6 +219,34 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
         ("test_emcy",),
         {
             "emcy_wrong_cob_id": "EMCY frames are sent on 080h + node-id + 1",
+            "emcy_valid_bit_ignored": "EMCYs are sent while 1014h bit 31 (not valid) is set",
+            "emcy_without_generic_bit": "1001h and the EMCY's byte 2 show the specific error bit without bit 0 "
+                                        "(generic)",
+            "emcy_inhibit_ignored": "the EMCY inhibit time 1015h is ignored: EMCYs follow each other at once",
+            "emcy_no_error_reset": "no EMCY 0000h (error reset) when the cause of the errors goes away",
+            "emcy_in_stopped": "EMCYs are sent in stopped too",
+            "sync_length_unchecked": "a SYNC whose length does not match 1019h is taken without the EMCY 8240h",
+            "heartbeat_consumer_timeout_silent": "a heartbeat-consumer time-out (1016h) sends no EMCY",
+        },
+    ),
+    (  # error history 1003h
+        ("test_emcy_history",),
+        {
+            "error_history_not_recorded": "errors are not entered in 1003h (its count stays)",
+            "error_history_oldest_first": "1003h enters a new error after the older ones (the newest at the "
+                                          "highest sub-index)",
+            "error_history_count_unlimited": "1003h sub 0 counts on past the number of entries the list has",
+            "error_history_not_cleared": "writing 0 to 1003h sub 0 is confirmed but the history stays",
+            "error_history_any_value_accepted": "1003h sub 0 accepts any value (each clears the history)",
+        },
+    ),
+    (  # SYNC consumer objects (1005h)
+        ("test_sync_objects",),
+        {
+            "sync_generate_bit_accepted": "1005h accepts bit 30 (generate SYNC) although the device cannot "
+                                          "produce SYNC",
+            "sync_restricted_can_id_accepted": "1005h accepts restricted CAN-IDs",
+            "sync_cob_id_ignored": "SYNC is taken on 080h whatever 1005h says",
         },
     ),
     (  # the generated sequences against the reference model (and the preset checks)
@@ -346,6 +374,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #: - unsized_download_takes_four_bytes: that a server takes an entry's own size for an expedited download without
 #:   size indicator (rather than refusing it) is our reading of CiA 301 §7.2.4.3.3 ("unspecified number of bytes").
 #: - emcy_on_unknown_command: that a refused SDO request draws no EMCY is our reading of CiA 301 §7.2.7.1.
+#: - sync_length_unchecked: CiA 301 names EMCY 8240h (unexpected SYNC data length) but does not require it.
 #: Judged without it (the rule that catches them is documented):
 #: - work_area_flags_swapped: 02h above / 04h below is CiA 406 6400h and WDGA T 6.9; only the edges are
 #:   inferred, and the swap shows at every position outside the area, not only at an edge;
@@ -357,7 +386,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #:   cam_low_order_ignored break CiA 406 or the profile's manual directly.
 JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored", "sync_tpdo_late",
                                              "unsized_download_takes_four_bytes",
-                                             "emcy_on_unknown_command"})
+                                             "emcy_on_unknown_command",
+                                             "sync_length_unchecked"})
 
 
 def faults_for(effects: Iterable[str]) -> list[str]:

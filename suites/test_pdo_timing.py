@@ -15,9 +15,10 @@ import time
 import can
 import pytest
 
+from encoder_conformance.checks import inconclusive_if_host_late
 from encoder_conformance.cia301 import SYNC_COB_ID
 from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe
+from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
 from fixtures.tpdo import configurable_tpdo, mapped_bytes_of, maps_position
 
@@ -82,7 +83,7 @@ def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, twi
         f"#{n}: {ms:.1f} ms" for n, ms in early[:8])
     late = [(n, ms) for n, ms in enumerate(latencies) if ms > limit]
     if late:
-        _inconclusive_if_host_late([syncs[n].timestamp for n, _ in late], [ms - limit for _, ms in late], host,
+        inconclusive_if_host_late([syncs[n].timestamp for n, _ in late], [ms - limit for _, ms in late], host,
                                    f"SYNC-to-TPDO latency (limit {limit:g} ms)")
         evidence.inferred_problem(
             f"{len(late)} of {len(latencies)} TPDOs later than {limit:g} ms after their SYNC: "
@@ -155,7 +156,7 @@ def test_inhibit_time_spaces_tpdos(dut, settings_journal, back_to_preoperational
         f"a change-driven TPDO must follow each change")
     close = [(n, ms) for n, ms in enumerate(spacing) if ms < INHIBIT_MS - tolerance]
     if close:
-        _inconclusive_if_host_late([frames[n + 1].timestamp for n, _ in close],
+        inconclusive_if_host_late([frames[n + 1].timestamp for n, _ in close],
                                    [INHIBIT_MS - ms - tolerance for _, ms in close], host,
                                    f"the spacing of TPDO {cob_id:03X}h")
     assert not close, (
@@ -219,10 +220,3 @@ def _tpdo_on_change(dut, shaft, is_tpdo, window: float, timeout: float) -> can.M
         frame = dut.frames.wait_for(is_tpdo, window, mark)
         if frame is not None or time.monotonic() >= deadline:
             return frame
-
-
-def _inconclusive_if_host_late(when: list[float], excess_ms: list[float], host: HostLatency, what: str) -> None:
-    """Skip as inconclusive where the tester's host was itself that late at each moment a figure is off."""
-    if all(host.worst_near(t, 0.05) >= ms for t, ms in zip(when, excess_ms, strict=True)):
-        pytest.skip(f"inconclusive: {what} cannot be judged, the tester's host was overloaded at each sample "
-                    f"off the limit: {host.describe()}")

@@ -73,9 +73,12 @@ class ShaftDrivePlugin:
 
 
 class ErrorStimulus(Protocol):
-    """Makes the device detect an internal error (and send its EMCY)."""
+    """Makes the device detect an internal error (and send its EMCY), and makes the cause go away (the device
+    then sends the error-reset EMCY 0000h)."""
 
     def raise_emcy(self, code: int, register_bits: int, info: bytes = b"") -> None: ...
+
+    def clear_emcy(self) -> None: ...
 
 
 class SimulatorControls(ShaftDrive, ErrorStimulus, Protocol):
@@ -131,7 +134,9 @@ def hardware_bench(power: BenchPower | None, shaft: ShaftDrive | None = None) ->
     """A real device: power where a switch is configured, the shaft where a drive plug-in turns it; no error
     stimulus yet."""
     unavailable = {
-        "errors": "no way to make a real device detect an internal error on demand (the simulator provides one)",
+        "errors": "no way to make a real device detect an internal error on demand, nor to make its cause go "
+                  "away (the simulator provides both; the EMCY tests use the bus triggers where the profile has "
+                  "them: a SYNC of the wrong length with 1019h, a heartbeat-consumer time-out with 1016h)",
     }
     if shaft is None:
         unavailable["shaft"] = ("no shaft drive on this bench (--shaft-drive MODULE:FACTORY plugs in a motor; or "

@@ -8,7 +8,7 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 
 Adding an effect: write its model here (the docstring says what the device does, each field
 what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 36 effects, one small model
+This module is over 400 lines because it is the catalogue of the 41 effects, one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -538,6 +538,41 @@ class MappingChangeWhileValid(EffectParams):
     procedure: Documentation = _doc("the manual's procedure, in its own words")
 
 
+
+class ErrorHistoryKeepsFirst(EffectParams):
+    """1003h keeps the first errors signalled (a manual's wording, e.g. WDGA T 6.1): a new error is entered after
+    the older ones, none once the list is full. CiA 301 enters it at sub 1 (newest first): the suites accept either
+    order where a profile has this effect, and the twin plays the manual's."""
+
+    effect = "error_history_keeps_first"
+    index: Documentation = _doc("the error history object")
+    entries: Documentation = _doc("the number of entries the manual gives")
+
+
+class EmcyInStopped(NoParams):
+    """The manual lists EMCY as available in Stopped (CiA 301 §7.3.2.2: not in Stopped); the suites record an
+    EMCY in Stopped instead of failing the device, and the twin sends it."""
+
+    effect = "emcy_in_stopped"
+
+
+class HeartbeatConsumerEmcy(EffectParams):
+    """A heartbeat-consumer time-out (1016h) sends this EMCY, as the manual documents (CiA 301 names 8130h
+    'life guard error or heartbeat error' but requires no EMCY)."""
+
+    effect = "heartbeat_consumer_emcy"
+    code: int = Field(ge=0, le=0xFFFF, description="the EMCY error code the time-out sends")
+
+
+class SyncCobIdAnyCanId(EffectParams):
+    """1005h accepts any CAN-ID of min..max as the manual prints it, restricted ones included (CiA 301 §7.3.5
+    refuses those): the suites record the answer to a restricted CAN-ID instead of judging it."""
+
+    effect = "sync_cob_id_any_can_id"
+    index: Documentation = _doc("the SYNC COB-ID object")
+    min: int = Field(ge=0, le=0x7FF, description="the lowest CAN-ID the manual allows")
+    max: int = Field(ge=0, le=0x7FF, description="the highest CAN-ID the manual allows")
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -549,6 +584,7 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
         UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
         OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange, ZeroingObject, MappingLengthDiffers,
-        MappingChangeWhileValid, BlockTransferUnconfirmed,
+        MappingChangeWhileValid, ErrorHistoryKeepsFirst, EmcyInStopped, HeartbeatConsumerEmcy, SyncCobIdAnyCanId,
+        BlockTransferUnconfirmed,
     )
 }

@@ -49,6 +49,9 @@ class ControlApi:
     def raise_emcy(self, code: int, register_bits: int, info: bytes = b"") -> None:
         self._call("raise_emcy", code, register_bits, info)
 
+    def clear_emcy(self) -> None:
+        self._call("clear_emcy")
+
     def describe(self) -> dict[str, Any]:
         return self._call("describe")
 
@@ -75,6 +78,7 @@ def _execute(host: SimulatorHost, command: str, node_id: int | None, args: tuple
         "turn_by": node.shaft.turn_by,
         "set_speed": node.shaft.set_speed,
         "raise_emcy": node.raise_emcy,
+        "clear_emcy": node.clear_emcy,
         "describe": node.describe,
         "scheduler_lateness": host.scheduler.lateness_since,
     }

@@ -58,6 +58,10 @@ class NodeHooks:
     sources: list[ValueSource] = field(default_factory=list)
     #: SYNC frames, with their counter byte (None: a SYNC without counter, 1019h = 0)
     sync: list[Callable[[int | None], None]] = field(default_factory=list)
+    #: SYNC frames, with their data length (the SYNC length check)
+    sync_length: list[Callable[[int], None]] = field(default_factory=list)
+    #: heartbeats of other nodes, with the producer's node-ID (the heartbeat consumer)
+    heartbeat: list[Callable[[int], None]] = field(default_factory=list)
     remote_frame: list[Callable[[int], None]] = field(default_factory=list)
     #: LSS master frames (7E5h), whatever the NMT state
     lss: list[Callable[[bytes], None]] = field(default_factory=list)

@@ -18,6 +18,7 @@ from typing import Protocol, TypeVar
 
 import can
 
+from ..cia301 import HEARTBEAT_CONSUMER, SYNC_COUNTER_OVERFLOW, EmcyCode
 from ..cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
 from ..profile import quirk_effects as fx
 from ..profile.datatypes import as_signed
@@ -33,6 +34,7 @@ from .faults import FaultSet, assemble
 from .forced_bits import ForcedBits
 from .guarding import GuardingHeartbeatExclusion
 from .heartbeat import HeartbeatProducer
+from .heartbeat_consumer import HeartbeatConsumer
 from .hooks import NodeHooks, ReloadEvent
 from .lss_behaviour import LssBehaviour
 from .lss_configuration import usable_node_id
@@ -51,6 +53,7 @@ from .send_repeat import SendRepeatCounters
 from .shaft import Shaft
 from .store_commands import EncoderMemory, StoreCommands
 from .sync_counter import SyncCounterRules
+from .sync_objects import SyncCobIdRules, SyncConsumer, SyncLengthCheck
 from .tpdo import TpdoEngine
 from .values import ObjectValues
 from .write_gates import preop_only, scaling_bit_needed
@@ -107,11 +110,13 @@ class SimulatedNode:
             enabled=profile.capabilities.heartbeat_producer,
         )
         self.emcy = assemble(EmcyProducer, faults)(
-            self.store, self._send,
-            allowed=lambda: self.state in (NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL),
+            self.store, scheduler, self._send,
+            allowed=lambda: self.state in self._emcy_states(),
             node_id=lambda: self.node_id,
             without_generic_bit=profile.has_effect(fx.ErrorRegisterWithoutGenericBit),
+            history_keeps_first=profile.has_effect(fx.ErrorHistoryKeepsFirst),
         )
+        self.sync_consumer = assemble(SyncConsumer, faults)(self.read_int)
         self.tpdo = assemble(TpdoEngine, faults)(
             scheduler,
             read=self.read_int,
@@ -142,9 +147,11 @@ class SimulatedNode:
             self._built(fx.CamLowBelowHigh, self._cam_low_limit_gate),
             assemble(PdoCobIdRules, faults)(self.read_int),
             assemble(SyncCounterRules, faults)(self.read_int, wrong_state),
+            assemble(SyncCobIdRules, faults)(self.profile.params_of(fx.SyncCobIdAnyCanId)),
             assemble(MappingRules, faults)(self.profile, self.read_int, codes),
             store_commands,
             self.emcy,
+            *self._emcy_triggers(),
             # the encoder function (position, speed, preset) only where the profile is an encoder: a drive or an
             # I/O module keeps whatever its 6004h/6030h/6500h hold
             _EncoderBehaviour(self.encoder, self.nvm) if self.profile.capabilities.encoder else None,
@@ -160,6 +167,29 @@ class SimulatedNode:
             self._lss(),
         ]
         return [b for b in optional if b is not None]
+
+    def _emcy_states(self) -> tuple[NmtState, ...]:
+        """Where an EMCY may go out: pre-operational and operational (CiA 301 §7.3.2.2), stopped too per quirk."""
+        usual = (NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL)
+        return (*usual, NmtState.STOPPED) if self.profile.has_effect(fx.EmcyInStopped) else usual
+
+    def _emcy_triggers(self) -> list[Behaviour]:
+        """The errors the bus can cause: a SYNC of the wrong length (where 1019h exists), a heartbeat-consumer
+        time-out (where 1016h exists)."""
+        triggers: list[Behaviour] = []
+        if self.profile.entry(SYNC_COUNTER_OVERFLOW, 0) is not None:
+            triggers.append(assemble(SyncLengthCheck, self.faults)(self.read_int, self._raise_error))
+        entries = self.profile.capabilities.heartbeat_consumer_entries
+        if entries and self.profile.entry(HEARTBEAT_CONSUMER, 1) is not None:
+            quirk = self.profile.params_of(fx.HeartbeatConsumerEmcy)
+            code = quirk.code if quirk else EmcyCode.HEARTBEAT
+            triggers.append(assemble(HeartbeatConsumer, self.faults)(self.scheduler, self.read_int, entries,
+                                                                     self._raise_error, code))
+        return triggers
+
+    def _raise_error(self, code: int, register_bits: int) -> None:
+        with self.lock:  # also from the scheduler's thread
+            self.emcy.raise_error(code, register_bits)
 
     def _cam_low_limit_gate(self, params: fx.CamLowBelowHigh) -> CamLowLimitGate:
         cam = self.profile.capabilities.cam
@@ -270,20 +300,20 @@ class SimulatedNode:
                 self.nmt.on_command(bytes(msg.data))
             elif can_id == 0x600 + self.node_id and not msg.is_remote_frame:
                 self.sdo_channel.on_request(bytes(msg.data))
-            elif self._is_sync(msg):
+            elif self.sync_consumer.is_sync(msg):
                 # every state: each listener knows when a SYNC acts on it (the TPDO engine only in operational,
                 # CiA 301 §7.3.2.2), so that a fault of the listener alone can break that
                 counter = msg.data[0] if msg.dlc >= 1 else None
                 for listener in self.hooks.sync:
                     listener(counter)
+                for length_listener in self.hooks.sync_length:
+                    length_listener(msg.dlc)
+            elif 0x701 <= can_id <= 0x77F and msg.dlc == 1 and not msg.is_extended_id and not msg.is_remote_frame:
+                for heartbeat_listener in self.hooks.heartbeat:
+                    heartbeat_listener(can_id - 0x700)
             elif msg.is_remote_frame and not msg.is_extended_id:
                 for listener in self.hooks.remote_frame:  # answered only by TPDOs that allow RTR
                     listener(can_id)
-
-    def _is_sync(self, msg: can.Message) -> bool:
-        cob = self.read_int(0x1005, 0)
-        cob = 0x80 if cob is None else cob & 0x7FF
-        return msg.arbitration_id == cob and not msg.is_extended_id and not msg.is_remote_frame
 
     # -- control API (used by the control server and in-process tests) ----------------------
     def position(self) -> int:
@@ -301,6 +331,11 @@ class SimulatedNode:
     def raise_emcy(self, code: int, register_bits: int, info: bytes = b"") -> None:
         with self.lock:
             self.emcy.raise_error(code, register_bits, info)
+
+    def clear_emcy(self) -> None:
+        """The cause of the errors went away: error register 0 and the error-reset EMCY."""
+        with self.lock:
+            self.emcy.clear()
 
     def describe(self) -> dict[str, object]:
         return {

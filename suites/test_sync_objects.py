@@ -1,0 +1,137 @@
+"""The SYNC consumer's COB-ID 1005h (CiA 301 §7.5.2 object 1005h): bit 30 (generate SYNC) refused by a device that
+cannot produce SYNC, restricted CAN-IDs refused, and SYNC taken on the CAN-ID 1005h names.
+
+Not here: the SYNC counter 1019h (its reserved values, its write while 1006h is not 0, the SYNC start value) is
+checked with TPDOs in test_pdo_comm.py; a SYNC of the wrong length (EMCY 8240h) in test_emcy.py. 1006h
+(communication cycle period) and 1007h (synchronous window) are declared by no profile; bit 31 of 1005h is "do not
+care" in CiA 301, nothing to check. Every 1005h value a test changes is put back (on a SIKO each write is stored by
+the device itself, on a WayCon only by its store command, which no test sends).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.checks import abort_accepted
+from encoder_conformance.cia301 import (
+    COB_ID_SYNC_GENERATE,
+    RESTRICTED_CAN_IDS,
+    SYNC_COB_ID_OBJECT,
+    SdoAbortCode,
+    is_restricted_can_id,
+)
+from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.value_domain import declared_domain
+from fixtures.tpdo import configurable_tpdo
+
+pytestmark = [pytest.mark.spec("CiA 301 §7.5.2 object 1005h (COB-ID SYNC)"), pytest.mark.requires("sync_consumer")]
+
+CLAUSE = "CiA 301 §7.5.2 object 1005h (COB-ID SYNC)"
+CODE_BASIS = "06090030h, the code CiA 301 gives for 1005h (CTT Other 10); any abort refuses the write"
+#: the ends of every restricted range (CiA 301 §7.3.5)
+RESTRICTED_PROBES = sorted({c for ids in RESTRICTED_CAN_IDS for c in (ids.start, ids.stop - 1)})
+OTHER_SYNC_CAN_ID = 0x0FF  # not restricted; the EMCY CAN-ID of node 127, rarely used on a bench
+
+
+@pytest.fixture
+def sync_cob_id(dut, settings_journal) -> int:
+    """1005h as found (put back after the test); skips where it cannot be written."""
+    entry = dut.profile.entry(SYNC_COB_ID_OBJECT, 0)
+    if entry is None or not entry.writable:
+        pytest.skip("not applicable: the profile has no writable 1005h")
+    found = dut.read_uint(SYNC_COB_ID_OBJECT)
+    settings_journal.remember(SYNC_COB_ID_OBJECT, 0, found.to_bytes(4, "little"))
+    return found
+
+
+def _write(dut, value: int) -> SdoResponse:
+    return dut.expect_abort(sdo_frames.expedited_download_request(SYNC_COB_ID_OBJECT, 0, value.to_bytes(4, "little")))
+
+
+def _judge_code(dut, response: SdoResponse, value: int, what: str, evidence) -> None:
+    """06090030h; also 06090031h/06090032h for a value outside the range the profile declares for 1005h."""
+    wanted = {SdoAbortCode.VALUE_INVALID}
+    domain = declared_domain(dut.profile, SYNC_COB_ID_OBJECT, 0)
+    if domain is not None and value not in domain:
+        wanted |= {SdoAbortCode.VALUE_HIGH, SdoAbortCode.VALUE_LOW}
+    if not abort_accepted(dut, response, wanted):
+        evidence.inferred_problem(f"{what}: aborted with {abort_name(response.abort_code or 0)}, expected "
+                                  + " or ".join(abort_name(c) for c in sorted(wanted)), CODE_BASIS)
+
+
+def test_sync_generate_bit_refused(dut, sync_cob_id, evidence):
+    """1005h with bit 30 set (the device generates SYNC) is refused by an encoder that cannot produce SYNC (no
+    profile declares a SYNC producer), and 1005h keeps its value."""
+    evidence.rests_on("cia", CLAUSE + ": a device that cannot generate SYNC refuses bit 30 = 1 with 06090030h")
+    value = sync_cob_id | COB_ID_SYNC_GENERATE
+    what = f"1005h = {value:08X}h (bit 30: generate SYNC)"
+    response = _write(dut, value)
+    assert response.is_abort, f"{what}: accepted ({response.describe()}); the device cannot produce SYNC"
+    _judge_code(dut, response, value, what, evidence)
+    after = dut.read_uint(SYNC_COB_ID_OBJECT)
+    assert after == sync_cob_id, f"after the refused {what}: 1005h reads {after:08X}h"
+
+
+def test_sync_restricted_can_id_refused(dut, sync_cob_id, evidence):
+    """1005h with a restricted CAN-ID (the ends of 000h-07Fh, 101h-180h, 581h-5FFh, 601h-67Fh, 6E0h-7FFh) is
+    refused and keeps its value; where the manual lets 1005h take any CAN-ID of a range (quirk), the answers are
+    recorded."""
+    evidence.rests_on("cia", "CiA 301 §7.3.5 (restricted CAN-IDs); CTT Other 10")
+    found = dut.profile.quirk_of(fx.SyncCobIdAnyCanId)
+    accepted = []
+    for can_id in RESTRICTED_PROBES:
+        value = (sync_cob_id & ~0x7FF) | can_id
+        what = f"1005h = {value:08X}h (restricted CAN-ID {can_id:03X}h)"
+        response = _write(dut, value)
+        evidence.note(f"{can_id:03X}h: {response.describe()}")
+        if not response.is_abort:
+            accepted.append(what)
+            dut.write(SYNC_COB_ID_OBJECT, 0, sync_cob_id.to_bytes(4, "little"))
+        else:
+            _judge_code(dut, response, value, what, evidence)
+    if found is not None:
+        evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
+        evidence.note(f"quirk {found[0]}: {len(accepted)} of {len(RESTRICTED_PROBES)} restricted CAN-IDs accepted "
+                      "(recorded, not judged)")
+        return
+    evidence.measure("restricted CAN-IDs refused", len(RESTRICTED_PROBES) - len(accepted), "",
+                     len(RESTRICTED_PROBES), len(RESTRICTED_PROBES))
+    assert not accepted, "accepted: " + "; ".join(accepted)
+    assert dut.read_uint(SYNC_COB_ID_OBJECT) == sync_cob_id, "1005h changed by the refused writes"
+
+
+def test_sync_taken_on_its_cob_id(dut, sync_cob_id, settings_journal, back_to_preoperational, evidence):
+    """With 1005h = 0FFh a synchronous TPDO (type 1) answers a SYNC on 0FFh, and no longer one on the old SYNC
+    CAN-ID."""
+    evidence.rests_on("cia", CLAUSE + " (bits 0-10: the CAN-ID of the SYNC the device consumes)")
+    assert not is_restricted_can_id(OTHER_SYNC_CAN_ID)
+    other = (sync_cob_id & ~0x7FF) | OTHER_SYNC_CAN_ID
+    domain = declared_domain(dut.profile, SYNC_COB_ID_OBJECT, 0)
+    if domain is not None and other not in domain:
+        pytest.skip(f"not applicable: the profile declares 1005h in {domain}, without {other:08X}h")
+    comm, kind = configurable_tpdo(dut, 2, evidence, settings_journal, [1, *range(2, 241)])
+    if kind != 1:
+        pytest.skip(f"not applicable: {comm:04X}h is sent on every {kind}th SYNC only (fixed), not on each")
+    if dut.profile.entry(comm, 2).writable:
+        settings_journal.write(comm, 2, b"\x01")
+    tpdo = dut.read_uint(comm, 1) & 0x7FF
+    old = sync_cob_id & 0x7FF
+    settings_journal.write(SYNC_COB_ID_OBJECT, 0, other.to_bytes(4, "little"))
+    dut.nmt("start")
+    assert dut.responds(), "no SDO answer after NMT start"
+    window = dut.pdo_silence_s + dut.profile.timing.nmt_settle_ms / 1000
+
+    def is_tpdo(msg) -> bool:
+        return msg.is_rx and msg.arbitration_id == tpdo and not msg.is_remote_frame
+
+    mark = dut.send(OTHER_SYNC_CAN_ID)
+    answered = dut.frames.wait_for(is_tpdo, window, mark)
+    assert answered is not None, (f"1005h = {OTHER_SYNC_CAN_ID:03X}h: no TPDO on {tpdo:03X}h after a SYNC on "
+                                  f"{OTHER_SYNC_CAN_ID:03X}h\n{format_frames(dut.frames.since(mark))}")
+    mark = dut.send(old)
+    stray = dut.frames.quiet_period(is_tpdo, window, mark)
+    assert not stray, (f"1005h = {OTHER_SYNC_CAN_ID:03X}h: TPDO {tpdo:03X}h after a frame on the old SYNC CAN-ID "
+                       f"{old:03X}h\n{format_frames(stray)}")
