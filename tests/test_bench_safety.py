@@ -195,12 +195,14 @@ def test_restore_command_finishes_after_a_hard_crash(tmp_path, after):
 def _lost_device_run(folder: Path, how: str) -> tuple[subprocess.CompletedProcess[str], float]:
     twin = start_twin(folder)
     try:
-        run = twin.start_run(folder / "report", "-q")
-        threading.Event().wait(3.0)
+        run = twin.start_run(folder / "report", "-v")
+        seen: list[str] = []
+        # mid-run means after the first verdict, not a fixed delay: a loaded CI machine can still be starting up
+        assert wait_for_line(run, " PASSED", 120, seen), "".join(seen[-20:])
         gone = time.monotonic()
         twin.kill() if how == "killed" else twin.freeze()
         output, _ = run.communicate(timeout=60)
-        return subprocess.CompletedProcess(run.args, run.returncode, output), time.monotonic() - gone
+        return subprocess.CompletedProcess(run.args, run.returncode, "".join(seen) + output), time.monotonic() - gone
     finally:
         twin.close()
 
