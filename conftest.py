@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
-from encoder_conformance.plugin import hypothesis_profiles, lifecycle, reporting, selection, verdicts
+from encoder_conformance.plugin import hypothesis_profiles, lifecycle, reporting, run_record, selection, verdicts
 from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence",
@@ -21,6 +21,7 @@ hypothesis_profiles.load()  # ci, bench, soak, dev (HYPOTHESIS_PROFILE)
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     opts.add_options(parser)
+    run_record.add_option(parser.getgroup("encoder-conformance"))
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -36,6 +37,7 @@ def pytest_configure(config: pytest.Config) -> None:
 def pytest_sessionstart(session: pytest.Session) -> None:
     reporting.set_metadata(session.config)
     reporting.start_background_writers(session.config)
+    run_record.start(session.config)
     lifecycle.start(session.config)
 
 
@@ -76,6 +78,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]):
         report.longrepr = f"could not test: {call.excinfo.value}"  # one line: the device is gone
     verdicts.judge(item, report)  # a broken inferred rule: a warning, or a failure with --strict-inferred
     reporting.attach_evidence(item, call, report)
+    run_record.note_report(item, report)
     lifecycle.note_report(item.config, report)
 
 
@@ -109,5 +112,6 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int):
     if not lifecycle.ended_early(session.config):
         reporting.fail_all_skipped(session)
     lifecycle.final_exit_status(session)
+    run_record.finish(session)
     reporting.finish_background_writers(session.config)
     return result

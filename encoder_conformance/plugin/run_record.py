@@ -1,0 +1,117 @@
+"""Collect the run's RunSummary from pytest's reports and write ``run-summary.json`` at the session's end."""
+
+from __future__ import annotations
+
+import time
+from datetime import datetime
+from pathlib import Path
+
+import pytest
+
+from ..run_summary import RunSummary, TestResult, area_of
+from . import lifecycle
+from .evidence import EVIDENCE
+from .options import settings_of
+from .reporting import IDENTITY, report_dir
+
+SUMMARY = pytest.StashKey[RunSummary]()
+_STARTED = pytest.StashKey[float]()
+KIND_OPTION = "--run-kind"
+MESSAGE_LIMIT = 1500  # characters of a failure kept in the summary (the HTML report has it all)
+
+
+def add_option(group) -> None:  # noqa: ANN001 - pytest's OptionGroup
+    group.addoption(KIND_OPTION, default="run", choices=["run", "accept"],
+                    help="what kind of run the history records (set by `encoder-conformance accept`)")
+
+
+def summary_of(config: pytest.Config) -> RunSummary | None:
+    return config.stash.get(SUMMARY, None)
+
+
+def start(config: pytest.Config) -> None:
+    """A conformance run (one with a report folder) starts its summary."""
+    folder = report_dir(config)
+    if folder is None:
+        return
+    settings = settings_of(config)
+    loaded = settings.loaded
+    station = settings.station
+    values = {key: f"{value} (from {settings.bus.sources.get(key, 'default')})"
+              for key, value in settings.bus.kwargs.items()}
+    values["node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
+    config.stash[_STARTED] = time.monotonic()
+    config.stash[SUMMARY] = RunSummary(
+        kind=config.getoption(KIND_OPTION, default="run"),
+        started=datetime.now().astimezone().isoformat(timespec="seconds"),
+        profile_id=loaded.profile.id, profile_sha256=loaded.sha256, settings=values,
+        station=getattr(station, "station", None), operator=getattr(station, "operator", None),
+        report_dir=str(folder))
+
+
+def _message(report: pytest.TestReport) -> str:
+    longrepr = report.longrepr
+    if isinstance(longrepr, tuple):  # a skip: (file, line, "Skipped: reason")
+        return str(longrepr[2]).removeprefix("Skipped: ")
+    crash = getattr(longrepr, "reprcrash", None)
+    text = str(crash.message) if crash is not None else str(longrepr or "")
+    return text[:MESSAGE_LIMIT]
+
+
+def _outcome(report: pytest.TestReport) -> str | None:
+    """The test's outcome from this phase's report, or None where the phase says nothing new."""
+    if report.when == "call":
+        if report.passed:
+            return "warning" if ("verdict", "warning") in report.user_properties else "passed"
+        return "failed" if report.failed else "skipped"
+    if report.failed:
+        return "error"
+    if report.skipped and report.when == "setup":
+        return "skipped"
+    return None
+
+
+def note_report(item: pytest.Item, report: pytest.TestReport) -> None:
+    """Add or update the test's result (a teardown error turns a pass into an error)."""
+    summary = summary_of(item.config)
+    outcome = _outcome(report)
+    if summary is None or outcome is None:
+        return
+    evidence = item.stash.get(EVIDENCE, None)
+    basis = next((v for k, v in report.user_properties if k == "verdict_basis"), None)
+    source = next((v for k, v in report.user_properties if k == "verdict_source"), None)
+    message = _message(report) if outcome in ("failed", "error", "skipped") else ""
+    if outcome == "warning":
+        message = "; ".join(v for k, v in report.user_properties if k == "inferred_problem")
+    folder = report_dir(item.config)
+    trace = None
+    if evidence is not None and evidence.trace_path is not None and folder is not None:
+        trace = evidence.trace_path.relative_to(folder).as_posix()
+    existing = next((r for r in reversed(summary.results) if r.nodeid == item.nodeid), None)
+    if existing is not None:  # a teardown error after the call's verdict
+        if outcome == "error":
+            existing.outcome, existing.message = "error", message
+        return
+    summary.results.append(TestResult(item.nodeid, area_of(item.nodeid), outcome, basis,  # type: ignore[arg-type]
+                                      source or (evidence.spec if evidence else None), message,
+                                      round(report.duration, 3), trace))
+
+
+def finish(session: pytest.Session) -> RunSummary | None:
+    """Complete the summary (identity, exit code, device custody) and write it to the report folder."""
+    config = session.config
+    summary, folder = summary_of(config), report_dir(config)
+    if summary is None or folder is None:
+        return None
+    summary.identity = dict(config.stash.get(IDENTITY, {}))
+    summary.duration_s = round(time.monotonic() - config.stash[_STARTED], 2)
+    summary.exit_code = int(session.exitstatus)
+    state = lifecycle.state_of(config)
+    if state is not None:
+        summary.could_not_test = state.stopped
+        summary.device_restored = None if state.record is None else state.record.ok
+    for result in summary.results:  # traces of passed tests may have been dropped (--trace failed)
+        if result.trace and not (Path(folder) / result.trace).exists():
+            result.trace = None
+    summary.write(folder)
+    return summary

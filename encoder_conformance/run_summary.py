@@ -1,0 +1,185 @@
+"""The outcome of one run for people and machines: the device, the settings, one result per test, a
+verdict per area and overall. Written by every run as ``run-summary.json`` in its report folder; read by
+the report's first screen, the acceptance certificate and the history database.
+
+Pure data (no pytest): the plugin fills it (plugin/run_record.py), everything else reads it.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Literal
+
+SUMMARY_FILE = "run-summary.json"
+
+#: the areas of a report, in the order a reader expects them
+AREAS: tuple[str, ...] = ("identity", "object dictionary", "SDO", "NMT", "error control", "EMCY", "PDO",
+                          "store/restore", "LSS", "encoder function", "CAM", "other")
+
+#: suite module -> area (a module not named here is "other")
+MODULE_AREAS: dict[str, str] = {
+    "test_identity": "identity",
+    "test_object_dictionary": "object dictionary",
+    "test_value_domain": "object dictionary",
+    "test_sdo_protocol": "SDO",
+    "test_sdo_block": "SDO",
+    "test_sdo_fuzz": "SDO",
+    "test_nmt": "NMT",
+    "test_nmt_state_machine": "NMT",
+    "test_heartbeat": "error control",
+    "test_error_control": "error control",
+    "test_emcy": "EMCY",
+    "test_emcy_history": "EMCY",
+    "test_sync_objects": "PDO",  # the SYNC consumer objects: what synchronous TPDOs run on
+    "test_pdo": "PDO",
+    "test_pdo_comm": "PDO",
+    "test_pdo_mapping": "PDO",
+    "test_pdo_repeat": "PDO",
+    "test_pdo_timing": "PDO",
+    "test_store_restore": "store/restore",
+    "test_manufacturer_store": "store/restore",
+    "test_lss": "LSS",
+    "test_encoder_position": "encoder function",
+    "test_encoder_properties": "encoder function",
+    "test_work_area": "encoder function",
+    "test_cam": "CAM",
+}
+
+Outcome = Literal["passed", "failed", "warning", "skipped", "error"]
+Verdict = Literal["PASS", "FAIL", "PASS WITH WARNINGS", "COULD NOT TEST", "NOT RUN"]
+
+
+def area_of(nodeid: str) -> str:
+    """The area of a test from its pytest node id (``suites/test_nmt.py::test_x[...]``)."""
+    module = Path(nodeid.split("::", 1)[0]).stem
+    return MODULE_AREAS.get(module, "other")
+
+
+@dataclass
+class TestResult:
+    """One test's verdict and what it rests on."""
+
+    __test__ = False  # not a pytest test class
+
+    nodeid: str
+    area: str
+    outcome: Outcome
+    basis: str | None = None  # cia / manual / inferred
+    source: str | None = None  # the clause or manual section
+    message: str = ""  # the failure (expected vs observed), the skip reason, the warning
+    duration_s: float = 0.0
+    trace: str | None = None  # the frame trace, relative to the report folder
+
+
+@dataclass
+class AreaVerdict:
+    """The counts of one area and its verdict."""
+
+    area: str
+    passed: int = 0
+    failed: int = 0
+    warnings: int = 0
+    skipped: int = 0
+
+    @property
+    def verdict(self) -> Verdict:
+        if self.failed:
+            return "FAIL"
+        if self.warnings:
+            return "PASS WITH WARNINGS"
+        return "PASS" if self.passed else "NOT RUN"
+
+    def count(self, outcome: Outcome) -> None:
+        name = {"passed": "passed", "failed": "failed", "error": "failed", "warning": "warnings",
+                "skipped": "skipped"}[outcome]
+        setattr(self, name, getattr(self, name) + 1)
+
+
+@dataclass
+class RunSummary:
+    """Everything a certificate, a history entry or the report's first screen needs."""
+
+    kind: str  # "run" or "accept"
+    started: str  # ISO 8601, local time with offset
+    profile_id: str
+    profile_sha256: str
+    duration_s: float = 0.0
+    identity: dict[str, str] = field(default_factory=dict)  # as read from the device (1000h, 1008h, 1018h)
+    settings: dict[str, str] = field(default_factory=dict)  # each with its source: "250000 (from station file)"
+    station: str | None = None
+    operator: str | None = None
+    results: list[TestResult] = field(default_factory=list)
+    exit_code: int | None = None
+    could_not_test: str | None = None  # why the run stopped before it could judge the device
+    device_restored: bool | None = None
+    report_dir: str | None = None
+
+    @property
+    def serial(self) -> str | None:
+        """The serial number (1018h.4) in decimal, as the label on the device shows it."""
+        text = self.identity.get("serial number (1018h.4)")
+        return None if text in (None, "-") else text.split()[0]
+
+    @property
+    def revision(self) -> str | None:
+        text = self.identity.get("revision (1018h.3)")
+        return None if text in (None, "-") else text
+
+    def areas(self) -> list[AreaVerdict]:
+        """The verdict per area, in AREAS order; areas with no test left out."""
+        by_area = {area: AreaVerdict(area) for area in AREAS}
+        for result in self.results:
+            by_area.setdefault(result.area, AreaVerdict(result.area)).count(result.outcome)
+        return [v for v in by_area.values() if v.passed or v.failed or v.warnings or v.skipped]
+
+    @property
+    def overall(self) -> Verdict:
+        if self.could_not_test:
+            return "COULD NOT TEST"
+        verdicts = {area.verdict for area in self.areas()}
+        if "FAIL" in verdicts or self.device_restored is False:
+            return "FAIL"
+        if not verdicts - {"NOT RUN"}:
+            return "NOT RUN"
+        return "PASS WITH WARNINGS" if "PASS WITH WARNINGS" in verdicts else "PASS"
+
+    def failing_areas(self) -> list[str]:
+        return [area.area for area in self.areas() if area.verdict == "FAIL"]
+
+    def with_outcome(self, *outcomes: Outcome) -> list[TestResult]:
+        return [r for r in self.results if r.outcome in outcomes]
+
+    def to_json(self) -> str:
+        data = asdict(self)
+        data["overall"] = self.overall
+        data["serial"] = self.serial
+        data["areas"] = [{**asdict(a), "verdict": a.verdict} for a in self.areas()]
+        return json.dumps(data, indent=1)
+
+    @classmethod
+    def from_json(cls, text: str) -> RunSummary:
+        data = json.loads(text)
+        for derived in ("overall", "serial", "areas"):
+            data.pop(derived, None)
+        data["results"] = [TestResult(**r) for r in data.get("results", [])]
+        return cls(**data)
+
+    def write(self, folder: Path) -> Path:
+        path = folder / SUMMARY_FILE
+        path.write_text(self.to_json(), encoding="utf-8")
+        return path
+
+    @classmethod
+    def read(cls, folder_or_file: Path) -> RunSummary:
+        path = folder_or_file / SUMMARY_FILE if folder_or_file.is_dir() else folder_or_file
+        return cls.from_json(path.read_text(encoding="utf-8"))
+
+
+def count_outcomes(results: Iterable[TestResult]) -> dict[str, int]:
+    counts: dict[str, int] = {}
+    for result in results:
+        counts[result.outcome] = counts.get(result.outcome, 0) + 1
+    return counts
