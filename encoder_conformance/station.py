@@ -1,19 +1,35 @@
-"""A station file: what a bench always uses (CAN adapter, node-id, power switch), so its operator
-types only the profile. Command-line options override it. Strictly validated: an unknown or
-ill-typed key is an error naming the file, the key and the fix.
+"""A station file: what a bench always uses (CAN adapter, node-id, power switch, operator, where reports
+and the history go), so its operator types only the profile. Command-line options override it; python-can's
+own configuration (CAN_INTERFACE, ~/can.conf) fills what neither gives. Strictly validated: an unknown or
+ill-typed key is an error naming the file, the key and the fix. TOML (``.toml``) or YAML (any other name):
 
-```yaml
-station: bench-3                 # a name for the report
-can: {interface: pcan, channel: PCAN_USBBUS1, bitrate: 250000}
-node_id: 5
-power: {off_command: "relayctl 3 off", on_command: "relayctl 3 on", off_time_s: 1.0}   # or: power: manual
+```toml
+station = "goods-in-2"            # a name for the report, the certificate and the history
+operator = "J. Meyer"
+node_id = 5
+shaft_drive = "bench_motor:connect=/dev/ttyUSB0"   # optional motor plug-in (see --shaft-drive)
+reports = "/srv/conformance/reports"               # report folders go here (default reports/)
+history = "/srv/conformance/history.sqlite"        # the history database (default reports/history.sqlite)
+
+[can]
+interface = "pcan"
+channel = "PCAN_USBBUS1"
+bitrate = 250000
+
+[power]                           # or: power = "manual" (the operator is asked and Enter continues)
+off_command = "relayctl 3 off"
+on_command = "relayctl 3 on"
+off_time_s = 1.0
 ```
+
+Relative paths (reports, history) are taken from the station file's folder.
 """
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
@@ -39,24 +55,46 @@ class StationPower(_Strict):
 
 class Station(_Strict):
     station: str
+    operator: str | None = None
     can: StationCan | None = None
     node_id: int | None = Field(default=None, ge=1, le=127)
     power: StationPower | Literal["manual"] | None = None
+    shaft_drive: str | None = Field(default=None, description="motor plug-in MODULE:FACTORY[=ARGUMENT]")
+    reports: Path | None = Field(default=None, description="folder the report folders go into")
+    history: Path | None = Field(default=None, description="the history database (SQLite)")
+
+    def resolved(self, folder: Path) -> Station:
+        """Relative paths taken from the station file's folder."""
+        paths = {key: folder / value for key in ("reports", "history")
+                 if (value := getattr(self, key)) is not None and not value.is_absolute()}
+        return self.model_copy(update=paths)
 
 
 class StationError(Exception):
     """The station file is missing or invalid; the message names file, key and fix."""
 
 
-def load_station(path: Path) -> Station:
+def _parse(path: Path) -> Any:
     try:
-        raw = yaml.safe_load(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
-        raise StationError(f"--station {path}: cannot read it: {exc.strerror}") from None
+        raise StationError(f"--station {path}: cannot read it: {exc.strerror}; give the path of the station "
+                           "file (TOML or YAML)") from None
+    if path.suffix == ".toml":
+        try:
+            return tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise StationError(f"--station {path}: not valid TOML: {exc}") from None
+    try:
+        return yaml.safe_load(text)
     except yaml.YAMLError as exc:
         raise StationError(f"--station {path}: not valid YAML: {exc}") from None
+
+
+def load_station(path: Path) -> Station:
+    raw = _parse(path)
     try:
-        return Station.model_validate(raw)
+        return Station.model_validate(raw).resolved(path.resolve().parent)
     except ValidationError as exc:
         problems = [f"{path}: {'.'.join(str(p) for p in e['loc']) or '(top level)'}: {e['msg']}"
                     for e in exc.errors()]

@@ -76,8 +76,8 @@ def add_options(parser: pytest.Parser) -> None:
                     help="simulator only: run it in the test process on the virtual interface "
                          "(faster start, less accurate timing)")
     group.addoption("--station", default=None,
-                    help="station file (YAML): the bench's CAN adapter, node-id and power switch; "
-                         "command-line options override it")
+                    help="station file (TOML, or YAML): the bench's CAN adapter, node-id, power switch, operator, "
+                         "motor plug-in, report and history locations; command-line options override it")
     group.addoption("--power-off-cmd", default=None,
                     help="shell command that switches the device off (with --power-on-cmd): the power-cycle "
                          "tests run on the bench instead of skipping")
@@ -155,13 +155,16 @@ def configure(config: pytest.Config) -> None:
         power=_power_settings(config, station, station_path, bus.simulated),
         station=station,
         delivery_state=bool(config.getoption("--delivery-state")),
-        shaft_drive=_shaft_drive(config, bus.simulated),
+        shaft_drive=_shaft_drive(config, station, bus.simulated),
     )
 
 
-def _shaft_drive(config: pytest.Config, simulated: bool) -> ShaftDrivePlugin | None:
-    """The --shaft-drive plug-in, imported now so that a wrong name is a usage error before any test."""
+def _shaft_drive(config: pytest.Config, station: Station | None, simulated: bool) -> ShaftDrivePlugin | None:
+    """The --shaft-drive plug-in (or the station's), imported now so that a wrong name is a usage error before any
+    test."""
     spec = config.getoption("--shaft-drive")
+    if spec is None and station is not None and station.shaft_drive is not None and not simulated:
+        spec = station.shaft_drive
     if spec is None:
         return None
     if simulated:

@@ -35,7 +35,9 @@ def configure_outputs(config: pytest.Config) -> None:
     settings = settings_of(config)
     given = config.getoption("--report-dir")
     stamp = time.strftime("%Y%m%d-%H%M%S")
-    folder = Path(given) if given else REPO_ROOT / "reports" / f"{stamp}-{settings.loaded.profile.id}"
+    station_reports = settings.station.reports if settings.station is not None else None
+    parent = station_reports or REPO_ROOT / "reports"
+    folder = Path(given) if given else parent / f"{stamp}-{settings.loaded.profile.id}"
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "traces").mkdir(exist_ok=True)
     config.stash[REPORT_DIR] = folder
