@@ -40,6 +40,7 @@ def start(config: pytest.Config) -> None:
     values = {key: f"{value} (from {settings.bus.sources.get(key, 'default')})"
               for key, value in settings.bus.kwargs.items()}
     values["node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
+    values.update(_bench_settings(config))
     config.stash[_STARTED] = time.monotonic()
     config.stash[SUMMARY] = RunSummary(
         kind=config.getoption(KIND_OPTION, default="run"),
@@ -47,6 +48,28 @@ def start(config: pytest.Config) -> None:
         profile_id=loaded.profile.id, profile_sha256=loaded.sha256, settings=values,
         station=getattr(station, "station", None), operator=getattr(station, "operator", None),
         report_dir=str(folder))
+
+
+def _bench_settings(config: pytest.Config) -> dict[str, str]:
+    """The station's other settings, each with where it came from."""
+    settings = settings_of(config)
+    station_path = config.getoption("--station")
+    values = {}
+    if settings.station is not None:
+        values["station"] = f"{settings.station.station} (from station {station_path})"
+        if settings.station.operator:
+            values["operator"] = f"{settings.station.operator} (from station {station_path})"
+    power = settings.power
+    if power is not None:
+        how = "operator asked" if power.manual else f"off: {power.off_command!r}, on: {power.on_command!r}"
+        values["power switch"] = f"{how}, off {power.off_time_s:g} s (from {power.source})"
+    if settings.shaft_drive is not None:
+        came_from = "command line" if config.getoption("--shaft-drive") else f"station {station_path}"
+        values["shaft drive"] = f"{settings.shaft_drive.spec} (from {came_from})"
+    values["inferred rules"] = ("failures (from --strict-inferred)" if config.getoption("--strict-inferred")
+                                else "warnings (default)")
+    values["SDO abort codes"] = f"{config.getoption('--abort-codes')} (from --abort-codes)"
+    return values
 
 
 def _message(report: pytest.TestReport) -> str:
