@@ -26,33 +26,36 @@ from ..run_summary import RunSummary
 
 HTML_NAME = "certificate.html"
 PDF_NAME = "certificate.pdf"
-FAILURES_SHOWN = 6  # a failed device's first failures fit on the page; the report has them all
+FAILURES_SHOWN = 5  # a failed device's first failures fit on the page; the report has them all
+MESSAGE_SHOWN = 120  # characters of a failure's first line (at most two lines of the table)
 
 _TEMPLATE = """<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <title>{{ title }} {{ s.serial or "" }}</title>
 <style>
-@page { size: A4 portrait; margin: 15mm 15mm 15mm 18mm; }
+@page { size: A4 portrait; margin: 12mm 14mm 12mm 18mm; }
 * { box-sizing: border-box; }
-body { font-family: "DejaVu Sans", Arial, Helvetica, sans-serif; font-size: 10pt; color: #111; margin: 0;
+body { font-family: "DejaVu Sans", Arial, Helvetica, sans-serif; font-size: 9.5pt; color: #111; margin: 0;
        max-width: 180mm; }
 h1 { font-size: 17pt; margin: 0 0 1mm 0; }
 .sub { color: #555; margin-bottom: 4mm; }
-.verdict { font-size: 30pt; font-weight: bold; text-align: center; padding: 4mm; margin: 3mm 0 5mm 0;
+.verdict { font-size: 26pt; font-weight: bold; text-align: center; padding: 2mm; margin: 2mm 0 3mm 0;
            border: 1.2mm solid; border-radius: 2mm; }
 .PASS { color: #1b6e20; border-color: #1b6e20; }
 .FAIL { color: #b00020; border-color: #b00020; }
 .WARN { color: #8a5a00; border-color: #c98a00; }
 .NONE { color: #555; border-color: #777; }
-table { border-collapse: collapse; width: 100%; margin-bottom: 4mm; page-break-inside: avoid; }
-th, td { text-align: left; padding: 1mm 2mm; border-bottom: 0.2mm solid #bbb; vertical-align: top; }
+table { border-collapse: collapse; width: 100%; margin-bottom: 3mm; }
+table.areas { page-break-inside: avoid; }
+table.failures td { font-size: 7.5pt; padding: 0.6mm 2mm; }
+th, td { text-align: left; padding: 0.5mm 2mm; border-bottom: 0.2mm solid #bbb; vertical-align: top; }
 th { background: #eee; }
 td.k { width: 42mm; color: #444; }
 td.n { text-align: right; width: 16mm; }
-.mono { font-family: "DejaVu Sans Mono", Consolas, monospace; font-size: 8.5pt; word-break: break-all; }
-h2 { font-size: 11.5pt; margin: 4mm 0 1.5mm 0; }
+.mono { font-family: "DejaVu Sans Mono", Consolas, monospace; font-size: 8pt; overflow-wrap: anywhere; }
+h2 { font-size: 11.5pt; margin: 3mm 0 1mm 0; }
 .small { font-size: 8.5pt; color: #333; }
-.sign { margin-top: 12mm; display: flex; gap: 12mm; }
+.sign { margin-top: 9mm; display: flex; gap: 12mm; }
 .sign div { flex: 1; border-top: 0.3mm solid #000; padding-top: 1mm; font-size: 8.5pt; color: #444; }
 @media screen { body { margin: 10mm auto; } }
 @media print { .noprint { display: none; } }
@@ -60,7 +63,7 @@ h2 { font-size: 11.5pt; margin: 4mm 0 1.5mm 0; }
 <h1>{{ title }}</h1>
 <div class="sub">CANopen encoder conformance suite (CiA 301 / 305 / 406) &middot; {{ kind_text }}</div>
 <div class="verdict {{ css }}">{{ s.overall }}</div>
-{% if s.could_not_test %}<p><b>Could not test:</b> {{ s.could_not_test }}</p>{% endif %}
+{% if s.could_not_test %}<p style="margin: 0 0 2mm 0"><b>Could not test:</b> {{ s.could_not_test }}</p>{% endif %}
 <table>
 <tr><td class="k">Serial number</td><td><b>{{ s.serial or "not read" }}</b></td></tr>
 <tr><td class="k">Firmware / revision</td><td>{{ s.revision or "not read" }}</td></tr>
@@ -74,7 +77,7 @@ h2 { font-size: 11.5pt; margin: 4mm 0 1.5mm 0; }
 <tr><td class="k">Device given back</td><td>{{ restored }}</td></tr>
 </table>
 <h2>Verdict per area</h2>
-<table>
+<table class="areas">
 <tr><th>Area</th><th>Verdict</th><th class="n">passed</th><th class="n">failed</th><th class="n">warnings</th>
 <th class="n">skipped</th></tr>
 {% for a in areas %}<tr><td>{{ a.area }}</td><td><b>{{ a.verdict }}</b></td><td class="n">{{ a.passed }}</td>
@@ -82,7 +85,8 @@ h2 { font-size: 11.5pt; margin: 4mm 0 1.5mm 0; }
 {% else %}<tr><td colspan="6">no test ran</td></tr>{% endfor %}
 </table>
 {% if failures %}<h2>Failures{% if more %} (first {{ failures|length }} of {{ failures|length + more }}){% endif %}</h2>
-<table class="small">{% for f in failures %}<tr><td class="mono">{{ f.nodeid }}</td><td>{{ f.message }}</td></tr>
+<table class="failures">{% for f in failures %}
+<tr><td><span class="mono">{{ f.nodeid }}</span> {{ f.message }}</td></tr>
 {% endfor %}</table>{% endif %}
 <h2>Bus settings</h2>
 <table class="small">{% for key, value in s.settings.items() %}<tr><td class="k">{{ key }}</td><td>{{ value }}</td></tr>
@@ -122,7 +126,8 @@ def render_certificate(summary: RunSummary) -> str:
 
 def _short(result):  # noqa: ANN001 - TestResult in, a dict the template reads out
     first = result.message.strip().splitlines()[0] if result.message.strip() else ""
-    return {"nodeid": result.nodeid, "message": first[:200]}
+    shown = first[:MESSAGE_SHOWN] + ("..." if len(first) > MESSAGE_SHOWN else "")
+    return {"nodeid": result.nodeid.removeprefix("suites/"), "message": shown}
 
 
 @dataclass(frozen=True)

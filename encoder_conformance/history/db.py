@@ -13,7 +13,7 @@ import json
 import os
 import sqlite3
 from collections.abc import Iterator
-from contextlib import closing, contextmanager
+from contextlib import closing, contextmanager, suppress
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -118,16 +118,19 @@ def _prepare(db: sqlite3.Connection, path: Path) -> None:
     if version > SCHEMA_VERSION:
         raise HistoryError(f"{path}: written by a newer version of the suite (schema {version}, this one knows "
                            f"{SCHEMA_VERSION}); update the suite or use another --history file")
-    if version == SCHEMA_VERSION:
-        return
+    if version < SCHEMA_VERSION:
+        with db:  # one transaction: a second process creating the schema at the same moment waits, then sees it
+            db.execute("BEGIN IMMEDIATE")
+            for statement in _SCHEMA.split(";"):
+                if statement.strip():
+                    db.execute(statement)
+            db.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
     if db.execute("PRAGMA journal_mode").fetchone()[0] != "wal":
-        db.execute("PRAGMA journal_mode = WAL")  # readers never block a run's write (not on network drives)
-    with db:  # one transaction: a second process creating the schema at the same moment waits, then sees it
-        db.execute("BEGIN IMMEDIATE")
-        for statement in _SCHEMA.split(";"):
-            if statement.strip():
-                db.execute(statement)
-        db.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+        # WAL: readers (history list) never block a run's write. Best effort: switching needs the database to
+        # itself and SQLite does not wait for that (seen: two runs creating it at once); the rollback journal
+        # with the busy timeout is just as safe, and a later connection switches.
+        with suppress(sqlite3.OperationalError):
+            db.execute("PRAGMA journal_mode = WAL")
 
 
 def record_run(summary: RunSummary, db_path: Path) -> int:
