@@ -68,6 +68,7 @@ def test_list_selects_by_serial_since_profile_and_kind(history, capsys):
     status, out, _ = _history(capsys, "list", "--db", str(history), "--serial", "111")
     assert status == 0
     assert _ids(out) == [1, 2]
+    assert _ids(_history(capsys, "list", "--db", str(history), "--serial", "0x0000006F")[1]) == [1, 2]
     assert out.splitlines()[0].split() == ["id", "date", "kind", "profile", "serial", "revision", "verdict",
                                            "station", "operator"]
     assert "FAIL" in out.splitlines()[2]
@@ -142,6 +143,7 @@ def test_compare_two_runs_of_one_serial(history, capsys):
     (["show", "x1"], "RUN_ID 'x1'"),
     (["compare", "1", "99"], "RUN_B 99"),
     (["list", "--since", "26.11.2026"], "--since '26.11.2026'"),
+    (["list", "--serial", "0xZZ"], "--serial '0xZZ'"),
     (["export", "--since", "yesterday"], "--since 'yesterday'"),
 ])
 def test_usage_errors_are_one_line_with_exit_code_4(history, capsys, args, names):

@@ -30,6 +30,16 @@ def parse_since(text: str) -> str:
     return (moment if moment.tzinfo else moment.astimezone()).astimezone(UTC).isoformat(timespec="seconds")
 
 
+def _serial(text: str | None) -> str | None:
+    """--serial in decimal (as stored) or 0x-hex (as a configuration tool may show 1018h.4)."""
+    if text is None or not text.lower().startswith("0x"):
+        return text
+    try:
+        return str(int(text, 16))
+    except ValueError:
+        raise UsageError(f"--serial {text!r}: not a number; give it in decimal or as 0x-hex") from None
+
+
 def _run_id(text: str, what: str) -> int:
     if not text.strip().isdigit():
         raise UsageError(f"{what} {text!r}: not a run id; give the number 'history list' shows in its id column")
@@ -57,7 +67,7 @@ def _db(args: argparse.Namespace, must_exist: bool = True) -> Path:
 def _filters(args: argparse.Namespace):  # -> db.Filters (imported lazily)
     from .db import Filters
 
-    return Filters(serial=args.serial, profile=args.profile, kind=args.kind,
+    return Filters(serial=_serial(args.serial), profile=args.profile, kind=args.kind,
                    since_utc=parse_since(args.since) if args.since else None)
 
 
@@ -146,7 +156,7 @@ def _where(parser: argparse.ArgumentParser) -> None:
 
 
 def _selection(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--serial", help="only this serial number (decimal, as 1018h.4 reads)")
+    parser.add_argument("--serial", help="only this serial number (1018h.4, decimal or 0x-hex)")
     parser.add_argument("--since", metavar="DATE", help="only runs started on or after DATE (YYYY-MM-DD or ISO "
                         "date-time, local time)")
     parser.add_argument("--profile", help="only runs of this profile id")
