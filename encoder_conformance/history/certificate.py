@@ -8,10 +8,11 @@ PDF: WeasyPrint, when installed (``pip install -e ".[pdf]"``). Chosen because it
 HTML and print CSS (``@page``) faithfully with a small pure-Python package (~5 MB beside what
 matplotlib already brings), while xhtml2pdf understands only a subset of CSS and pulls in ReportLab,
 and no browser is on a station by default. WeasyPrint needs the Pango system library: present on
-this project's machines (measured: import 0.85 s, page 0.07 s), possibly missing on a fresh one. So the
-PDF is optional and never fails a run: without WeasyPrint or Pango the HTML is the certificate and
-one note says why there is no PDF. It is an extra, not a dependency, because its ~1 s import would
-lengthen every acceptance run of a station that only prints the HTML.
+this project's machines (measured: import and one page 0.9 s on an idle 2-core machine, 2 s on a
+loaded one), possibly missing on a fresh one. So the PDF is optional and never fails a run: without
+WeasyPrint or Pango the HTML is the certificate and one note says why there is no PDF. It is an
+extra, not a dependency, because its 1-2 s would lengthen every acceptance run (aimed at < 5 s) of a
+station that only prints the HTML.
 """
 
 from __future__ import annotations

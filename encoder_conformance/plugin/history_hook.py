@@ -34,7 +34,15 @@ def _db_path(config: pytest.Config) -> Path | None:
 
 def record(session: pytest.Session) -> None:
     """Called after run_record.finish: the summary is complete and written."""
-    config = session.config
+    try:
+        _record(session.config)
+    except Exception as exc:  # a bug here must not turn the device's verdict into the tool's internal error
+        session.config.get_terminal_writer().line(
+            f"history: this run was not recorded ({type(exc).__name__}: {exc}); the verdict stands; please report "
+            "this with the output", yellow=True)
+
+
+def _record(config: pytest.Config) -> None:
     summary = summary_of(config)
     if summary is None or summary.report_dir is None:
         return
