@@ -133,9 +133,21 @@ def test_compare_two_runs_of_one_serial(history, capsys):
     assert "areas: 1 changed" in out
     assert "  SDO: PASS -> FAIL" in out
     assert "suites/test_sdo_protocol.py::test_expedited: passed -> failed (expected 4 bytes)" in out
-    assert "tests: 1 changed outcome of 4" in out
+    assert "tests: 1 of 4 run in both changed outcome\n" in out
     _, other, _ = _history(capsys, "compare", "2", "3", "--db", str(history))
     assert "not the same device (serial 111 vs 222)" in other
+
+
+def test_compare_counts_the_tests_only_one_run_ran(tmp_path, capsys):
+    path = tmp_path / "history.sqlite"
+    full = _summary(111, "2026-06-02T10:30:00+02:00", kind="run")
+    accept = _summary(111, "2026-06-03T10:30:00+02:00", sdo="failed")
+    accept.results = accept.results[1:3]  # a smaller selection
+    db.record_run(full, path)
+    db.record_run(accept, path)
+    _, out, _ = _history(capsys, "compare", "1", "2", "--db", str(path))
+    assert "tests: 1 of 2 run in both changed outcome; 2 only in A, 0 only in B (another selection)" in out
+    assert "  NMT: NOT RUN -> -" in out
 
 
 @pytest.mark.parametrize(("args", "names"), [
@@ -291,12 +303,17 @@ def test_an_acceptance_run_against_the_twin_is_recorded_with_its_certificate(tmp
 
 
 def test_a_broken_history_warns_once_and_the_verdict_stands(tmp_path):
+    """The station file's history (over the environment's) is a text file: one warning, exit status 0."""
     broken = tmp_path / "broken.sqlite"
     broken.write_bytes(b"this is not an SQLite database, but a text file someone saved here" * 20)
-    run = _suite_run(tmp_path, "broken", broken)
+    station = tmp_path / "goods-in.toml"
+    station.write_text(f'station = "goods-in-2"\nhistory = "{broken.name}"\n', encoding="utf-8")
+    run = _suite_run(tmp_path, "broken", tmp_path / "environment.sqlite", "--station", str(station))
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     warnings = [line for line in run.stdout.splitlines() if line.startswith("history:")]
     assert len(warnings) == 1
+    assert f"{broken}: file is not a database" in warnings[0]
     assert "this run was not recorded" in warnings[0]
     assert "verdict stands" in warnings[0]
     assert "Traceback" not in run.stdout + run.stderr
+    assert not (tmp_path / "environment.sqlite").exists()

@@ -128,14 +128,14 @@ def compare(a: StoredRun, b: StoredRun) -> str:
     lines += [f"  {area}: {old} -> {new}" for area, old, new in changed]
     tests_a = {r["nodeid"]: r for r in a.results}
     tests_b = {r["nodeid"]: r for r in b.results}
-    order = [*tests_a, *(n for n in tests_b if n not in tests_a)]
-    moved = [n for n in order if (tests_a[n]["outcome"] if n in tests_a else "-")
-             != (tests_b[n]["outcome"] if n in tests_b else "-")]
-    lines.append(f"tests: {len(moved)} changed outcome of {len(order)} ('-': not run in that run)")
+    both = [n for n in tests_a if n in tests_b]
+    moved = [n for n in both if tests_a[n]["outcome"] != tests_b[n]["outcome"]]
+    only_a, only_b = len(tests_a) - len(both), len(tests_b) - len(both)
+    lines.append(f"tests: {len(moved)} of {len(both)} run in both changed outcome"
+                 + (f"; {only_a} only in A, {only_b} only in B (another selection)" if only_a or only_b else ""))
     for nodeid in moved:
-        old = tests_a[nodeid]["outcome"] if nodeid in tests_a else "-"
-        new = tests_b.get(nodeid)
-        why = new["message"].strip().splitlines()[0] if new is not None and new["message"].strip() else ""
-        lines.append(f"  {nodeid}: {old} -> {new['outcome'] if new is not None else '-'}"
-                     + (f" ({why[:160]})" if why and new is not None and new["outcome"] != "passed" else ""))
+        new = tests_b[nodeid]
+        why = new["message"].strip().splitlines()[0] if new["message"].strip() else ""
+        lines.append(f"  {nodeid}: {tests_a[nodeid]['outcome']} -> {new['outcome']}"
+                     + (f" ({why[:160]})" if why and new["outcome"] != "passed" else ""))
     return "\n".join(lines)
