@@ -8,6 +8,7 @@ naming the option and the fix, exit code 4.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from datetime import UTC, datetime
 from pathlib import Path
@@ -141,6 +142,9 @@ def _run(args: argparse.Namespace, extra: list[str]) -> int:
 
     try:
         return args.history_func(args)
+    except BrokenPipeError:  # 'history list | head': the reader has all it wanted
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - Python flushes stdout at exit: not into the closed pipe
+        return 0
     except UsageError as exc:
         print(f"history {args.history_command}: {exc}", file=sys.stderr)
     except HistoryError as exc:
