@@ -9,6 +9,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
+from encoder_conformance.plugin import history_hook as history
 from encoder_conformance.plugin import hypothesis_profiles, lifecycle, reporting, run_record, selection, verdicts
 from encoder_conformance.plugin import options as opts
 
@@ -22,6 +23,7 @@ hypothesis_profiles.load()  # ci, bench, soak, dev (HYPOTHESIS_PROFILE)
 def pytest_addoption(parser: pytest.Parser) -> None:
     opts.add_options(parser)
     run_record.add_option(parser.getgroup("encoder-conformance"))
+    history.add_option(parser.getgroup("encoder-conformance"))
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -113,5 +115,6 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int):
         reporting.fail_all_skipped(session)
     lifecycle.final_exit_status(session)
     run_record.finish(session)
+    history.record(session)  # the history entry, and an acceptance run's certificate
     reporting.finish_background_writers(session.config)
     return result

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .errors import BusSetupError, ProfileError
 from .exit_codes import RunExit, interrupted_by
+from .history.cli import add_history_parser
 from .lss_cli import add_lss_parser
 from .paths import DEFAULT_PROFILE, SUITES_DIR
 
@@ -275,6 +276,7 @@ def build_parser() -> argparse.ArgumentParser:
     restore.set_defaults(func=_cmd_restore)
 
     add_lss_parser(sub, _Parser, _bus_arguments)
+    add_history_parser(sub, _Parser)
 
     sim_control = sub.add_parser("sim-control", help="switch a served simulator's power (a bench power switch)")
     sim_control.add_argument("--control", required=True, help="HOST:PORT of the simulator's control channel")

@@ -1,0 +1,72 @@
+"""At the end of a conformance run: append it to the history, and write an acceptance run's certificate.
+
+Neither may change the run's verdict: a broken, locked or unwritable history gives one warning line
+and the run's exit status stands (the run-summary.json in the report folder still holds everything).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from ..history.certificate import write_certificate
+from ..history.db import ENV_VAR, OFF, HistoryError, history_path, note_certificate, record_run
+from .options import settings_of
+from .run_record import summary_of
+
+OPTION = "--history"
+
+
+def add_option(group) -> None:  # noqa: ANN001 - pytest's OptionGroup
+    group.addoption(OPTION, default=None, metavar="PATH",
+                    help=f"the history database this run is appended to (SQLite; default: the station file's "
+                         f"history, else ${ENV_VAR}, else reports/history.sqlite); '{OFF}' records nothing")
+
+
+def _db_path(config: pytest.Config) -> Path | None:
+    given = config.getoption(OPTION, default=None)
+    if given == OFF:
+        return None
+    station = settings_of(config).station
+    return history_path(given, station.history if station is not None else None)
+
+
+def record(session: pytest.Session) -> None:
+    """Called after run_record.finish: the summary is complete and written."""
+    try:
+        _record(session.config)
+    except Exception as exc:  # a bug here must not turn the device's verdict into the tool's internal error
+        session.config.get_terminal_writer().line(
+            f"history: this run was not recorded ({type(exc).__name__}: {exc}); the verdict stands; please report "
+            "this with the output", yellow=True)
+
+
+def _record(config: pytest.Config) -> None:
+    summary = summary_of(config)
+    if summary is None or summary.report_dir is None:
+        return
+    writer = config.get_terminal_writer()
+    certificate = None
+    if summary.kind == "accept":
+        try:
+            files = write_certificate(summary, Path(summary.report_dir))
+        except OSError as exc:
+            writer.line(f"certificate: not written ({exc}); make it later with 'encoder-conformance history show "
+                        "RUN_ID --certificate'", yellow=True)
+        else:
+            certificate = files.html
+            writer.line(f"certificate: {files.pdf or files.html}" + (f" ({files.pdf_note})" if files.pdf_note
+                                                                     else ""))
+    db_path = _db_path(config)
+    if db_path is None:
+        return
+    try:
+        run_id = record_run(summary, db_path)
+        if certificate is not None:
+            note_certificate(db_path, run_id, certificate)
+    except HistoryError as exc:
+        writer.line(f"history: this run was not recorded: {exc}; the verdict stands (fix or move the file, or give "
+                    f"{OPTION} PATH)", yellow=True)
+        return
+    writer.line(f"history: run {run_id} recorded in {db_path}")
