@@ -82,7 +82,8 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     (strict about inferred rules where the fault is in JUDGED_STRICTLY)."""
     folder = workdir / (fault or "no-fault")
     command = [sys.executable, "-m", "pytest", *_suite_paths(fault, targeted), "-q", "-p", "no:cacheprovider",
-               "--device-profile", profile, "--report-dir", str(folder), "--tb=no"]
+               "--device-profile", profile, "--report-dir", str(folder), "--tb=no",
+               "--history", "off"]  # a fault's run says nothing about a device: not in the history
     if fault:
         command += ["--sim-fault", fault]
     if fault in JUDGED_STRICTLY:
