@@ -155,10 +155,12 @@ def _phase(item, when: str, failed: bool = False) -> None:
     reporting.attach_evidence(item, None, report)  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize(("policy", "teardown_fails", "kept"), [
-    ("failed", False, False), ("failed", True, True), ("all", False, True)])
-def test_trace_kept_by_policy_and_teardown_failure(tmp_path, policy, teardown_fails, kept):
+@pytest.mark.parametrize(("policy", "teardown_fails", "shared", "kept"), [
+    ("failed", False, False, False), ("failed", True, False, True), ("all", False, False, True),
+    ("failed", False, True, True)])  # shared: other verdicts rest on its frames (the periodic capture)
+def test_trace_kept_by_policy_and_teardown_failure(tmp_path, policy, teardown_fails, shared, kept):
     item = _fake_item(tmp_path, policy)
+    item.stash[EVIDENCE].keep_trace = shared
     trace = item.stash[EVIDENCE].trace_path
     _phase(item, "setup")
     _phase(item, "call")

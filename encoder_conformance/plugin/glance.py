@@ -101,9 +101,9 @@ def skip_reason_key(reason: str) -> str:
 def _banner(summary: RunSummary) -> str:
     verdict = summary.overall
     counts = Counter(r.outcome for r in summary.results)
-    figures = ", ".join(f"{counts[key]} {label}" for key, label in (
-        ("passed", "passed"), ("failed", "failed"), ("error", "errors"), ("warning", "warnings"),
-        ("skipped", "skipped")) if counts[key])
+    figures = ", ".join(f"{counts[key]} {label if counts[key] > 1 else label.removesuffix('s')}"
+                        for key, label in (("passed", "passed"), ("failed", "failed"), ("error", "errors"),
+                                           ("warning", "warnings"), ("skipped", "skipped")) if counts[key])
     serial = f" &middot; serial {escape(summary.serial)}" if summary.serial else ""
     duration = f", {summary.duration_s:.0f} s" if summary.duration_s else ""
     why = f"<div>could not test: {escape(summary.could_not_test)}</div>" if summary.could_not_test else ""

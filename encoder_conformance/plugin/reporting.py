@@ -21,7 +21,6 @@ from .verdicts import strict as verdicts_strict
 REPORT_DIR = pytest.StashKey[Path]()
 ALLURE_WRITER = pytest.StashKey[BackgroundWriter]()
 IDENTITY = pytest.StashKey[dict[str, str]]()
-_KEEP_TRACE = pytest.StashKey[bool]()  # a phase of the test failed, or it passed with a warning
 _CALL_REPORT = pytest.StashKey[pytest.TestReport]()
 TRACE_LINKS = ("bus trace (ASC)", "bus trace (candump log)")
 
@@ -147,7 +146,7 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
     if evidence is None:
         return
     if report.failed or ("verdict", "warning") in report.user_properties:
-        item.stash[_KEEP_TRACE] = True
+        evidence.keep_trace = True
     if report.when == "teardown":
         settle_trace(item)
     if report.when != "call":
@@ -200,7 +199,7 @@ def settle_trace(item: pytest.Item) -> None:
     evidence = item.stash.get(EVIDENCE, None)
     if evidence is None or evidence.trace_path is None:
         return
-    if trace_policy(item.config) != "failed" or item.stash.get(_KEEP_TRACE, False):
+    if trace_policy(item.config) != "failed" or evidence.keep_trace:
         return
     for path in (evidence.trace_path, evidence.trace_path.with_suffix(".log")):
         path.unlink(missing_ok=True)
