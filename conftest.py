@@ -95,7 +95,7 @@ def pytest_html_report_title(report) -> None:
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_html_results_summary(prefix: list[str], summary: list[str], postfix: list[str], session) -> None:
-    reporting.html_summary(prefix, session, lifecycle.summary_lines(session.config))
+    reporting.html_summary(prefix, session, run_record.completed(session), lifecycle.summary_lines(session.config))
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:

@@ -40,6 +40,8 @@ def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
         argv.append("--strict-inferred")  # pytest's own --strict is about markers and config
     for fault in args.sim_fault:
         argv += ["--sim-fault", fault]
+    if args.trace:
+        argv += ["--bus-trace", args.trace]  # pytest's own --trace is its debugger
     status = int(pytest.main(argv + _pytest_arguments(extra)))
     # pytest's own 'interrupted' (2) comes only from a Ctrl-C before the run's signal handling was set up
     return RunExit.INTERRUPTED if status == pytest.ExitCode.INTERRUPTED else status
@@ -260,6 +262,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--strict", action="store_true",
                      help="fail a device also on rules we only inferred (pytest option --strict-inferred); by "
                           "default they give warnings. SDO abort codes: --abort-codes exact|family (to pytest)")
+    run.add_argument("--trace", choices=("failed", "all", "none"),
+                     help="which tests keep their bus trace (ASC and candump log): failed (default: failed, error "
+                          "and warning tests), all, none")
     run.set_defaults(func=_cmd_run)
 
     restore = sub.add_parser("restore", help="put a device back as a run's snapshot found it (after a crash)")

@@ -89,8 +89,13 @@ class FrameLog(can.Listener):
         )
         self.on_message_received(copy)
 
-    def add_listener(self, listener: can.Listener) -> None:
+    def add_listener(self, listener: can.Listener, replay_from: Mark | None = None) -> None:
+        """``listener`` gets every frame from now on; with ``replay_from``, first the frames since that mark still
+        in the log (at once, under the lock: none is missed or given twice)."""
         with self._cond:
+            if replay_from is not None:
+                for msg in self._after(replay_from.seq):
+                    listener.on_message_received(msg)
             self._listeners.append(listener)
 
     def remove_listener(self, listener: can.Listener) -> None:

@@ -58,6 +58,7 @@ class Evidence:
     deviations: list[tuple[str, str]] = field(default_factory=list)  # (quirk id, text)
     notes: list[str] = field(default_factory=list)
     trace_path: Path | None = None
+    keep_trace: bool = False  # kept under --bus-trace failed: the test failed or warned, or other verdicts rest on it
     basis: Basis | None = None  # set where a test knows better than its spec marker (see verdict_basis)
     basis_source: str | None = None  # the clause or manual section the verdict rests on
     inferred: list[InferredProblem] = field(default_factory=list)

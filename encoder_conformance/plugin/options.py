@@ -17,6 +17,8 @@ from ..station import Station, StationError, StationPower, load_station
 from . import verdicts
 
 PROFILE_ENV = "ENCODER_CONFORMANCE_PROFILE"
+TRACE_OPTION = "--bus-trace"
+TRACE_POLICIES = ("failed", "all", "none")
 
 
 @dataclass(frozen=True)
@@ -107,6 +109,10 @@ def add_options(parser: pytest.Parser) -> None:
     group.addoption("--fuzz-budget", default=None, type=float, metavar="SECONDS",
                     help="wall-clock time each SDO fuzz test may spend sending examples; once spent, it stops "
                          "(default: no limit, the hypothesis profile's example count decides; set it on a bench)")
+    group.addoption(TRACE_OPTION, choices=TRACE_POLICIES, default="failed",
+                    help="which tests keep their bus trace (traces/<test>.asc and .log, candump format): 'failed' "
+                         "(default: failed, error and warning tests), 'all', or 'none' (pytest's own --trace is its "
+                         "debugger; `encoder-conformance run --trace` sets this)")
     group.addoption("--allure", action="store_true", default=False,
                     help="also write allure-pytest results (allure-results/ in the report folder; render with "
                          "`npx allure generate`). Off by default: about 3,400 files and 3 s of a 14 s WDGA run")
@@ -219,3 +225,7 @@ def _power_settings(config: pytest.Config, station: Station | None, station_path
 def settings_of(config: pytest.Config) -> RunSettings:
     return config.stash[SETTINGS]
 
+
+def trace_policy(config: pytest.Config) -> str:
+    """Which tests keep their bus trace: failed (and warnings), all, or none."""
+    return str(config.getoption(TRACE_OPTION, default="failed"))

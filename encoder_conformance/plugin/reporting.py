@@ -10,15 +10,23 @@ from pathlib import Path
 import pytest
 
 from ..paths import REPO_ROOT, SUITES_DIR
+from ..run_summary import RunSummary
 from .allure_writer import BackgroundWriter, write_in_background
 from .evidence import EVIDENCE
-from .options import settings_of
-from .verdicts import add_property, html_section, terminal_lines
+from .glance import Deviation, PageContext, render, skip_reason_key
+from .options import settings_of, trace_policy
+from .verdicts import STRICT_OPTION, add_property, terminal_lines
 from .verdicts import strict as verdicts_strict
 
 REPORT_DIR = pytest.StashKey[Path]()
 ALLURE_WRITER = pytest.StashKey[BackgroundWriter]()
 IDENTITY = pytest.StashKey[dict[str, str]]()
+_CALL_REPORT = pytest.StashKey[pytest.TestReport]()
+TRACE_LINKS = ("bus trace (ASC)", "bus trace (candump log)")
+
+#: pytest-html's own "Environment" table (above everything, 20 rows) and its "Summary" heading are hidden:
+#: the first screen is ours, and the environment is folded into it (glance's settings)
+HIDE_PYTEST_HTML = "<style>#environment-header,#environment,.summary__data>h2{display:none}</style>"
 
 
 def runs_suites(config: pytest.Config) -> bool:
@@ -41,6 +49,7 @@ def configure_outputs(config: pytest.Config) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "traces").mkdir(exist_ok=True)
     config.stash[REPORT_DIR] = folder
+    config.pluginmanager.register(HtmlTable(), "encoder-conformance-html-table")
     option = config.option
     if not getattr(option, "htmlpath", None):
         option.htmlpath = str(folder / "report.html")
@@ -131,10 +140,18 @@ def header_lines(config: pytest.Config) -> list[str]:
 
 
 def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pytest.TestReport) -> None:
-    """Add measurements, deviations and the trace link to the HTML report and the allure result."""
+    """Add measurements, deviations and the trace link to the HTML report and the allure result; after the
+    test's last phase, keep or drop its trace (--bus-trace)."""
     evidence = item.stash.get(EVIDENCE, None)
-    if evidence is None or report.when != "call":
+    if evidence is None:
         return
+    if report.failed or ("verdict", "warning") in report.user_properties:
+        evidence.keep_trace = True
+    if report.when == "teardown":
+        settle_trace(item)
+    if report.when != "call":
+        return
+    item.stash[_CALL_REPORT] = report
     dut = getattr(item, "funcargs", {}).get("dut")
     if dut is not None:  # what the DUT layer noticed during the test (late SDO answers, family abort codes)
         evidence.notes.extend(dut.tester_notes)
@@ -167,44 +184,75 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
             add_property(item, report, name, value)
     folder = report_dir(item.config)
     if evidence.trace_path and evidence.trace_path.exists() and folder:
-        relative = evidence.trace_path.relative_to(folder).as_posix()
-        extras.append(html_extras.url(relative, name="bus trace (ASC)"))
+        relative = evidence.trace_path.relative_to(folder)
+        extras.append(html_extras.url(relative.as_posix(), name=TRACE_LINKS[0]))
+        extras.append(html_extras.url(relative.with_suffix(".log").as_posix(), name=TRACE_LINKS[1]))
     report.extras = extras
     for quirk_id, _ in evidence.deviations:
         add_property(item, report, "documented_deviation", quirk_id)
 
 
-def html_summary(prefix: list[str], session: pytest.Session, run_lines: list[tuple[str, bool]]) -> None:
-    """Run outcome and device custody (alarms in red), the identity read, the documented deviations."""
+def settle_trace(item: pytest.Item) -> None:
+    """After the teardown (the trace writers have stopped): with --bus-trace failed, a test that passed or
+    skipped loses its trace files and the report its links; a failure, an error in any phase (teardown too)
+    or a warning keeps them."""
+    evidence = item.stash.get(EVIDENCE, None)
+    if evidence is None or evidence.trace_path is None:
+        return
+    if trace_policy(item.config) != "failed" or evidence.keep_trace:
+        return
+    for path in (evidence.trace_path, evidence.trace_path.with_suffix(".log")):
+        path.unlink(missing_ok=True)
+    evidence.trace_path = None
+    call = item.stash.get(_CALL_REPORT, None)  # pytest-html reads the call's extras at the teardown's logreport
+    if call is not None:
+        call.extras = [e for e in getattr(call, "extras", []) if e.get("name") not in TRACE_LINKS]
+
+
+class HtmlTable:
+    """pytest-html's results table: a skip's log shows its reason, not pytest's (file, line, 'Skipped: ...')."""
+
+    @pytest.hookimpl(optionalhook=True)
+    def pytest_html_results_table_html(self, report: pytest.TestReport, data: list[str]) -> None:
+        if isinstance(report.longrepr, tuple) and len(report.longrepr) == 3 and data:
+            data[0] = html.escape(skip_reason(report)) + "\n"
+
+
+def skip_reason(report: pytest.TestReport) -> str:
+    """The reason text of a skip report (pytest keeps it as (file, line, 'Skipped: reason'))."""
+    longrepr = report.longrepr
+    text = str(longrepr[2]) if isinstance(longrepr, tuple) else str(longrepr)
+    return text.removeprefix("Skipped: ")
+
+
+def deviations_relied_on(config: pytest.Config) -> dict[str, int]:
+    """How many verdicts of this run relied on each documented deviation (quirk id -> tests)."""
+    reporter = config.pluginmanager.get_plugin("terminalreporter")
+    stats = reporter.stats if reporter is not None else {}
+    counts: dict[str, int] = {}
+    for rep in stats.get("passed", []) + stats.get("failed", []):
+        for key, value in rep.user_properties:
+            if key == "documented_deviation":
+                counts[value] = counts.get(value, 0) + 1
+    return counts
+
+
+def html_summary(prefix: list[str], session: pytest.Session, summary: RunSummary | None,
+                 run_lines: list[tuple[str, bool]]) -> None:
+    """The report's first screen (plugin/glance.py): verdict, identity, areas, failures; the rest folded."""
+    if summary is None:
+        return
     config = session.config
     profile = settings_of(config).loaded.profile
-    if profile.todo:
-        items = "".join(f"<li>{html.escape(todo)}</li>" for todo in profile.todo)
-        prefix.append(f"<h2 style='color:#b60'>{html.escape(draft_banner(profile))}</h2>"
-                      f"<details><summary>the assumptions (todo: in the profile)</summary><ol>{items}</ol></details>")
-    prefix.append(html_section(config))
-    if run_lines:
-        items = "".join(
-            f"<li style='color:{'#c00;font-weight:bold' if alarm else 'inherit'}'>{html.escape(text)}</li>"
-            for text, alarm in run_lines
-        )
-        prefix.append(f"<h2>The device on the bench: snapshot and restore</h2><ul>{items}</ul>")
-    settings = settings_of(config)
-    profile = settings.loaded.profile
-    identity = config.stash.get(IDENTITY, {})
-    rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in identity.items())
-    rows = rows or "<tr><td>not read</td></tr>"
-    prefix.append(f"<h2>Device identity (read from the device)</h2><table>{rows}</table>")
-    quirk_rows = "".join(
-        f"<tr><td>{html.escape(qid)}</td><td>{html.escape(q.title)}</td><td>{html.escape(q.manual)}</td>"
-        f"<td>{html.escape(q.deviates_from or '')}</td></tr>"
-        for qid, q in profile.quirks.items()
-    )
-    prefix.append(
-        f"<h2>Documented deviations of {html.escape(profile.id)} ({len(profile.quirks)})</h2>"
-        "<table><tr><th>id</th><th>deviation</th><th>manual</th><th>deviates from</th></tr>"
-        f"{quirk_rows}</table>"
-    )
+    relied = deviations_relied_on(config)
+    deviations = [Deviation(qid, q.title, q.manual, q.deviates_from or "", relied.get(qid, 0))
+                  for qid, q in profile.quirks.items()]
+    environment = {str(k): str(v) for k, v in (_metadata(config) or {}).items()}
+    mode = "failures (--strict-inferred)" if verdicts_strict(config) else f"warnings ({STRICT_OPTION} fails them)"
+    context = PageContext(custody=run_lines, deviations=deviations,
+                          draft=draft_banner(profile) if profile.todo else None, todo=list(profile.todo),
+                          environment=environment, inferred_mode=mode)
+    prefix.append(HIDE_PYTEST_HTML + render(summary, context))
 
 
 def terminal_summary(terminalreporter, config: pytest.Config,  # noqa: ANN001 - pytest type
@@ -228,22 +276,16 @@ def terminal_summary(terminalreporter, config: pytest.Config,  # noqa: ANN001 - 
         terminalreporter.write_sep("-", "the device on the bench")
         for text, alarm in run_lines:
             terminalreporter.write_line(text, red=alarm, bold=alarm)
-    stats = terminalreporter.stats
-    skipped = stats.get("skipped", [])
+    skipped = terminalreporter.stats.get("skipped", [])
     if skipped:
         reasons: dict[str, int] = {}
         for rep in skipped:
-            reason = rep.longrepr[2] if isinstance(rep.longrepr, tuple) else str(rep.longrepr)
-            key = reason.replace("Skipped: ", "").split(" (")[0]
+            key = skip_reason_key(skip_reason(rep))
             reasons[key] = reasons.get(key, 0) + 1
         terminalreporter.write_sep("-", "skipped, by reason")
         for reason, count in sorted(reasons.items(), key=lambda kv: -kv[1]):
             terminalreporter.write_line(f"{count:4d}  {reason}")
-    deviations: dict[str, int] = {}
-    for rep in stats.get("passed", []) + stats.get("failed", []):
-        for key, value in rep.user_properties:
-            if key == "documented_deviation":
-                deviations[value] = deviations.get(value, 0) + 1
+    deviations = deviations_relied_on(config)
     if deviations:
         terminalreporter.write_sep("-", "documented deviations relied on")
         for quirk_id, count in sorted(deviations.items()):

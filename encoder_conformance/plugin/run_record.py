@@ -120,8 +120,11 @@ def note_report(item: pytest.Item, report: pytest.TestReport) -> None:
                                       round(report.duration, 3), trace))
 
 
-def finish(session: pytest.Session) -> RunSummary | None:
-    """Complete the summary (identity, exit code, device custody) and write it to the report folder."""
+def completed(session: pytest.Session) -> RunSummary | None:
+    """The summary with what is known at the session's end (identity, device custody, kept traces).
+
+    Called by the HTML report's summary hook too, which pytest-html runs before ``finish`` (inside the
+    conftest's sessionfinish wrapper); repeating it is harmless."""
     config = session.config
     summary, folder = summary_of(config), report_dir(config)
     if summary is None or folder is None:
@@ -133,8 +136,16 @@ def finish(session: pytest.Session) -> RunSummary | None:
     if state is not None:
         summary.could_not_test = state.stopped
         summary.device_restored = None if state.record is None else state.record.ok
-    for result in summary.results:  # traces of passed tests may have been dropped (--trace failed)
+    for result in summary.results:  # traces of passed tests may have been dropped (--bus-trace failed)
         if result.trace and not (Path(folder) / result.trace).exists():
             result.trace = None
-    summary.write(folder)
+    return summary
+
+
+def finish(session: pytest.Session) -> RunSummary | None:
+    """Complete the summary and write it to the report folder."""
+    summary = completed(session)
+    folder = report_dir(session.config)
+    if summary is not None and folder is not None:
+        summary.write(folder)
     return summary

@@ -8,7 +8,6 @@ the summaries) unless the run asks for ``--strict-inferred``. The summaries coun
 
 from __future__ import annotations
 
-import html
 from collections import Counter
 from dataclasses import dataclass, field
 
@@ -93,19 +92,3 @@ def terminal_lines(config: pytest.Config) -> tuple[list[str], list[str]]:
     warnings = [f"{test}: {problem}" for test, problems in tally.warnings for problem in problems]
     return tally.lines(), warnings
 
-
-def html_section(config: pytest.Config) -> str:
-    """The report's first section: verdicts per basis, and the warnings on inferred rules."""
-    tally = tally_of(config)
-    mode = "failures (--strict-inferred)" if strict(config) else f"warnings (pass {STRICT_OPTION} to fail them)"
-    rows = "".join(f"<li>{html.escape(line)}</li>" for line in tally.lines()) or "<li>no verdicts</li>"
-    text = (f"<h2>Verdicts by what they rest on</h2><p>cia: a CiA clause; manual: the device's manual; "
-            f"inferred: our reading where neither says (judged as {html.escape(mode)})</p><ul>{rows}</ul>")
-    if tally.warnings:
-        items = "".join(
-            f"<li><b>{html.escape(test)}</b>: {html.escape(problem)}</li>"
-            for test, problems in tally.warnings for problem in problems
-        )
-        text += (f"<h3 style='color:#b60'>Warnings: inferred rules broken ({len(tally.warnings)} tests)</h3>"
-                 f"<ul>{items}</ul>")
-    return text
