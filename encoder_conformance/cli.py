@@ -27,6 +27,7 @@ def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
     for profile in args.profile:
         usage.check_profile("--profile", profile)
     usage.check_faults("--fault", args.fault)
+    usage.check_output_file("--nvm", args.nvm)
     try:
         plan = plan_nodes(args.profile, args.node_id, args.copies, args.unconfigured)
         return serve(plan, args.listen, args.control, args.fault, args.nvm, args.ready_line)
@@ -112,6 +113,7 @@ def _cmd_profile_from_eds(args: argparse.Namespace, extra: list[str]) -> int:
         print(f"from-eds: {eds}: no such file; give the path of the device's EDS", file=sys.stderr)
         return RunExit.USAGE_ERROR
     out = Path(args.output) if args.output else None
+    usage.check_output_file("-o", out)
     # without --id the id follows the output file's name: a profile's id must equal its file name
     profile_id = args.id or (out.stem if out is not None else None)
     try:
@@ -142,6 +144,7 @@ def _cmd_profile_to_eds(args: argparse.Namespace, extra: list[str]) -> int:
     usage.check_profile("profile", args.profile)
     loaded = load_profile(args.profile)
     out = Path(args.output or f"{loaded.profile.id}.eds")
+    usage.check_output_file("-o", out)
     export_eds(loaded.profile, out, args.node_id)
     print(f"wrote {out}")
     return 0

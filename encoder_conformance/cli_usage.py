@@ -115,6 +115,16 @@ def check_report_dir(option: str, path: str | None) -> None:
         raise UsageError(f"{option} {path}: is a file, not a folder; give a folder (it is created if missing)")
 
 
+def check_output_file(option: str, path: Path | None) -> None:
+    """A file the command will write: not a folder, and its folder exists."""
+    if path is None:
+        return
+    if path.is_dir():
+        raise UsageError(f"{option} {path}: is a folder; give a file name (in that folder, e.g. {path / 'NAME'})")
+    if not path.parent.is_dir():
+        raise UsageError(f"{option} {path}: the folder {path.parent} does not exist; create it or give another path")
+
+
 def profile_files(names: Iterable[str]) -> list[str]:
     """The profile files to validate: names as given, a folder as every *.yaml in it."""
     files: list[str] = []

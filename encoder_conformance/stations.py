@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
 
+from .cli_usage import UsageError
 from .exit_codes import DESCRIPTIONS, RunExit, interrupted_by
 from .paths import REPO_ROOT
 from .run_summary import RunSummary
@@ -102,8 +103,17 @@ def strip_options(arguments: Sequence[str], options: set[str]) -> list[str]:
 
 def plan_stations(station_files: Sequence[str], parent: Path) -> list[StationRun]:
     """One run per station file; its report folder is named after the station (the file's name if two
-    stations share a name)."""
-    names = [load_station(Path(path)).station for path in station_files]
+    stations share a name). UsageError if two stations name the same CAN channel."""
+    stations = [load_station(Path(path)) for path in station_files]
+    buses: dict[tuple[str, str], str] = {}
+    for path, station in zip(station_files, stations, strict=True):
+        if station.can is not None and station.can.channel is not None:
+            bus = (station.can.interface, station.can.channel)
+            if bus in buses:
+                raise UsageError(f"--station {path}: uses the CAN channel {bus[1]} ({bus[0]}) of --station "
+                                 f"{buses[bus]}; parallel stations need a bus each")
+            buses[bus] = path
+    names = [station.station for station in stations]
     runs = []
     for path, name in zip(station_files, names, strict=True):
         folder_name = name if names.count(name) == 1 else f"{name}-{Path(path).stem}"

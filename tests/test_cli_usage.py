@@ -112,6 +112,16 @@ def test_from_eds_of_a_missing_file(capsys, tmp_path):
     assert "EDS" in line
 
 
+def test_sim_nvm_naming_a_folder(capsys, tmp_path):
+    line = usage_error(capsys, "sim", "--profile", "waycon-sx", "--nvm", str(tmp_path))
+    assert f"--nvm {tmp_path}: is a folder" in line
+
+
+def test_to_eds_into_a_missing_folder(capsys, tmp_path):
+    line = usage_error(capsys, "profile", "to-eds", "waycon-sx", "-o", str(tmp_path / "no" / "x.eds"))
+    assert "does not exist" in line
+
+
 def test_run_report_dir_naming_a_file(capsys, tmp_path):
     existing = tmp_path / "a-file"
     existing.write_text("x", encoding="utf-8")

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+from encoder_conformance.cli_usage import UsageError
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.run_summary import RunSummary, TestResult
 from encoder_conformance.stations import (
@@ -61,6 +62,16 @@ def test_each_station_gets_its_folder_and_the_command(two_stations, tmp_path):
     command = child_command("accept", runs[1], ["--station", two_stations[0], "--profile", "waycon-sx"])
     assert command[3:] == ["accept", "--station", two_stations[1], "--report-dir", str(tmp_path / "out" / "bench-b"),
                            "--profile", "waycon-sx"]
+
+
+def test_two_stations_on_one_channel_are_refused(tmp_path):
+    files = []
+    for name in ("a", "b"):
+        path = tmp_path / f"{name}.toml"
+        path.write_text(f'station = "{name}"\n[can]\ninterface = "pcan"\nchannel = "PCAN_USBBUS1"\n', encoding="utf-8")
+        files.append(str(path))
+    with pytest.raises(UsageError, match="uses the CAN channel PCAN_USBBUS1"):
+        plan_stations(files, tmp_path / "out")
 
 
 def test_a_row_from_the_summary_and_one_without(tmp_path):
