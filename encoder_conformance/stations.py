@@ -15,6 +15,7 @@ the restore command to finish the job).
 
 from __future__ import annotations
 
+import os
 import queue
 import signal
 import subprocess
@@ -34,6 +35,7 @@ from .station import load_station
 
 STOP_BOUND_S = 120.0  # a restore after Ctrl-C takes seconds; a run that needs longer is stuck
 CONSOLE_LOG = "console.log"
+CLEAR = "\r\x1b[K"  # back to the start of the line, erase it
 
 #: exit codes from least to most serious: the combined run ends with the most serious one
 SEVERITY: tuple[int, ...] = (RunExit.PASSED, RunExit.NO_TESTS, RunExit.NON_CONFORMANT, RunExit.COULD_NOT_TEST,
@@ -189,10 +191,22 @@ def _start(command: str, run: StationRun, arguments: Sequence[str], ended: queue
     threading.Thread(target=wait, name=f"station-{run.name}", daemon=True).start()
 
 
+def status_line(runs: Sequence[StationRun], now: float) -> str:
+    """'running: bench-a 0:42, bench-b 0:42' (the stations still running and for how long)."""
+    from .plugin.progress import clock_text
+
+    running = [f"{run.name} {clock_text(now - run.started)}" for run in runs if run.exit_code is None]
+    return "running: " + ", ".join(running)
+
+
 def _wait_all(runs: list[StationRun], ended: queue.Queue[StationRun], forward: _ForwardSignals) -> None:
-    """Report each run as it ends; after a forwarded Ctrl-C, kill what is still running at the bound."""
+    """Report each run as it ends; after a forwarded Ctrl-C, kill what is still running at the bound. On a
+    terminal (not in CI) a line below says which stations still run, and for how long."""
+    live = sys.stdout.isatty() and not os.environ.get("CI")
     remaining = len(runs)
     while remaining:
+        if live:
+            print(f"{CLEAR}{status_line(runs, time.monotonic())}", end="", flush=True)
         # wakes once a second: a signal handler cannot interrupt the wait, and its deadline must be seen
         timeout = 1.0 if forward.deadline is None else min(max(forward.deadline - time.monotonic(), 0.0), 1.0)
         try:
@@ -200,6 +214,7 @@ def _wait_all(runs: list[StationRun], ended: queue.Queue[StationRun], forward: _
         except queue.Empty:
             if forward.deadline is None or time.monotonic() < forward.deadline:
                 continue
+            print(CLEAR if live else "", end="", flush=True)
             for run in runs:
                 if run.process is not None and run.process.poll() is None:
                     print(f"station {run.name}: still running {STOP_BOUND_S:.0f} s after the stop; killed. Its "
@@ -209,6 +224,7 @@ def _wait_all(runs: list[StationRun], ended: queue.Queue[StationRun], forward: _
             forward.deadline = None
             continue
         remaining -= 1
+        print(CLEAR if live else "", end="")
         verdict = DESCRIPTIONS.get(run.exit_code, f"exit {run.exit_code}")  # type: ignore[call-overload]
         print(f"station {run.name}: ended after {run.ended - run.started:.0f} s: {verdict} (exit {run.exit_code})",
               flush=True)

@@ -23,6 +23,7 @@ from encoder_conformance.stations import (
     format_table,
     plan_stations,
     row_of,
+    status_line,
     strip_options,
     worst_exit,
 )
@@ -62,6 +63,12 @@ def test_each_station_gets_its_folder_and_the_command(two_stations, tmp_path):
     command = child_command("accept", runs[1], ["--station", two_stations[0], "--profile", "waycon-sx"])
     assert command[3:] == ["accept", "--station", two_stations[1], "--report-dir", str(tmp_path / "out" / "bench-b"),
                            "--profile", "waycon-sx"]
+
+
+def test_the_status_line_names_the_stations_still_running():
+    runs = [StationRun("a.toml", "bench-a", Path("a"), started=10.0), StationRun("b.toml", "bench-b", Path("b"),
+                                                                                   started=10.0, exit_code=0)]
+    assert status_line(runs, now=75.0) == "running: bench-a 1:05"
 
 
 def test_two_stations_on_one_channel_are_refused(tmp_path):

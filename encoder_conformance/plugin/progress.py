@@ -43,7 +43,8 @@ def wanted(config: pytest.Config, isatty: bool, environ: dict[str, str] | os._En
     return config.pluginmanager.get_plugin("terminalreporter") is not None and runs_suites(config)
 
 
-def _clock(seconds: float) -> str:
+def clock_text(seconds: float) -> str:
+    """'1:05', '1:02:03'."""
     minutes, secs = divmod(int(seconds + 0.5), 60)
     return f"{minutes // 60}:{minutes % 60:02d}:{secs:02d}" if minutes >= 60 else f"{minutes}:{secs:02d}"
 
@@ -72,9 +73,9 @@ def format_line(tally: Tally, elapsed_s: float, width: int, testing_s: float | N
     """'PDO  test 123 of 456  1:23 elapsed  ~2:10 left  2 failed, 1 warnings', cut to the terminal's width.
     ``elapsed_s`` counts from the start of the run, ``testing_s`` from the first test (the estimate's base:
     collection and the device snapshot are no test time)."""
-    parts = [f"{tally.area or 'starting'}", f"test {tally.started} of {tally.total}", f"{_clock(elapsed_s)} elapsed"]
+    parts = [tally.area or "starting", f"test {tally.started} of {tally.total}", f"{clock_text(elapsed_s)} elapsed"]
     remaining = tally.remaining_s(elapsed_s if testing_s is None else testing_s)
-    parts.append(f"~{_clock(remaining)} left" if remaining is not None else "estimating")
+    parts.append(f"~{clock_text(remaining)} left" if remaining is not None else "estimating")
     counts = [f"{n} {word}" for n, word in ((tally.failed, "failed"), (tally.warnings, "warnings"),
                                             (tally.skipped, "skipped")) if n]
     if counts:
