@@ -201,6 +201,7 @@ _Parser = OneLineParser  # the name the sub-command modules are given (add_lss_p
 _positive = positive_int
 _bus_arguments = bus_arguments
 
+
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="encoder-conformance", description=__doc__,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
