@@ -15,7 +15,8 @@ from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence",
                   "fixtures.emcy",
-                  "fixtures.lss", "fixtures.encoder"]
+                  "fixtures.lss", "fixtures.encoder",
+                  "encoder_conformance.plugin.progress"]
 
 hypothesis_profiles.load()  # ci, bench, soak, dev (HYPOTHESIS_PROFILE)
 

@@ -11,50 +11,29 @@ import os
 import sys
 from pathlib import Path
 
+from . import cli_usage as usage
+from .cli_usage import OneLineParser, UsageError, bus_arguments, host_port, positive_int
+from .cli_usage import node_id_arg as node_id_type
 from .errors import BusSetupError, ProfileError
 from .exit_codes import RunExit, interrupted_by
 from .history.cli import add_history_parser
 from .lss_cli import add_lss_parser
-from .paths import DEFAULT_PROFILE, SUITES_DIR
-
-
-def _pytest_arguments(extra: list[str]) -> list[str]:
-    """What goes to pytest: the arguments ``run`` does not know, with the ``--`` that may separate them dropped
-    (to pytest a ``--`` would turn every option after it into a file name)."""
-    return [arg for arg in extra if arg != "--"]
-
-
-def _cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
-    import pytest
-
-    argv = [str(SUITES_DIR), "--device-profile", args.profile, "-p", "no:cacheprovider"]
-    for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir", "station",
-                   "power_off_cmd", "power_on_cmd", "power_off_time"):
-        value = getattr(args, option)
-        if value is not None:
-            argv += [f"--{option.replace('_', '-')}", str(value)]
-    for flag in ("allow_destructive", "power_manual", "delivery_state"):
-        if getattr(args, flag):
-            argv.append(f"--{flag.replace('_', '-')}")
-    if args.strict:
-        argv.append("--strict-inferred")  # pytest's own --strict is about markers and config
-    for fault in args.sim_fault:
-        argv += ["--sim-fault", fault]
-    if args.trace:
-        argv += ["--bus-trace", args.trace]  # pytest's own --trace is its debugger
-    status = int(pytest.main(argv + _pytest_arguments(extra)))
-    # pytest's own 'interrupted' (2) comes only from a Ctrl-C before the run's signal handling was set up
-    return RunExit.INTERRUPTED if status == pytest.ExitCode.INTERRUPTED else status
+from .paths import DEFAULT_PROFILE
+from .run_cli import add_run_parser
 
 
 def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
     from .sim.serve import plan_nodes, serve
 
+    for profile in args.profile:
+        usage.check_profile("--profile", profile)
+    usage.check_faults("--fault", args.fault)
+    usage.check_output_file("--nvm", args.nvm)
     try:
         plan = plan_nodes(args.profile, args.node_id, args.copies, args.unconfigured)
-    except ValueError as exc:
-        args.parser.error(str(exc))
-    return serve(plan, args.listen, args.control, args.fault, args.nvm, args.ready_line)
+        return serve(plan, args.listen, args.control, args.fault, args.nvm, args.ready_line)
+    except ValueError as exc:  # a combination of options, or a port that cannot be had
+        raise UsageError(str(exc)) from None
 
 
 def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
@@ -77,7 +56,7 @@ def _cmd_sim_control(args: argparse.Namespace, extra: list[str]) -> int:
 
     try:
         control = SimulatorControl(parse_address(args.control))
-    except (OSError, ValueError) as exc:
+    except OSError as exc:
         print(f"sim-control: cannot reach the control channel {args.control}: {exc}", file=sys.stderr)
         return RunExit.COULD_NOT_TEST
     try:
@@ -91,7 +70,7 @@ def _cmd_profile_validate(args: argparse.Namespace, extra: list[str]) -> int:
     from .profile.loader import load_profile
 
     status = 0
-    for name in args.files:
+    for name in usage.profile_files(args.files):
         try:
             loaded = load_profile(name)
         except ProfileError as exc:
@@ -135,6 +114,7 @@ def _cmd_profile_from_eds(args: argparse.Namespace, extra: list[str]) -> int:
         print(f"from-eds: {eds}: no such file; give the path of the device's EDS", file=sys.stderr)
         return RunExit.USAGE_ERROR
     out = Path(args.output) if args.output else None
+    usage.check_output_file("-o", out)
     # without --id the id follows the output file's name: a profile's id must equal its file name
     profile_id = args.id or (out.stem if out is not None else None)
     try:
@@ -162,8 +142,10 @@ def _cmd_profile_to_eds(args: argparse.Namespace, extra: list[str]) -> int:
     from .profile.eds import export_eds
     from .profile.loader import load_profile
 
+    usage.check_profile("profile", args.profile)
     loaded = load_profile(args.profile)
     out = Path(args.output or f"{loaded.profile.id}.eds")
+    usage.check_output_file("-o", out)
     export_eds(loaded.profile, out, args.node_id)
     print(f"wrote {out}")
     return 0
@@ -176,6 +158,8 @@ def _cmd_fault_matrix(args: argparse.Namespace, extra: list[str]) -> int:
     from .fault_matrix import format_matrix, run_matrix
     from .profile.loader import load_profile
 
+    usage.check_profile("--profile", args.profile)
+    usage.check_faults("--fault", args.fault)  # before the baseline run: a typo must not cost its 12 s
     faults = args.fault or faults_for(load_profile(args.profile).profile.effects)
     with tempfile.TemporaryDirectory(prefix="fault-matrix-") as workdir:
         baseline, results = run_matrix(args.profile, faults, Path(workdir), args.select, workers=args.workers,
@@ -196,6 +180,7 @@ def _cmd_repeat(args: argparse.Namespace, extra: list[str]) -> int:
 
     from .repeat_runs import repeat_runs
 
+    usage.check_profile("--profile", args.profile)
     with tempfile.TemporaryDirectory(prefix="repeat-") as workdir:
         result = repeat_runs(args.profile, args.runs, Path(workdir), args.select, args.parallel, args.busy)
     print(result.format())
@@ -213,59 +198,17 @@ def _cmd_faults(args: argparse.Namespace, extra: list[str]) -> int:
     return 0
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse with the suite's usage-error exit code (4) instead of argparse's 2."""
-
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.print_usage(sys.stderr)
-        self.exit(RunExit.USAGE_ERROR, f"{self.prog}: error: {message}\n")
-
-
-def _positive(text: str) -> int:
-    """argparse type: an integer >= 1."""
-    value = int(text) if text.strip().isdigit() else 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive whole number")
-    return value
-
-
-def _bus_arguments(parser: argparse.ArgumentParser, node_id: bool = True) -> None:
-    parser.add_argument("--can-interface", help="python-can interface (pcan, kvaser, socketcan, remote ...)")
-    parser.add_argument("--can-channel")
-    parser.add_argument("--can-bitrate", type=int)
-    if node_id:
-        parser.add_argument("--node-id", type=int)
+_Parser = OneLineParser  # the name the sub-command modules are given (add_lss_parser)
+_positive = positive_int
+_bus_arguments = bus_arguments
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="encoder-conformance", description=__doc__,
-                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    parser = OneLineParser(prog="encoder-conformance", description=__doc__,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
 
-    run = sub.add_parser("run", help="run the conformance suites (extra arguments go to pytest)",
-                         epilog="Arguments 'run' does not know go to pytest, with or without a '--' before them: "
-                                "e.g. 'run --profile waycon-sx -k test_pdo -x' or 'run -- --durations=10'.")
-    run.add_argument("--profile", default=DEFAULT_PROFILE,
-                     help=f"device profile id or file (default {DEFAULT_PROFILE})")
-    _bus_arguments(run)
-    run.add_argument("--report-dir", help="where to write the reports (default reports/<timestamp>-<profile>)")
-    run.add_argument("--allow-destructive", action="store_true",
-                     help="allow tests that change what the device remembers; the run puts it all back")
-    run.add_argument("--station", help="station file: the bench's CAN adapter, node-id and power switch")
-    run.add_argument("--power-off-cmd", help="shell command that switches the device off")
-    run.add_argument("--power-on-cmd", help="shell command that switches the device on")
-    run.add_argument("--power-manual", action="store_true", help="ask the operator to switch the power")
-    run.add_argument("--power-off-time", type=float, help="seconds the power stays off (default 1.0)")
-    run.add_argument("--delivery-state", action="store_true",
-                     help="the device is fresh from the factory: check its factory defaults as found")
-    run.add_argument("--sim-fault", action="append", default=[], help="simulator fault (see 'faults')")
-    run.add_argument("--strict", action="store_true",
-                     help="fail a device also on rules we only inferred (pytest option --strict-inferred); by "
-                          "default they give warnings. SDO abort codes: --abort-codes exact|family (to pytest)")
-    run.add_argument("--trace", choices=("failed", "all", "none"),
-                     help="which tests keep their bus trace (ASC and candump log): failed (default: failed, error "
-                          "and warning tests), all, none")
-    run.set_defaults(func=_cmd_run)
+    add_run_parser(sub)
 
     restore = sub.add_parser("restore", help="put a device back as a run's snapshot found it (after a crash)")
     restore.add_argument("--from", dest="snapshot", required=True,
@@ -284,15 +227,19 @@ def build_parser() -> argparse.ArgumentParser:
     add_history_parser(sub, _Parser)
 
     sim_control = sub.add_parser("sim-control", help="switch a served simulator's power (a bench power switch)")
-    sim_control.add_argument("--control", required=True, help="HOST:PORT of the simulator's control channel")
+    sim_control.add_argument("--control", required=True, type=host_port,
+                             help="HOST:PORT of the simulator's control channel")
     sim_control.add_argument("action", choices=["power-off", "power-on", "power-cycle"])
     sim_control.set_defaults(func=_cmd_sim_control)
 
     sim = sub.add_parser("sim", help="serve simulated devices on a python-can-remote endpoint")
     sim.add_argument("--profile", action="append", required=True, help="profile id or file (repeat for more nodes)")
-    sim.add_argument("--listen", default="127.0.0.1:54701", help="HOST:PORT for python-can-remote clients")
-    sim.add_argument("--control", default=None, help="HOST:PORT for the control channel (power cycle ...)")
-    sim.add_argument("--node-id", type=int, action="append", default=[], help="node-id per profile")
+    sim.add_argument("--listen", default="127.0.0.1:54701", type=host_port,
+                     help="HOST:PORT for python-can-remote clients (default 127.0.0.1:54701; port 0: any free one)")
+    sim.add_argument("--control", default=None, type=host_port,
+                     help="HOST:PORT for the control channel (power cycle ...; default: none)")
+    sim.add_argument("--node-id", type=node_id_type, action="append", default=[], metavar="1..127",
+                     help="node-ID per profile (default: the profile's)")
     sim.add_argument("--copies", type=_positive, default=1, metavar="N",
                      help="N units of the profile with serial numbers base, base+1, ... (the profile's "
                           "simulator.serial_number) and consecutive node-ids from --node-id or the profile's")
@@ -306,7 +253,8 @@ def build_parser() -> argparse.ArgumentParser:
     profile = sub.add_parser("profile", help="validate, list, import from EDS, export to EDS")
     psub = profile.add_subparsers(dest="profile_command", required=True)
     validate = psub.add_parser("validate", help="check profile files and print every problem")
-    validate.add_argument("files", nargs="+")
+    validate.add_argument("files", nargs="+", metavar="FILE_OR_FOLDER",
+                          help="profile files, or folders (every *.yaml in them)")
     validate.add_argument("--todo", action="store_true",
                           help="also list each profile's unconfirmed assumptions (todo:), numbered")
     validate.set_defaults(func=_cmd_profile_validate)
@@ -323,7 +271,7 @@ def build_parser() -> argparse.ArgumentParser:
     to_eds = psub.add_parser("to-eds", help="export a profile as an EDS")
     to_eds.add_argument("profile")
     to_eds.add_argument("-o", "--output")
-    to_eds.add_argument("--node-id", type=int)
+    to_eds.add_argument("--node-id", type=node_id_type, metavar="1..127")
     to_eds.set_defaults(func=_cmd_profile_to_eds)
 
     matrix = sub.add_parser("fault-matrix", help="run the suites once per fault: which tests catch which fault")
@@ -331,7 +279,7 @@ def build_parser() -> argparse.ArgumentParser:
     matrix.add_argument("--fault", action="append", default=[],
                         help="only these faults (default: every fault that can show on the profile)")
     matrix.add_argument("-k", dest="select", help="pytest -k expression selecting the tests")
-    matrix.add_argument("--workers", type=int, default=2, help="suite runs in parallel (default 2)")
+    matrix.add_argument("--workers", type=positive_int, default=2, help="suite runs in parallel (default 2)")
     matrix.add_argument("--targeted", action="store_true",
                         help="run each fault only against the suite modules it is made for (faster)")
     matrix.set_defaults(func=_cmd_fault_matrix)
@@ -339,8 +287,8 @@ def build_parser() -> argparse.ArgumentParser:
     repeat = sub.add_parser("repeat", help="repeat a run against the twin, several at a time: which verdicts are "
                                            "stable (timing limits on a loaded PC)")
     repeat.add_argument("--profile", default=DEFAULT_PROFILE)
-    repeat.add_argument("--runs", type=int, default=20, help="runs in all (default 20)")
-    repeat.add_argument("--parallel", type=int, default=2, help="runs at a time (default 2)")
+    repeat.add_argument("--runs", type=positive_int, default=20, help="runs in all (default 20)")
+    repeat.add_argument("--parallel", type=positive_int, default=2, help="runs at a time (default 2)")
     repeat.add_argument("--busy", action="store_true", help="beside a process that keeps one core busy")
     repeat.add_argument("-k", dest="select", help="pytest -k expression selecting the tests")
     repeat.set_defaults(func=_cmd_repeat)
@@ -358,12 +306,14 @@ def main(argv: list[str] | None = None) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra and args.command != "run":
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # as given: what parallel stations pass on
     try:
         status = int(args.func(args, extra))
         return RunExit.INTERRUPTED if EARLY_SIGNALS and status == RunExit.PASSED else status
+    except UsageError as exc:
+        return usage.report(f"encoder-conformance {args.command}", str(exc))
     except ProfileError as exc:
-        print(exc, file=sys.stderr)
-        return RunExit.USAGE_ERROR
+        return usage.report(f"encoder-conformance {args.command}", usage.profile_error_text(exc))
     except KeyboardInterrupt:  # before the run took the device into custody: nothing to put back
         print("interrupted", file=sys.stderr)
         # exit now with the documented code: an interrupt that struck inside code the interpreter ran for

@@ -46,7 +46,11 @@ def configure_outputs(config: pytest.Config) -> None:
     station_reports = settings.station.reports if settings.station is not None else None
     parent = station_reports or REPO_ROOT / "reports"
     folder = Path(given) if given else parent / f"{stamp}-{settings.loaded.profile.id}"
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        raise pytest.UsageError(f"--report-dir {folder}: is a file, not a folder; give a folder (it is created if "
+                                "missing)") from None
     (folder / "traces").mkdir(exist_ok=True)
     config.stash[REPORT_DIR] = folder
     config.pluginmanager.register(HtmlTable(), "encoder-conformance-html-table")

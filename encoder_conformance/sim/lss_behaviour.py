@@ -25,6 +25,7 @@ from .lss_slave import LssSlave
 from .nmt_slave import NmtSlave
 from .nvm import NonVolatileMemory
 from .object_store import ObjectStore
+from .sim_log import log
 
 _STATES = {"pre-operational": NmtState.PRE_OPERATIONAL, "operational": NmtState.OPERATIONAL,
            "stopped": NmtState.STOPPED}
@@ -73,6 +74,8 @@ class LssBehaviour:
             self._rate_index = stored if isinstance(stored, int) and self._bus_index is not None else self._bus_index
 
     def activate_bit_timing(self, switch_delay_s: float) -> None:
+        log.info("node %d: LSS activate bit timing (table index %s) after %.0f ms", self._nmt.node_id,
+                 self.config.pending_bit_index, switch_delay_s * 1000)
         now = time.monotonic()
         self._switch = (now + switch_delay_s, self.config.pending_bit_index)
         self._silent_until = now + 2 * switch_delay_s
@@ -102,6 +105,8 @@ class LssBehaviour:
 
     # -- events from the slave ---------------------------------------------------------------------
     def configured(self, what: str) -> None:
+        pending = self.config.pending_node_id if what == "node_id" else self.config.pending_bit_index
+        log.info("node %d: LSS configure %s: %s pending", self._nmt.node_id, what.replace("_", "-"), pending)
         if what != "node_id":
             return
         if self._nmt.waiting_for_node_id and self._unconfigured is not None \
@@ -109,6 +114,7 @@ class LssBehaviour:
             self._start()
 
     def left_configuration(self) -> None:
+        log.info("node %d: LSS waiting state (configuration left)", self._nmt.node_id)
         if self._nmt.waiting_for_node_id:
             self._start()
 

@@ -51,6 +51,7 @@ from .sdo_channel import SdoChannel
 from .sdo_server import SdoServer
 from .send_repeat import SendRepeatCounters
 from .shaft import Shaft
+from .sim_log import EventLog
 from .store_commands import EncoderMemory, StoreCommands
 from .sync_counter import SyncCounterRules
 from .sync_objects import SyncCobIdRules, SyncConsumer, SyncLengthCheck
@@ -128,7 +129,9 @@ class SimulatedNode:
             repeat=self._built(fx.PdoSendRepeatCounters, SendRepeatCounters.from_params),
             response_max_s=profile.timing.pdo_response_max_ms / 1000,
         )
-        for behaviour in self._behaviours(codes):
+        events = EventLog(lambda: self.node_id)
+        self.nvm.listeners.append(events.nvm_changed)
+        for behaviour in (events, *self._behaviours(codes)):
             behaviour.register(hooks)
 
     def _behaviours(self, codes: dict[str, int]) -> list[Behaviour]:

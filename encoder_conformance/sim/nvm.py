@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 Key = tuple[int, int]
@@ -25,6 +26,8 @@ class NonVolatileMemory:
     def __init__(self, path: Path | None = None) -> None:
         self.path = path
         self._values: dict[Key, int | str] = {}
+        #: told of every change ("stored" / "removed", the keys): the simulator's log
+        self.listeners: list[Callable[[str, list[Key]], None]] = []
         if path is not None and path.exists():
             raw = json.loads(path.read_text(encoding="utf-8"))
             self._values = {_decode_key(k): v for k, v in raw.get("values", {}).items()}
@@ -38,11 +41,15 @@ class NonVolatileMemory:
     def put_many(self, values: dict[Key, int | str]) -> None:
         self._values.update(values)
         self._flush()
+        for listener in self.listeners:
+            listener("stored", list(values))
 
     def remove_many(self, keys: list[Key]) -> None:
         for key in keys:
             self._values.pop(key, None)
         self._flush()
+        for listener in self.listeners:
+            listener("removed (back to defaults)", keys)
 
     def snapshot(self) -> dict[Key, int | str]:
         return dict(self._values)

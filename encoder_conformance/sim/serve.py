@@ -7,13 +7,14 @@ for an LSS master to give them one.
 
 from __future__ import annotations
 
+import errno
 import json
-import logging
 import os
 import signal
 import sys
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +25,7 @@ from ..profile.quirk_effects import SecondNode
 from .control import parse_address, serve_control
 from .faults import FaultSet
 from .host import SimulatorHost
+from .sim_log import configure_logging, log
 
 
 @dataclass(frozen=True)
@@ -79,20 +81,27 @@ def serve(
     nvm: Path | None,
     ready_line: bool,
 ) -> int:
-    """Start the host, add the planned nodes, print the endpoints, run until signalled."""
+    """Start the host, add the planned nodes, print the endpoints, run until signalled.
+
+    ValueError: a port could not be taken (the message names the option and the fix; a usage error)."""
     # Timing: the default 5 ms GIL switch interval delays the scheduler thread by up to 5 ms when
     # the receive/remote threads are busy; 0.5 ms keeps heartbeat jitter well below the CI
     # tolerance (reference/python-stack-measured.md §6: p99 4.9 ms -> 1.8 ms).
     sys.setswitchinterval(0.0005)
-    # python-can-remote reports a dropped client through logging only: into the simulator's log
-    logging.basicConfig(level=logging.WARNING, stream=sys.stderr, format="%(asctime)s %(name)s: %(message)s")
+    configure_logging()
     host = SimulatorHost(channel=f"sim-{time.monotonic_ns()}")
+    try:  # the ports first: a port in use is one line, before any node has powered on
+        can_host, can_port = _bind("--listen", listen, lambda address: host.serve_remote(*address))
+        control_address = (_bind("--control", control, lambda address: serve_control(host, address))
+                           if control else None)
+    except ValueError:
+        host.shutdown()
+        raise
+    _log_plan([(node.profile.id, node.node_id) for node in plan], faults, nvm)
     for i, node in enumerate(plan):
         nvm_path = None if nvm is None else nvm.with_name(f"{nvm.stem}-{i}{nvm.suffix}") if i else nvm
         host.add_node(node.profile, node.node_id, nvm_path, FaultSet(faults), serial_number=node.serial_number)
     host.add_siblings()  # second_node quirk: the redundant interface's other node
-    can_host, can_port = host.serve_remote(*parse_address(listen))
-    control_address = serve_control(host, parse_address(control)) if control else None
     info = {
         "can": f"ws://{can_host}:{can_port}/",
         "control": control_address,
@@ -100,6 +109,7 @@ def serve(
         "nodes": [{**node.describe(), "serial_number": node.profile.simulator.serial_number}
                   for node in host.nodes],
     }
+    _log_start(host, info["can"], control_address)
     if ready_line:
         print("READY " + json.dumps(info), flush=True)
     else:
@@ -115,11 +125,46 @@ def serve(
             pass
     except KeyboardInterrupt:
         pass
+    log.info("stopping: %s", "SIGTERM" if stop.is_set() else "Ctrl-C")
     host.shutdown()  # the memory is written on every store, so nothing is left to save here
     sys.stdout.flush()
     sys.stderr.flush()
     # the web-socket server's threads make the interpreter's own shutdown take ~0.1 s, every run's end
     os._exit(0)
+
+
+def _bind(option: str, text: str, serve_at: Callable[[tuple[str, int]], tuple[str, int]]) -> tuple[str, int]:
+    """``serve_at(address)``; a port in use or an address that cannot be had becomes a ValueError naming
+    ``option`` and the fix."""
+    try:
+        address = parse_address(text)
+    except ValueError:
+        raise ValueError(f"{option} {text}: not HOST:PORT; give e.g. 127.0.0.1:54701 (port 0 picks a free one)") \
+            from None
+    try:
+        return serve_at(address)
+    except OSError as exc:
+        if exc.errno == errno.EADDRINUSE:
+            raise ValueError(f"{option} {text}: port {address[1]} is in use; choose another port (0 picks a free "
+                             f"one) or stop the program holding it") from None
+        raise ValueError(f"{option} {text}: cannot listen there ({exc.strerror or exc}); give an address of this "
+                         "machine, e.g. 127.0.0.1:PORT") from None
+
+
+def _log_plan(profiles: list[tuple[str, int | None]], faults: list[str], nvm: Path | None) -> None:
+    """What this simulator is about to play: before the nodes power on, so the log reads in order."""
+    nodes = ", ".join(f"{profile_id} (node-ID {node_id or 'from the profile'})" for profile_id, node_id in profiles)
+    log.info("starting: %s; faults: %s; NVM %s", nodes, ", ".join(faults) or "none", nvm or "in memory")
+
+
+def _log_start(host: SimulatorHost, can_url: str, control: tuple[str, int] | None) -> None:
+    """Where this simulator listens, and each node as it came up."""
+    log.info("serving the bus on %s; control channel %s", can_url,
+             f"{control[0]}:{control[1]}" if control else "none")
+    for node in host.nodes:
+        log.info("node %d: profile %s (%s), serial number %d, faults: %s", node.node_id, node.profile.id,
+                 node.profile.title, node.profile.simulator.serial_number, ", ".join(sorted(node.faults.names)) or
+                 "none")
 
 
 def _describe(host: SimulatorHost) -> str:
