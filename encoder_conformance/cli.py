@@ -1,4 +1,5 @@
-"""Command line: ``encoder-conformance run | restore | lss | sim | sim-control | profile | faults | fault-matrix``.
+"""Command line: ``encoder-conformance run | accept | restore | lss | sim | sim-control | profile | faults |
+fault-matrix``.
 
 Exit codes of ``run``, ``restore`` and ``lss`` follow exit_codes.RunExit; a usage error (bad option,
 unreadable profile) is 4 for every command.
@@ -11,6 +12,7 @@ import os
 import sys
 from pathlib import Path
 
+from .accept_cli import add_accept_parser
 from .errors import BusSetupError, ProfileError
 from .exit_codes import RunExit, interrupted_by
 from .lss_cli import add_lss_parser
@@ -275,6 +277,7 @@ def build_parser() -> argparse.ArgumentParser:
     restore.set_defaults(func=_cmd_restore)
 
     add_lss_parser(sub, _Parser, _bus_arguments)
+    add_accept_parser(sub, _bus_arguments)
 
     sim_control = sub.add_parser("sim-control", help="switch a served simulator's power (a bench power switch)")
     sim_control.add_argument("--control", required=True, help="HOST:PORT of the simulator's control channel")

@@ -143,18 +143,22 @@ def configure(config: pytest.Config) -> None:
         )
     if faults and not bus.simulated:
         raise pytest.UsageError("--sim-fault only works with the built-in simulator; remove --can-interface")
+    accepting = config.getoption("--run-kind", default="run") == "accept"
+    if accepting and config.getoption("--allow-destructive"):
+        raise pytest.UsageError("--allow-destructive: an acceptance changes nothing the device remembers; use 'run'")
     config.stash[SETTINGS] = RunSettings(
         loaded=loaded,
         bus=bus,
         node_id=node_id,
         node_id_source=source,
-        allow_destructive=bool(config.getoption("--allow-destructive")) or bus.simulated,
+        # an acceptance does on the twin what it does on a bench: nothing destructive, defaults as found
+        allow_destructive=bool(config.getoption("--allow-destructive")) or (bus.simulated and not accepting),
         sim_faults=faults,
         sim_inprocess=bool(config.getoption("--sim-inprocess")),
         sim_profile=load_profile(config.getoption("--sim-profile")) if config.getoption("--sim-profile") else loaded,
         power=_power_settings(config, station, station_path, bus.simulated),
         station=station,
-        delivery_state=bool(config.getoption("--delivery-state")),
+        delivery_state=bool(config.getoption("--delivery-state")) or accepting,  # goods-in: fresh from the factory
         shaft_drive=_shaft_drive(config, station, bus.simulated),
     )
 

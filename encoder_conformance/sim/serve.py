@@ -89,7 +89,10 @@ def serve(
     host = SimulatorHost(channel=f"sim-{time.monotonic_ns()}")
     for i, node in enumerate(plan):
         nvm_path = None if nvm is None else nvm.with_name(f"{nvm.stem}-{i}{nvm.suffix}") if i else nvm
-        host.add_node(node.profile, node.node_id, nvm_path, FaultSet(faults), serial_number=node.serial_number)
+        # booted: a served twin is switched on before a tester connects, as a device on a bench is (a run
+        # does not wait for a POSITAL's 4 s power-on boot before its first request)
+        host.add_node(node.profile, node.node_id, nvm_path, FaultSet(faults), serial_number=node.serial_number,
+                      booted=True)
     host.add_siblings()  # second_node quirk: the redundant interface's other node
     can_host, can_port = host.serve_remote(*parse_address(listen))
     control_address = serve_control(host, parse_address(control)) if control else None
