@@ -38,7 +38,8 @@ def _pytest_argv(args: argparse.Namespace) -> list[str]:
     # where no bytecode cache is written (PYTHONDONTWRITEBYTECODE)
     argv = [*pytest_args(), "--device-profile", args.profile, KIND_OPTION, KIND, "-p", "no:cacheprovider",
             "--assert=plain"]
-    for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir", "station", "shaft_drive"):
+    for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir", "station", "shaft_drive",
+                   "sim_profile"):
         value = getattr(args, option)
         if value is not None:
             argv += [f"--{option.replace('_', '-')}", str(value)]
@@ -62,7 +63,7 @@ def format_verdict(summary: RunSummary) -> list[str]:
         lines.append(f"  {area.area:18s} {area.verdict:18s} ({counts})")
         if area.verdict == "FAIL":
             failed = next(r for r in summary.results if r.area == area.area and r.outcome in ("failed", "error"))
-            first = (failed.message.strip().splitlines() or [""])[0]
+            first = (failed.message.strip().splitlines() or [""])[0].removeprefix("AssertionError: ")
             lines.append(f"      {failed.nodeid.split('/')[-1]}: {first[:MESSAGE_WIDTH]}")
     if summary.could_not_test:
         lines.append(f"  could not test: {summary.could_not_test}")
@@ -110,6 +111,8 @@ def add_accept_parser(sub: argparse._SubParsersAction, bus_arguments: BusArgumen
     accept.add_argument("--shaft-drive", metavar="MODULE:FACTORY[=ARGUMENT]",
                         help="bench only: motor plug-in that turns the shaft (see run --help; or the station's)")
     accept.add_argument("--sim-fault", action="append", default=[], help="simulator fault (see 'faults')")
+    accept.add_argument("--sim-profile", help="simulator only: the twin plays this profile instead (a delivery of "
+                                              "another product)")
     accept.add_argument("--strict", action="store_true",
                         help="fail also on rules we only inferred (default: they give PASS WITH WARNINGS)")
     accept.add_argument("--verbose", action="store_true", help="show pytest's own output too")
