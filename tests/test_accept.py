@@ -39,7 +39,7 @@ def _suite_module(name: str):
 def _selected_tests():
     for module_name, test in SELECTION:
         module = _suite_module(module_name)
-        names = [test] if test else [n for n in vars(module) if n.startswith("test_")]
+        names = [test.split("[")[0]] if test else [n for n in vars(module) if n.startswith("test_")]
         for name in names:
             assert hasattr(module, name), f"{module_name}::{name} in the acceptance selection does not exist"
             yield f"{module_name}::{name}", getattr(module, name), module
