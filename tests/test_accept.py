@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib.util
 import inspect
+import json
 import re
 import subprocess
 import sys
@@ -167,7 +168,10 @@ def test_accept_takes_no_reset(tmp_path):
     """The POSITAL reboots for ~4 s: an acceptance resets nothing, so it ends well before one reboot."""
     result, summary = _accept(tmp_path, "fraba-posital-awc58-c2-mt")
     assert result.returncode == RunExit.PASSED, result.stdout + result.stderr
-    assert summary.duration_s < 4.0, f"{summary.duration_s} s: did the run wait for a reboot?"
+    assert summary.duration_s < 5.0, f"{summary.duration_s} s: did the run wait for a reboot?"
+    snapshot = json.loads((Path(summary.report_dir) / "device-snapshot.json").read_text(encoding="utf-8"))
+    assert snapshot["entries"], "no values as found in the snapshot"
+    assert all(e["stored"] is None for e in snapshot["entries"]), "the start-up reset the node to read what is stored"
     traces = "".join(p.read_text() for p in (Path(summary.report_dir) / "traces").glob("*.asc"))
     assert traces, "no bus traces written"
     assert not re.search(r"\s1\s+0\s+Tx\s+d 2 8[12] ", traces), "an NMT reset was sent"  # 000h 81h/82h
@@ -195,3 +199,11 @@ def test_another_product_fails_identity_not_could_not_test(tmp_path):
     assert summary.could_not_test is None
     assert [(r.nodeid, r.area, r.outcome) for r in summary.results] == [(IDENTITY_CHECK, "identity", "failed")]
     assert "vendor-id 0x00000195" in summary.results[0].message
+
+
+def test_unknown_profile_is_a_usage_error():
+    result = subprocess.run([sys.executable, "-m", "encoder_conformance", "accept", "--profile", "nope"], cwd=REPO,
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == RunExit.USAGE_ERROR
+    assert "nope" in result.stderr
+    assert "Traceback" not in result.stderr
