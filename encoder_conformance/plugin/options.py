@@ -220,6 +220,27 @@ def _power_settings(config: pytest.Config, station: Station | None, station_path
     return None
 
 
+def bench_settings(settings: RunSettings, station_path: str | None, shaft_option: str | None) -> dict[str, str]:
+    """The station's settings beyond the bus and node-id, each with its source (for the report and the summary)."""
+    station, path = settings.station, station_path
+    from_station = f"from station {path}"
+    values: dict[str, str] = {}
+    if station is not None:
+        values["station"] = f"{station.station} ({from_station})"
+        if station.operator:
+            values["operator"] = f"{station.operator} ({from_station})"
+        for key in ("reports", "history"):
+            if getattr(station, key) is not None:
+                values[key] = f"{getattr(station, key)} ({from_station})"
+    power = settings.power
+    if power is not None:
+        how = "operator (asked at the terminal)" if power.manual else f"{power.off_command} / {power.on_command}"
+        values["power switch"] = f"{how}, off {power.off_time_s:g} s (from {power.source})"
+    if settings.shaft_drive is not None:
+        values["shaft drive"] = f"{settings.shaft_drive.spec} (from {'command line' if shaft_option else from_station})"
+    return values
+
+
 def settings_of(config: pytest.Config) -> RunSettings:
     return config.stash[SETTINGS]
 

@@ -12,7 +12,7 @@ import pytest
 from ..paths import REPO_ROOT, SUITES_DIR
 from .allure_writer import BackgroundWriter, write_in_background
 from .evidence import EVIDENCE
-from .options import settings_of
+from .options import bench_settings, settings_of
 from .verdicts import add_property, html_section, terminal_lines
 from .verdicts import strict as verdicts_strict
 
@@ -94,6 +94,9 @@ def set_metadata(config: pytest.Config) -> None:
     data["Node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
     data["SDO abort codes"] = f"{config.getoption('--abort-codes')} (--abort-codes)"
     data["Inferred rules"] = "failures (--strict-inferred)" if verdicts_strict(config) else "warnings"
+    data["Run kind"] = config.getoption("--run-kind", default="run")
+    bench = bench_settings(settings, config.getoption("--station"), config.getoption("--shaft-drive"))
+    data.update({key.capitalize(): value for key, value in bench.items()})
 
 
 def record_identity(config: pytest.Config, identity: dict[str, str]) -> None:

@@ -11,7 +11,7 @@ import pytest
 from ..run_summary import RunSummary, TestResult, area_of
 from . import acceptance, lifecycle
 from .evidence import EVIDENCE
-from .options import settings_of
+from .options import bench_settings, settings_of
 from .reporting import IDENTITY, report_dir
 
 SUMMARY = pytest.StashKey[RunSummary]()
@@ -40,7 +40,7 @@ def start(config: pytest.Config) -> None:
     values = {key: f"{value} (from {settings.bus.sources.get(key, 'default')})"
               for key, value in settings.bus.kwargs.items()}
     values["node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
-    values.update(_bench_settings(config))
+    values.update(bench_settings(settings, config.getoption("--station"), config.getoption("--shaft-drive")))
     config.stash[_STARTED] = time.monotonic()
     config.stash[SUMMARY] = RunSummary(
         kind=config.getoption(KIND_OPTION, default="run"),
@@ -48,29 +48,6 @@ def start(config: pytest.Config) -> None:
         profile_id=loaded.profile.id, profile_sha256=loaded.sha256, settings=values,
         station=getattr(station, "station", None), operator=getattr(station, "operator", None),
         report_dir=str(folder))
-
-
-def _bench_settings(config: pytest.Config) -> dict[str, str]:
-    """The station's other settings, each with its source (the certificate and the report show them)."""
-    settings = settings_of(config)
-    station, path = settings.station, config.getoption("--station")
-    from_station = f"from station {path}"
-    values: dict[str, str] = {}
-    if station is not None:
-        values["station"] = f"{station.station} ({from_station})"
-        if station.operator:
-            values["operator"] = f"{station.operator} ({from_station})"
-        for key in ("reports", "history"):
-            if getattr(station, key) is not None:
-                values[key] = f"{getattr(station, key)} ({from_station})"
-    power = settings.power
-    if power is not None:
-        how = "operator (asked at the terminal)" if power.manual else f"{power.off_command} / {power.on_command}"
-        values["power switch"] = f"{how}, off {power.off_time_s:g} s (from {power.source})"
-    if settings.shaft_drive is not None:
-        given = config.getoption("--shaft-drive")
-        values["shaft drive"] = f"{settings.shaft_drive.spec} (from {'command line' if given else from_station})"
-    return values
 
 
 def _identity_rejected(config: pytest.Config, reason: str) -> TestResult:
