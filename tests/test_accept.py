@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.accept_cli import format_verdict
+from encoder_conformance.accept_cli import exit_code, format_verdict
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.plugin.acceptance import IDENTITY_CHECK, SELECTION, pytest_args
 from encoder_conformance.profile.model import SerialFormat
@@ -73,6 +73,16 @@ def test_verdict_lines_name_the_failing_area():
     assert any(line.split()[:2] == ["error", "control"] and "FAIL" in line for line in lines)
     assert "test_heartbeat.py::test_x: slow" in "\n".join(lines)
     assert lines[-1].startswith("FAIL (2.5 s); report: /r")
+
+
+def test_warnings_pass_and_nothing_checked_fails():
+    """An inferred rule broken: PASS WITH WARNINGS, exit 0; every test skipped: nothing was checked, exit 1."""
+    warned = RunSummary("accept", "t", "p", "0" * 64, results=[
+        TestResult("suites/test_identity.py::test_serial_number_format", "identity", "warning", "inferred")])
+    assert format_verdict(warned)[-1].startswith("PASS WITH WARNINGS")
+    assert exit_code(warned, RunExit.PASSED) == RunExit.PASSED
+    skipped = RunSummary("accept", "t", "p", "0" * 64, results=[TestResult("suites/x.py::t", "other", "skipped")])
+    assert exit_code(skipped, RunExit.PASSED) == RunExit.NON_CONFORMANT
 
 
 # -- the station file (TOML) -------------------------------------------------------------------------------
@@ -207,3 +217,12 @@ def test_unknown_profile_is_a_usage_error():
     assert result.returncode == RunExit.USAGE_ERROR
     assert "nope" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_silent_device_is_could_not_test(tmp_path):
+    """No answer at all (nobody on this bus): no verdict about a device, exit 69, not FAIL."""
+    result, summary = _accept(tmp_path, "wachendorff-wdga-mt", "--can-interface", "virtual", "--can-channel",
+                              f"accept-nobody-{tmp_path.name}")
+    assert result.returncode == RunExit.COULD_NOT_TEST, result.stdout + result.stderr
+    assert summary.overall == "COULD NOT TEST"
+    assert "no answer from node" in summary.could_not_test
