@@ -116,7 +116,9 @@ def finish(session: pytest.Session) -> RunSummary | None:
     summary.exit_code = int(session.exitstatus)
     state = lifecycle.state_of(config)
     if state is not None:
-        summary.could_not_test = state.stopped
+        # an interrupted run has no verdict either: no PASS (nor a certificate) for what was not run
+        interrupted = state.guard.reason if state.guard.signum is not None else None
+        summary.could_not_test = state.stopped or interrupted
         if state.rejected:
             summary.results.insert(0, _identity_rejected(config, state.rejected))
         summary.device_restored = None if state.record is None else state.record.ok
