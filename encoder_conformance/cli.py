@@ -1,4 +1,5 @@
-"""Command line: ``encoder-conformance run | restore | lss | sim | sim-control | profile | faults | fault-matrix``.
+"""Command line: ``encoder-conformance run | accept | restore | lss | sim | sim-control | profile | faults |
+fault-matrix``.
 
 Exit codes of ``run``, ``restore`` and ``lss`` follow exit_codes.RunExit; a usage error (bad option,
 unreadable profile) is 4 for every command.
@@ -12,6 +13,7 @@ import sys
 from pathlib import Path
 
 from . import cli_usage as usage
+from .accept_cli import add_accept_parser
 from .cli_usage import OneLineParser, UsageError, bus_arguments, host_port, positive_int
 from .cli_usage import node_id_arg as node_id_type
 from .errors import BusSetupError, ProfileError
@@ -225,6 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_lss_parser(sub, _Parser, _bus_arguments)
     add_history_parser(sub, _Parser)
+    add_accept_parser(sub, _bus_arguments)
 
     sim_control = sub.add_parser("sim-control", help="switch a served simulator's power (a bench power switch)")
     sim_control.add_argument("--control", required=True, type=host_port,

@@ -26,6 +26,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "wrong_revision": "1018h sub 3 reads 0xFFFFFFFF (a revision no manual covers)",
             "wrong_identity_size": "1018h sub 0 reads one more than the highest sub-index",
             "serial_mismatch": "1018h sub 4 differs from the serial number in 650Bh",
+            "serial_unset": "1018h sub 4 reads FFFFFFFFh, what a unit without a serial number reads",
         },
     ),
     (  # object dictionary / SDO
@@ -387,7 +388,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored", "sync_tpdo_late",
                                              "unsized_download_takes_four_bytes",
                                              "emcy_on_unknown_command",
-                                             "sync_length_unchecked"})
+                                             "sync_length_unchecked",
+                                             "serial_unset"})  # the serial format rule is ours without a manual
 
 
 def faults_for(effects: Iterable[str]) -> list[str]:

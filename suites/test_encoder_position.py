@@ -15,6 +15,8 @@ import pytest
 
 from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.reference_custody import ReferenceCustody
+from encoder_conformance.dut.store_watch import AUTO_STORED
 from encoder_conformance.encoder_model import objects as od
 from encoder_conformance.encoder_model.position import position_limits, units_per_rev, unsigned_in_span
 from encoder_conformance.plugin.options import settings_of
@@ -58,6 +60,47 @@ def _rests_on_preset_clause(encoder, evidence) -> None:
                                     "(quirk manufacturer_encoder_objects)")
     else:
         evidence.rests_on("cia", "CiA 406 6003h (preset value) and 6509h (offset value)")
+
+
+def _preset_stores_itself(encoder) -> bool:
+    """Whether a preset changes what the device stores (its preset object persists itself): then presetting is
+    destructive under the custody rules, else the run gives the reference point back by presetting again."""
+    custody = ReferenceCustody(encoder.access.dut)
+    return custody.store_may_have_changed({AUTO_STORED: 1}, history_unknown=False)
+
+
+def test_position_plausible_and_moving(encoder, evidence):
+    """The position lies in the measuring range, follows the shaft where the bench turns it, and reads a preset
+    value at once where presetting changes nothing stored (the acceptance check of the encoder function)."""
+    _rests_on_preset_clause(encoder, evidence)
+    access = encoder.access
+    settings = access.settings(functions=False)
+    low, high = settings.limits()
+    before = access.position()
+    evidence.note(f"position {before}, range {low} .. {high}")
+    assert low <= before <= high, f"the position reads {before}, outside the measuring range {low} .. {high}"
+    checked = []
+    if encoder.shaft is not None:
+        per_rev = units_per_rev(settings.geometry, settings.scaling)
+        encoder.shaft.turn_by(STEP_UNITS / per_rev)
+        turned = access.position()
+        evidence.note(f"{STEP_UNITS} units clockwise: {before} -> {turned}")
+        assert turned != before, f"the shaft turned by {STEP_UNITS} units but the position still reads {before}"
+        checked.append("shaft")
+    caps = access.dut.profile.capabilities
+    if caps.preset and not _preset_stores_itself(encoder):
+        _allow_preset(encoder)
+        now = access.position()
+        target = settings.shown(unsigned_in_span(now + settings.span // 3, settings.span))
+        reached = encoder.preset(target)
+        evidence.note(f"preset {target}: {now} -> {reached} (the reference point is put back by presetting)")
+        assert reached == target, f"preset {target}: the position reads {reached} (it read {now} before)"
+        checked.append("preset")
+    elif caps.preset:
+        evidence.note("no preset: the preset object stores itself (persisted_by auto), so a preset would change "
+                      "what the device remembers")
+    if not checked:
+        evidence.note("the position could not be moved: no shaft drive and no preset that leaves the memory alone")
 
 
 @pytest.mark.destructive

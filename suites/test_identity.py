@@ -84,3 +84,26 @@ def test_serial_number_consistent(dut, evidence):
         pytest.skip("not applicable: the profile declares no 650Bh serial number to compare with")
     observed = dut.read_uint(*other)
     assert observed == serial, f"650Bh.{other[1]:02X} = {observed} but 1018h.04 = {serial}"
+
+
+#: what a device without a serial number reads (SIKO WV58M manual p.37-38: 650Bh = FFFFFFFFh "not supported")
+NO_SERIAL = (0, 0xFFFFFFFF)
+
+
+@pytest.mark.spec("CiA 301 §7.5.2.23 (1018h sub 4 serial number)")
+def test_serial_number_format(dut, evidence):
+    """1018h sub 4 has the format the manual states (identity.serial_format); where it states none, a value a
+    device without a serial number would not show (neither 0 nor FFFFFFFFh: our reading, a warning only)."""
+    if dut.profile.entry(0x1018, 4) is None:
+        pytest.skip("not applicable: the profile declares no 1018h sub 4 serial number")
+    serial = dut.read_uint(0x1018, 4)
+    evidence.note(f"serial number {serial} (0x{serial:08X})")
+    wanted = dut.profile.identity.serial_format
+    if wanted is None:
+        if serial in NO_SERIAL:
+            evidence.inferred_problem(f"1018h.04 = 0x{serial:08X}, what a device without a serial number reads",
+                                      "a delivered unit has a serial number other than 0 and FFFFFFFFh (our reading)")
+        return
+    evidence.rests_on("manual", wanted.manual)
+    assert wanted.matches(serial), (
+        f"1018h.04 = {serial} does not have the format the manual states ({wanted.pattern!r}, {wanted.manual})")

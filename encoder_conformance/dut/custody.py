@@ -43,6 +43,10 @@ class PreflightError(Exception):
     """The run cannot start: one line saying what failed and what to check."""
 
 
+class IdentityMismatch(PreflightError):
+    """The node answers but is plainly another product than the profile's (a verdict about the device)."""
+
+
 @dataclass
 class Change:
     """An entry that differs from the snapshot."""
@@ -110,10 +114,14 @@ class Custody:
         self.first_steps: list[Callable[[], str | None]] = []
 
     # -- take --------------------------------------------------------------------------------------
-    def take(self, profile_sha256: str) -> Snapshot:
-        """Pre-flight and snapshot; raises PreflightError with what to check."""
+    def take(self, profile_sha256: str, read_stored: bool = True) -> Snapshot:
+        """Pre-flight and snapshot; raises PreflightError with what to check.
+
+        ``read_stored=False`` (acceptance) skips the reset that shows what the device stored: a run that
+        sends no store command cannot change it, and a reset costs a boot-up (4 s on a POSITAL).
+        """
         try:
-            return self._take(profile_sha256)
+            return self._take(profile_sha256, read_stored)
         except (AssertionError, DutLostError) as exc:
             if isinstance(exc, BusLostError):
                 raise PreflightError(str(exc)) from None
@@ -123,7 +131,7 @@ class Custody:
                 "SDO on 600h/580h + node-id. Check --node-id, the bit rate and that no other tool talks to it"
             ) from None
 
-    def _take(self, profile_sha256: str) -> Snapshot:
+    def _take(self, profile_sha256: str, read_stored: bool) -> Snapshot:
         dut = self.dut
         keys = custody_keys(dut.profile)
         with dut.custody():
@@ -140,6 +148,8 @@ class Custody:
                 snapshot.entries = [self._entry(k, found[k], None) for k in keys]
                 snapshot.found_state = self._state_seen(before)
                 self._save()
+                if not read_stored:
+                    return snapshot
             if not (self.restarts.shows_stored or dut.reset_and_reach()):  # a fresh boot-up shows what is stored
                 raise PreflightError(
                     f"no answer from node {dut.node_id}: no SDO answer and no boot-up after NMT reset node. "
@@ -165,7 +175,7 @@ class Custody:
         snapshot.identity = identity.as_report()
         problem = identity_mismatch(identity, self.dut.profile)
         if problem:
-            raise PreflightError(problem)
+            raise IdentityMismatch(problem)
 
     def _state_seen(self, since: Mark) -> int | None:
         """The NMT state of the last heartbeat the node sent before the run touched it (None: none seen)."""
@@ -243,7 +253,8 @@ class Custody:
         targets = {e.key: e.target_found() for e in snapshot.entries}
         self._write(record, deadline, {k: v for k, v in targets.items() if v is not None and now.get(k) != v}, now)
         self._give_back_reference(record, deadline, snapshot.reference_in_use, record.left_changed)  # scaled units
-        after = read_values(dut, keys)
+        # nothing written or preset since ``now`` was read (and it showed no difference): it is still ``now``
+        after = read_values(dut, keys) if record.written or record.left_changed else now
         for change in self._differences(after, lambda e: e.target_found()):
             record.fail(f"not restored: {change.describe()}")
         self._back_to_found_state(record)

@@ -6,6 +6,7 @@ and the run's exit status stands (the run-summary.json in the report folder stil
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import pytest
@@ -32,32 +33,38 @@ def _db_path(config: pytest.Config) -> Path | None:
     return history_path(given, station.history if station is not None else None)
 
 
+def _say(config: pytest.Config, text: str, warning: bool = False) -> None:
+    """On pytest's terminal, or plain stdout/stderr where there is none (accept runs with -p no:terminal)."""
+    if config.pluginmanager.get_plugin("terminalreporter") is not None:
+        config.get_terminal_writer().line(text, yellow=warning)
+    else:
+        print(text, file=sys.stderr if warning else sys.stdout, flush=True)
+
+
 def record(session: pytest.Session) -> None:
     """Called after run_record.finish: the summary is complete and written."""
     try:
         _record(session.config)
     except Exception as exc:  # a bug here must not turn the device's verdict into the tool's internal error
-        session.config.get_terminal_writer().line(
-            f"history: this run was not recorded ({type(exc).__name__}: {exc}); the verdict stands; please report "
-            "this with the output", yellow=True)
+        _say(session.config, f"history: this run was not recorded ({type(exc).__name__}: {exc}); the verdict "
+                             "stands; please report this with the output", warning=True)
 
 
 def _record(config: pytest.Config) -> None:
     summary = summary_of(config)
     if summary is None or summary.report_dir is None:
         return
-    writer = config.get_terminal_writer()
     certificate = None
     if summary.kind == "accept":
         try:
             files = write_certificate(summary, Path(summary.report_dir))
         except OSError as exc:
-            writer.line(f"certificate: not written ({exc}); make it later with 'encoder-conformance history show "
-                        "RUN_ID --certificate'", yellow=True)
+            _say(config, f"certificate: not written ({exc}); make it later with 'encoder-conformance history show "
+                         "RUN_ID --certificate'", warning=True)
         else:
             certificate = files.html
-            writer.line(f"certificate: {files.pdf or files.html}" + (f" ({files.pdf_note})" if files.pdf_note
-                                                                     else ""))
+            _say(config, f"certificate: {files.pdf or files.html}" + (f" ({files.pdf_note})" if files.pdf_note
+                                                                      else ""))
     db_path = _db_path(config)
     if db_path is None:
         return
@@ -66,7 +73,7 @@ def _record(config: pytest.Config) -> None:
         if certificate is not None:
             note_certificate(db_path, run_id, certificate)
     except HistoryError as exc:
-        writer.line(f"history: this run was not recorded: {exc}; the verdict stands (fix or move the file, or give "
-                    f"{OPTION} PATH)", yellow=True)
+        _say(config, f"history: this run was not recorded: {exc}; the verdict stands (fix or move the file, or "
+                     f"give {OPTION} PATH)", warning=True)
         return
-    writer.line(f"history: run {run_id} recorded in {db_path}")
+    _say(config, f"history: run {run_id} recorded in {db_path}")

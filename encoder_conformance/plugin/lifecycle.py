@@ -26,6 +26,7 @@ class RunState:
     guard: InterruptGuard
     custody: Custody | None = None
     stopped: str | None = None  # could not test: why
+    rejected: str | None = None  # the start-up check found another product (acceptance: an identity failure)
     collected: int = 0
     reported: set[str] = field(default_factory=set)  # test ids with a call-phase report
 
@@ -139,6 +140,15 @@ def stop_run(config: pytest.Config, reason: str) -> None:
     pytest.exit(f"could not test: {reason}", returncode=RunExit.COULD_NOT_TEST)
 
 
+def reject_device(config: pytest.Config, reason: str) -> None:
+    """The device answers but is not the product bought (acceptance): a verdict, not 'could not test'; the
+    run ends with one reason and exit code NON_CONFORMANT, the summary records an identity failure."""
+    state = state_of(config)
+    if state is not None:
+        state.rejected = reason
+    pytest.exit(f"FAIL identity: {reason}", returncode=RunExit.NON_CONFORMANT)
+
+
 def stop_if_gone(config: pytest.Config) -> None:
     """Before each test: if the device or the bus is gone, end the run with one reason (could not test)."""
     reason = device_gone(config)
@@ -165,6 +175,8 @@ def final_exit_status(session: pytest.Session) -> None:
         session.exitstatus = state.guard.exit_code
     elif state.stopped or session.exitstatus == RunExit.COULD_NOT_TEST:
         session.exitstatus = RunExit.COULD_NOT_TEST
+    elif state.rejected:
+        session.exitstatus = RunExit.NON_CONFORMANT
     elif record is not None and not record.ok:
         session.exitstatus = RunExit.NOT_RESTORED
     _write_outcome(session, state)
@@ -198,7 +210,8 @@ def _write_outcome(session: pytest.Session, state: RunState) -> None:
 def ended_early(config: pytest.Config) -> bool:
     """Interrupted or stopped: 'every test skipped' means nothing then."""
     state = state_of(config)
-    return state is not None and (state.guard.signum is not None or state.stopped is not None)
+    return state is not None and (state.guard.signum is not None or state.stopped is not None
+                                  or state.rejected is not None)
 
 
 def note_collected(session: pytest.Session) -> None:
@@ -218,6 +231,8 @@ def summary_lines(config: pytest.Config) -> list[tuple[str, bool]]:
         lines.append((f"{state.guard.reason}: {not_run} test(s) not run", True))
     elif state.stopped:
         lines.append((f"could not test: {state.stopped}; {not_run} test(s) not run", True))
+    elif state.rejected:
+        lines.append((f"FAIL identity: {state.rejected}; {not_run} test(s) not run", True))
     record = state.record
     if record is None:
         return lines

@@ -149,18 +149,22 @@ def configure(config: pytest.Config) -> None:
         )
     if faults and not bus.simulated:
         raise pytest.UsageError("--sim-fault only works with the built-in simulator; remove --can-interface")
+    accepting = config.getoption("--run-kind", default="run") == "accept"
+    if accepting and config.getoption("--allow-destructive"):
+        raise pytest.UsageError("--allow-destructive: an acceptance changes nothing the device remembers; use 'run'")
     config.stash[SETTINGS] = RunSettings(
         loaded=loaded,
         bus=bus,
         node_id=node_id,
         node_id_source=source,
-        allow_destructive=bool(config.getoption("--allow-destructive")) or bus.simulated,
+        # an acceptance does on the twin what it does on a bench: nothing destructive, defaults as found
+        allow_destructive=bool(config.getoption("--allow-destructive")) or (bus.simulated and not accepting),
         sim_faults=faults,
         sim_inprocess=bool(config.getoption("--sim-inprocess")),
         sim_profile=load_profile(config.getoption("--sim-profile")) if config.getoption("--sim-profile") else loaded,
         power=_power_settings(config, station, station_path, bus.simulated),
         station=station,
-        delivery_state=bool(config.getoption("--delivery-state")),
+        delivery_state=bool(config.getoption("--delivery-state")) or accepting,  # goods-in: fresh from the factory
         shaft_drive=_shaft_drive(config, station, bus.simulated),
     )
 
@@ -220,6 +224,27 @@ def _power_settings(config: pytest.Config, station: Station | None, station_path
                              power.off_time_s if off_time is None else off_time,
                              f"station {station_path}")
     return None
+
+
+def bench_settings(settings: RunSettings, station_path: str | None, shaft_option: str | None) -> dict[str, str]:
+    """The station's settings beyond the bus and node-id, each with its source (for the report and the summary)."""
+    station, path = settings.station, station_path
+    from_station = f"from station {path}"
+    values: dict[str, str] = {}
+    if station is not None:
+        values["station"] = f"{station.station} ({from_station})"
+        if station.operator:
+            values["operator"] = f"{station.operator} ({from_station})"
+        for key in ("reports", "history"):
+            if getattr(station, key) is not None:
+                values[key] = f"{getattr(station, key)} ({from_station})"
+    power = settings.power
+    if power is not None:
+        how = "operator (asked at the terminal)" if power.manual else f"{power.off_command} / {power.on_command}"
+        values["power switch"] = f"{how}, off {power.off_time_s:g} s (from {power.source})"
+    if settings.shaft_drive is not None:
+        values["shaft drive"] = f"{settings.shaft_drive.spec} (from {'command line' if shaft_option else from_station})"
+    return values
 
 
 def settings_of(config: pytest.Config) -> RunSettings:

@@ -14,7 +14,7 @@ from ..run_summary import RunSummary
 from .allure_writer import BackgroundWriter, write_in_background
 from .evidence import EVIDENCE
 from .glance import Deviation, PageContext, render, skip_reason_key
-from .options import settings_of, trace_policy
+from .options import bench_settings, settings_of, trace_policy
 from .verdicts import STRICT_OPTION, add_property, terminal_lines
 from .verdicts import strict as verdicts_strict
 
@@ -107,6 +107,9 @@ def set_metadata(config: pytest.Config) -> None:
     data["Node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
     data["SDO abort codes"] = f"{config.getoption('--abort-codes')} (--abort-codes)"
     data["Inferred rules"] = "failures (--strict-inferred)" if verdicts_strict(config) else "warnings"
+    data["Run kind"] = config.getoption("--run-kind", default="run")
+    bench = bench_settings(settings, config.getoption("--station"), config.getoption("--shaft-drive"))
+    data.update({key.capitalize(): value for key, value in bench.items()})
 
 
 def record_identity(config: pytest.Config, identity: dict[str, str]) -> None:
@@ -179,11 +182,13 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
         rows.append(f"<tr><th>note</th><td>{html.escape(note)}</td></tr>")
     if rows:
         extras.append(html_extras.html(f"<table class='evidence'>{''.join(rows)}</table>"))
+    # an acceptance plots only what failed: rendering a plot costs ~1.5 s (matplotlib), a third of its budget
+    plot = report.outcome != "passed" or item.config.getoption("--run-kind", default="run") != "accept"
     for timing in evidence.timings:  # statistics and plot, one per timing measurement
-        image = base64.b64encode(timing.png()).decode("ascii")
-        extras.append(html_extras.html(f"<div class='timing'>{timing.html_table()}"
-                                       f"<img src='data:image/png;base64,{image}' alt='{html.escape(timing.name)}'>"
-                                       "</div>"))
+        image = base64.b64encode(timing.png()).decode("ascii") if plot else None
+        extras.append(html_extras.html(f"<div class='timing'>{timing.html_table()}" + (
+            f"<img src='data:image/png;base64,{image}' alt='{html.escape(timing.name)}'>" if image else "")
+            + "</div>"))
         for name, value in timing.properties():
             add_property(item, report, name, value)
     folder = report_dir(item.config)

@@ -9,14 +9,14 @@ from pathlib import Path
 import pytest
 
 from ..run_summary import RunSummary, TestResult, area_of
-from . import lifecycle
+from . import acceptance, lifecycle
 from .evidence import EVIDENCE
-from .options import settings_of
+from .options import bench_settings, settings_of
 from .reporting import IDENTITY, report_dir
 
 SUMMARY = pytest.StashKey[RunSummary]()
 _STARTED = pytest.StashKey[float]()
-KIND_OPTION = "--run-kind"
+KIND_OPTION = acceptance.KIND_OPTION
 MESSAGE_LIMIT = 1500  # characters of a failure kept in the summary (the HTML report has it all)
 
 
@@ -40,7 +40,7 @@ def start(config: pytest.Config) -> None:
     values = {key: f"{value} (from {settings.bus.sources.get(key, 'default')})"
               for key, value in settings.bus.kwargs.items()}
     values["node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
-    values.update(_bench_settings(config))
+    values.update(bench_settings(settings, config.getoption("--station"), config.getoption("--shaft-drive")))
     config.stash[_STARTED] = time.monotonic()
     config.stash[SUMMARY] = RunSummary(
         kind=config.getoption(KIND_OPTION, default="run"),
@@ -50,26 +50,11 @@ def start(config: pytest.Config) -> None:
         report_dir=str(folder))
 
 
-def _bench_settings(config: pytest.Config) -> dict[str, str]:
-    """The station's other settings, each with where it came from."""
-    settings = settings_of(config)
-    station_path = config.getoption("--station")
-    values = {}
-    if settings.station is not None:
-        values["station"] = f"{settings.station.station} (from station {station_path})"
-        if settings.station.operator:
-            values["operator"] = f"{settings.station.operator} (from station {station_path})"
-    power = settings.power
-    if power is not None:
-        how = "operator asked" if power.manual else f"off: {power.off_command!r}, on: {power.on_command!r}"
-        values["power switch"] = f"{how}, off {power.off_time_s:g} s (from {power.source})"
-    if settings.shaft_drive is not None:
-        came_from = "command line" if config.getoption("--shaft-drive") else f"station {station_path}"
-        values["shaft drive"] = f"{settings.shaft_drive.spec} (from {came_from})"
-    values["inferred rules"] = ("failures (from --strict-inferred)" if config.getoption("--strict-inferred")
-                                else "warnings (default)")
-    values["SDO abort codes"] = f"{config.getoption('--abort-codes')} (from --abort-codes)"
-    return values
+def _identity_rejected(config: pytest.Config, reason: str) -> TestResult:
+    """The start-up check's verdict on another product (acceptance): a failure of the identity area."""
+    identity = settings_of(config).loaded.profile.identity
+    return TestResult(acceptance.IDENTITY_CHECK, "identity", "failed", "manual",
+                      f"profile identity ({identity.manual})", reason)
 
 
 def _message(report: pytest.TestReport) -> str:
@@ -134,7 +119,11 @@ def completed(session: pytest.Session) -> RunSummary | None:
     summary.exit_code = int(session.exitstatus)
     state = lifecycle.state_of(config)
     if state is not None:
-        summary.could_not_test = state.stopped
+        # an interrupted run has no verdict either: no PASS (nor a certificate) for what was not run
+        interrupted = state.guard.reason if state.guard.signum is not None else None
+        summary.could_not_test = state.stopped or interrupted
+        if state.rejected:
+            summary.results.insert(0, _identity_rejected(config, state.rejected))
         summary.device_restored = None if state.record is None else state.record.ok
     for result in summary.results:  # traces of passed tests may have been dropped (--bus-trace failed)
         if result.trace and not (Path(folder) / result.trace).exists():

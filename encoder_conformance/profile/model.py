@@ -258,12 +258,39 @@ class RevisionRange(StrictModel):
     max: int = 0xFFFFFFFF
 
 
+class SerialFormat(StrictModel):
+    """How the manual says the serial number (1018h sub 4) looks, as the decimal text on the label.
+
+    Without it the suite checks only what any device with a serial number shows: neither 0 nor FFFFFFFFh
+    (our inference: FFFFFFFFh is what a device without a serial number reads, e.g. SIKO 650Bh).
+    """
+
+    pattern: str = Field(description="regular expression the decimal serial number must match in full, e.g. "
+                                     "'[0-9]{8}' for eight digits")
+    manual: str = Field(description="the manual's section that states the format")
+
+    @field_validator("pattern")
+    @classmethod
+    def _compiles(cls, value: str) -> str:
+        try:
+            re.compile(value)
+        except re.error as exc:
+            raise ValueError(f"not a regular expression: {exc}") from None
+        return value
+
+    def matches(self, serial: int) -> bool:
+        return re.fullmatch(self.pattern, str(serial)) is not None
+
+
 class Identity(StrictModel):
     vendor_name: str
     product_name: str
     vendor_id: int | None = Field(description="1018h sub 1; null if the device has no 1018h")
     product_code: int | None = None
     revision: RevisionRange | None = None
+    serial_format: SerialFormat | None = Field(
+        default=None, description="the serial number's format where the manual states it (default: any value "
+        "but 0 and FFFFFFFFh, our inference)")
     device_type: int | None = Field(description="1000h value; null if the manual does not give it")
     device_name: str | None = Field(default=None, description="1008h text, if the manual gives it")
     order_code: str | None = Field(default=None, description="order code (EDS [DeviceInfo] OrderCode)")

@@ -48,15 +48,17 @@ class SimulatorHost:
         faults: FaultSet | None = None,
         power_on: bool = True,
         serial_number: int | None = None,
+        booted: bool = False,
     ) -> SimulatedNode:
-        """A node playing ``profile``; ``serial_number`` replaces the profile's ``simulator.serial_number``."""
+        """A node playing ``profile``; ``serial_number`` replaces the profile's ``simulator.serial_number``;
+        ``booted``: its first boot-up without the boot delay (it was switched on before)."""
         if serial_number is not None:
             profile = with_serial_number(profile, serial_number)
         node = SimulatedNode(profile, self.scheduler, self._send_from(None), node_id, nvm_path, faults)
         node._send_raw = self._send_from(node)
         self.nodes.append(node)
         if power_on:
-            node.power_on()
+            node.power_on(at_once=booted)
         return node
 
     def add_siblings(self, power_on: bool = True) -> list[SimulatedNode]:

@@ -58,13 +58,14 @@ class NmtSlave:
         self._boot_job: JobHandle | None = None
 
     # -- power ---------------------------------------------------------------------------
-    def power_on(self) -> None:
-        """Apply power: reload everything from NVM, then boot (or wait for bus traffic)."""
+    def power_on(self, at_once: bool = False) -> None:
+        """Apply power: reload everything from NVM, then boot (or wait for bus traffic); ``at_once``: the boot
+        delay has passed already (a served twin was switched on before a tester connects, as a bench device is)."""
         self._reload(ReloadEvent("power_on", everything=True))
         self.state = NmtState.INITIALISING
         self.awaiting_traffic = self._silent_until_traffic
         if not self.awaiting_traffic:
-            self._schedule_boot(power_on=True)
+            self._schedule_boot(power_on=True, delay_s=0.0 if at_once else None)
 
     def power_off(self) -> None:
         self._halt()
@@ -160,10 +161,11 @@ class NmtSlave:
         self._reload(ReloadEvent("nmt_82h", everything=False))
         self._schedule_boot(power_on=False)
 
-    def _schedule_boot(self, power_on: bool) -> None:
+    def _schedule_boot(self, power_on: bool, delay_s: float | None = None) -> None:
         if self.waiting_for_node_id:
             return  # CiA 305: an unconfigured node waits for LSS
-        self._boot_job = self._scheduler.call_later(self._boot_delay_s, lambda: self._finish_boot(power_on))
+        delay = self._boot_delay_s if delay_s is None else delay_s
+        self._boot_job = self._scheduler.call_later(delay, lambda: self._finish_boot(power_on))
 
     def _finish_boot(self, power_on: bool) -> None:
         with self._lock:

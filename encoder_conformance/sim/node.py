@@ -267,10 +267,11 @@ class SimulatedNode:
     def node_id(self) -> int:
         return self.nmt.node_id
 
-    def power_on(self) -> None:
-        """Apply power: reload everything from NVM, then boot (or wait for bus traffic)."""
+    def power_on(self, at_once: bool = False) -> None:
+        """Apply power: reload everything from NVM, then boot (or wait for bus traffic); ``at_once``: without
+        the boot delay (switched on before anyone looked)."""
         with self.lock:
-            self.nmt.power_on()
+            self.nmt.power_on(at_once)
 
     def power_off(self) -> None:
         with self.lock:

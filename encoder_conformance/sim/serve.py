@@ -100,7 +100,10 @@ def serve(
     _log_plan([(node.profile.id, node.node_id) for node in plan], faults, nvm)
     for i, node in enumerate(plan):
         nvm_path = None if nvm is None else nvm.with_name(f"{nvm.stem}-{i}{nvm.suffix}") if i else nvm
-        host.add_node(node.profile, node.node_id, nvm_path, FaultSet(faults), serial_number=node.serial_number)
+        # booted: a served twin is switched on before a tester connects, as a device on a bench is (a run
+        # does not wait for a POSITAL's 4 s power-on boot before its first request)
+        host.add_node(node.profile, node.node_id, nvm_path, FaultSet(faults), serial_number=node.serial_number,
+                      booted=True)
     host.add_siblings()  # second_node quirk: the redundant interface's other node
     info = {
         "can": f"ws://{can_host}:{can_port}/",

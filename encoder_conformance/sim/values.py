@@ -71,6 +71,7 @@ IDENTITY_FAULTS = [
     _identity_fault("wrong_revision", (0x1018, 3), lambda v: 0xFFFFFFFF),
     _identity_fault("wrong_identity_size", (0x1018, 0), lambda v: v + 1),
     _identity_fault("serial_mismatch", (0x1018, 4), lambda v: (v ^ 0x1) & 0xFFFFFFFF),
+    _identity_fault("serial_unset", (0x1018, 4), lambda v: 0xFFFFFFFF),
     _identity_fault("wrong_device_type", (0x1000, 0), lambda v: (v & 0xFFFF0000) | ((v + 1) & 0xFFFF)),
 ]
 
