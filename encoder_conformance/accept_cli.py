@@ -47,6 +47,8 @@ def _pytest_argv(args: argparse.Namespace) -> list[str]:
         argv.append("--strict-inferred")
     for fault in args.sim_fault:
         argv += ["--sim-fault", fault]
+    if args.trace:
+        argv += ["--bus-trace", args.trace]  # pytest's own --trace is its debugger
     if not args.verbose:
         argv += ["-p", "no:terminal"]
     return argv
@@ -123,5 +125,7 @@ def add_accept_parser(sub: argparse._SubParsersAction, bus_arguments: BusArgumen
                                               "another product)")
     accept.add_argument("--strict", action="store_true",
                         help="fail also on rules we only inferred (default: they give PASS WITH WARNINGS)")
+    accept.add_argument("--trace", choices=("failed", "all", "none"),
+                        help="which tests keep their bus trace (ASC and candump log): failed (default), all, none")
     accept.add_argument("--verbose", action="store_true", help="show pytest's own output too")
     accept.set_defaults(func=_cmd_accept)

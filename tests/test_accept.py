@@ -176,7 +176,7 @@ def test_accept_passes_with_station_settings_recorded(tmp_path):
 
 def test_accept_takes_no_reset(tmp_path):
     """The POSITAL reboots for ~4 s: an acceptance resets nothing, so it ends well before one reboot."""
-    result, summary = _accept(tmp_path, "fraba-posital-awc58-c2-mt")
+    result, summary = _accept(tmp_path, "fraba-posital-awc58-c2-mt", "--trace", "all")
     assert result.returncode == RunExit.PASSED, result.stdout + result.stderr
     assert summary.duration_s < 5.0, f"{summary.duration_s} s: did the run wait for a reboot?"
     snapshot = json.loads((Path(summary.report_dir) / "device-snapshot.json").read_text(encoding="utf-8"))

@@ -151,7 +151,8 @@ def _fake_item(tmp_path: Path, policy: str) -> SimpleNamespace:
 
 
 def _phase(item, when: str, failed: bool = False) -> None:
-    report = SimpleNamespace(when=when, failed=failed, user_properties=[], extras=[])
+    report = SimpleNamespace(when=when, failed=failed, outcome="failed" if failed else "passed", user_properties=[],
+                             extras=[])
     reporting.attach_evidence(item, None, report)  # type: ignore[arg-type]
 
 
