@@ -45,7 +45,7 @@ def cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
 
     args.station = args.station[0] if args.station else None
     argv = [str(SUITES_DIR), "--device-profile", args.profile, "-p", "no:cacheprovider"]
-    for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir", "station",
+    for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir", "station", "label_serial",
                    "power_off_cmd", "power_on_cmd", "power_off_time"):
         value = getattr(args, option)
         if value is not None:
@@ -104,6 +104,10 @@ def add_run_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[typ
                      help="station file (TOML or YAML): the bench's CAN adapter, node-ID, power switch, operator, "
                           "report and history locations; options given here override it. Give it several times "
                           "to check one device per station in parallel")
+    run.add_argument("--label-serial", type=int, metavar="NUMBER",
+                        help="the serial number on the device's label: checked against what the device reports "
+                             "(1018h sub 4, else 650Bh) and recorded in the history (default: none; on the simulator "
+                             "the twin's own)")
     run.add_argument("--report-dir", metavar="DIR",
                      help="folder for the report (default reports/<timestamp>-<profile>/, or under the station's "
                           "reports); with several --station: the parent of one folder per station")

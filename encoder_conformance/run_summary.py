@@ -48,6 +48,9 @@ MODULE_AREAS: dict[str, str] = {
     "test_cam": "CAM",
 }
 
+#: where a serial number comes from, in order of trust
+SERIAL_KEYS = ("serial number (1018h.4)", "serial number (650Bh)", "serial number (label)")
+
 Outcome = Literal["passed", "failed", "warning", "skipped", "error"]
 Verdict = Literal["PASS", "FAIL", "PASS WITH WARNINGS", "COULD NOT TEST", "NOT RUN"]
 
@@ -119,9 +122,13 @@ class RunSummary:
 
     @property
     def serial(self) -> str | None:
-        """The serial number (1018h.4) in decimal, as the label on the device shows it."""
-        text = self.identity.get("serial number (1018h.4)")
-        return None if text in (None, "-") else text.split()[0]
+        """The serial number in decimal, as the label on the device shows it: 1018h sub 4, else 650Bh, else the
+        label's (--label-serial) for a device that reports none."""
+        for key in SERIAL_KEYS:
+            text = self.identity.get(key)
+            if text is not None and not text.startswith("-"):
+                return text.split()[0]
+        return None
 
     @property
     def revision(self) -> str | None:

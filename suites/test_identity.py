@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.checks import describe_value
+from encoder_conformance.dut.identity import NO_SERIAL, read_identity, serial_650b_key
 from encoder_conformance.profile import datatypes
 
 pytestmark = pytest.mark.spec("CiA 301 §7.5.2")
@@ -79,15 +80,13 @@ def test_serial_number_consistent(dut, evidence):
         pytest.skip("not applicable: the profile declares no 1018h sub 4 serial number")
     serial = dut.read_uint(0x1018, 4)
     evidence.note(f"serial number {serial}")
-    other = (profile.entry(0x650B, 1) and (0x650B, 1)) or (profile.entry(0x650B, 0) and (0x650B, 0))
+    other = serial_650b_key(profile)
     if not other:
         pytest.skip("not applicable: the profile declares no 650Bh serial number to compare with")
     observed = dut.read_uint(*other)
     assert observed == serial, f"650Bh.{other[1]:02X} = {observed} but 1018h.04 = {serial}"
 
 
-#: what a device without a serial number reads (SIKO WV58M manual p.37-38: 650Bh = FFFFFFFFh "not supported")
-NO_SERIAL = (0, 0xFFFFFFFF)
 
 
 @pytest.mark.spec("CiA 301 §7.5.2.23 (1018h sub 4 serial number)")
@@ -107,3 +106,20 @@ def test_serial_number_format(dut, evidence):
     evidence.rests_on("manual", wanted.manual)
     assert wanted.matches(serial), (
         f"1018h.04 = {serial} does not have the format the manual states ({wanted.pattern!r}, {wanted.manual})")
+
+
+@pytest.mark.spec("CiA 301 §7.5.2.23 (1018h sub 4 serial number) / CiA 406 650Bh")
+def test_serial_number_matches_label(dut, evidence, label_serial):
+    """The unit reports the serial number printed on its label (1018h sub 4, else 650Bh): goods-in checks that
+    the device on the bench is the unit it books in."""
+    if label_serial is None:
+        pytest.skip("not applicable: no label serial number given (--label-serial)")
+    label, source = label_serial
+    identity = read_identity(dut)
+    if identity.unit_serial is None:
+        pytest.skip("not applicable: the device reports no serial number (no 1018h sub 4, no 650Bh); "
+                    f"label {label} ({source})")
+    where = "1018h.04" if identity.serial is not None else "650Bh"
+    evidence.note(f"label {label} ({source}); device {where} = {identity.unit_serial}")
+    assert identity.unit_serial == label, (
+        f"{where} = {identity.unit_serial} but the label says {label} ({source}): another unit, or a wrong serial")

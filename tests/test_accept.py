@@ -176,8 +176,13 @@ def test_accept_passes_with_station_settings_recorded(tmp_path):
 
 def test_accept_takes_no_reset(tmp_path):
     """The POSITAL reboots for ~4 s: an acceptance resets nothing, so it ends well before one reboot."""
-    result, summary = _accept(tmp_path, "fraba-posital-awc58-c2-mt", "--trace", "all")
+    result, summary = _accept(tmp_path, "fraba-posital-awc58-c2-mt", "--trace", "all", "--label-serial", "10058201")
     assert result.returncode == RunExit.PASSED, result.stdout + result.stderr
+    assert summary.serial == "10058201", "a device without a serial object is booked in by its label's"
+    assert (Path(summary.report_dir) / "certificate.html").exists()
+    listing = subprocess.run([sys.executable, "-m", "encoder_conformance", "history", "list", "--serial", "10058201",
+                              "--kind", "accept"], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert "fraba-posital-awc58-c2-mt" in listing.stdout, listing.stdout + listing.stderr
     assert summary.duration_s < 5.0, f"{summary.duration_s} s: did the run wait for a reboot?"
     snapshot = json.loads((Path(summary.report_dir) / "device-snapshot.json").read_text(encoding="utf-8"))
     assert snapshot["entries"], "no values as found in the snapshot"

@@ -9,6 +9,9 @@ from canopen.sdo.exceptions import SdoAbortedError
 from ..profile.model import DeviceProfile
 from .device import DeviceUnderTest
 
+#: what a device without a serial number reads (SIKO WV58M manual p.37-38: 650Bh = FFFFFFFFh "not supported")
+NO_SERIAL = (0, 0xFFFFFFFF)
+
 
 @dataclass(frozen=True)
 class DeviceIdentity:
@@ -19,6 +22,14 @@ class DeviceIdentity:
     revision: int | None
     serial: int | None
     malformed: tuple[str, ...] = ()  # objects whose answer did not have the size of their type
+    serial_650b: int | None = None  # CiA 406 650Bh, read where 1018h has no serial number
+
+    @property
+    def unit_serial(self) -> int | None:
+        """The unit's serial number from 1018h sub 4, else 650Bh (neither 0 nor FFFFFFFFh: "not supported")."""
+        if self.serial is not None:
+            return self.serial
+        return self.serial_650b if self.serial_650b not in (None, *NO_SERIAL) else None
 
     def as_report(self) -> dict[str, str]:
         def hex_or_dash(value: int | None) -> str:
@@ -31,6 +42,9 @@ class DeviceIdentity:
             "serial number (1018h.4)": "-" if self.serial is None else f"{self.serial} (0x{self.serial:08X})",
             "device type (1000h)": hex_or_dash(self.device_type),
             "device name (1008h)": self.device_name or "-",
+            **({"serial number (650Bh)": f"{self.serial_650b} (0x{self.serial_650b:08X})" if self.unit_serial
+                else f"- (0x{self.serial_650b:08X}: no serial number)"}
+               if self.serial is None and self.serial_650b is not None else {}),
         }
 
 
@@ -60,15 +74,23 @@ def read_identity(dut: DeviceUnderTest) -> DeviceIdentity:
     except SdoAbortedError:
         name = None
     malformed: list[str] = []
+    serial = _optional_u32(dut, 0x1018, 4, malformed)
+    serial_key = serial_650b_key(dut.profile)
     return DeviceIdentity(
         device_type=_optional_u32(dut, 0x1000, 0, malformed),
         device_name=name,
         vendor_id=_optional_u32(dut, 0x1018, 1, malformed),
         product_code=_optional_u32(dut, 0x1018, 2, malformed),
         revision=_optional_u32(dut, 0x1018, 3, malformed),
-        serial=_optional_u32(dut, 0x1018, 4, malformed),
+        serial=serial,
         malformed=tuple(malformed),
+        serial_650b=_optional_u32(dut, *serial_key, malformed) if serial is None and serial_key else None,
     )
+
+
+def serial_650b_key(profile: DeviceProfile) -> tuple[int, int] | None:
+    """Where the profile keeps the CiA 406 serial number 650Bh (sub 1 of a record, or sub 0), if it has one."""
+    return next(((0x650B, sub) for sub in (1, 0) if profile.entry(0x650B, sub) is not None), None)
 
 
 def identity_mismatch(identity: DeviceIdentity, profile: DeviceProfile) -> str | None:

@@ -92,6 +92,10 @@ def add_options(parser: pytest.Parser) -> None:
                     help="bench only: a plug-in that turns the encoder's shaft (a motor): FACTORY(config) returns an "
                          "object with turn_by(revolutions) and set_speed(revolutions_per_second); config.argument is "
                          "the text after '='. Without it the tests that need rotation skip on a bench")
+    group.addoption("--label-serial", default=None, type=int, metavar="NUMBER",
+                    help="the serial number printed on the device's label (decimal): the identity tests check that the "
+                         "device reports it (1018h sub 4, else 650Bh), and the history finds a device that reports "
+                         "none by it. On the built-in simulator: the twin's own (profile simulator.serial_number)")
     group.addoption("--delivery-state", action="store_true", default=False,
                     help="the device is in its delivery state (never configured): check factory defaults "
                          "as found, without restoring defaults first (no --allow-destructive needed)")

@@ -115,6 +115,9 @@ def completed(session: pytest.Session) -> RunSummary | None:
     if summary is None or folder is None:
         return None
     summary.identity = dict(config.stash.get(IDENTITY, {}))
+    label = config.getoption("--label-serial", default=None)
+    if label is not None:
+        summary.identity["serial number (label)"] = str(label)
     summary.duration_s = round(time.monotonic() - config.stash[_STARTED], 2)
     summary.exit_code = int(session.exitstatus)
     state = lifecycle.state_of(config)
