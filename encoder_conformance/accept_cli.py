@@ -39,7 +39,7 @@ def _pytest_argv(args: argparse.Namespace) -> list[str]:
     argv = [*pytest_args(), "--device-profile", args.profile, KIND_OPTION, KIND, "-p", "no:cacheprovider",
             "--assert=plain"]
     for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir", "station", "label_serial",
-                   "shaft_drive", "sim_profile"):
+                   "shaft_drive", "sim_profile", "history"):
         value = getattr(args, option)
         if value is not None:
             argv += [f"--{option.replace('_', '-')}", str(value)]
@@ -116,6 +116,9 @@ def add_accept_parser(sub: argparse._SubParsersAction, bus_arguments: BusArgumen
                         help="station file (TOML or YAML): CAN adapter, node-id, operator, motor plug-in, where "
                              "reports and the history go. Give it several times to accept one device per station in "
                              "parallel")
+    accept.add_argument("--history", metavar="PATH",
+                        help="the history database the acceptance is appended to (default: the station's history, "
+                             "else $ENCODER_CONFORMANCE_HISTORY, else reports/history.sqlite); 'off' records nothing")
     accept.add_argument("--label-serial", type=int, metavar="NUMBER",
                         help="the serial number on the device's label: checked against what the device reports "
                              "(1018h sub 4, else 650Bh) and recorded in the history (default: none; on the simulator "
