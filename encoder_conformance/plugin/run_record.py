@@ -125,7 +125,8 @@ def completed(session: pytest.Session) -> RunSummary | None:
         # an interrupted run has no verdict either: no PASS (nor a certificate) for what was not run
         interrupted = state.guard.reason if state.guard.signum is not None else None
         summary.could_not_test = state.stopped or interrupted
-        if state.rejected:
+        already = any(r.nodeid == acceptance.IDENTITY_CHECK for r in summary.results)
+        if state.rejected and not already:  # completed() runs twice: for the HTML summary, then for the file
             summary.results.insert(0, _identity_rejected(config, state.rejected))
         summary.device_restored = None if state.record is None else state.record.ok
     for result in summary.results:  # traces of passed tests may have been dropped (--bus-trace failed)
