@@ -112,8 +112,10 @@ def launch_simulator(
     stderr = open(log_path, "w", encoding="utf-8") if log_path else subprocess.DEVNULL  # noqa: SIM115
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     # a session of its own: the terminal's Ctrl-C reaches only the run, which gives the device back first
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True, env=env,
-                               start_new_session=True)
+    # stdin a pipe that only this process holds: when it ends, however (even SIGKILL), the simulator reads
+    # end-of-file and stops, instead of living on as an orphan holding its ports
+    process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr, text=True,
+                               env=env, start_new_session=True)
     lines: list[str] = []
 
     def read_ready_line() -> None:

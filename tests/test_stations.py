@@ -118,6 +118,18 @@ def test_two_simulated_stations_in_parallel(two_stations, tmp_path):
         assert RunSummary.read(tmp_path / "out" / name).station == name
 
 
+def test_two_stations_accepted_in_parallel(two_stations, tmp_path):
+    """accept takes several stations too: one acceptance each, one table, each run recorded as an acceptance."""
+    result = subprocess.run([sys.executable, "-m", "encoder_conformance", "accept", "--profile", "waycon-sx",
+                             *(arg for path in two_stations for arg in ("--station", path)),
+                             "--report-dir", str(tmp_path / "out")],
+                            cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout + result.stderr
+    for name in ("bench-a", "bench-b"):
+        summary = RunSummary.read(tmp_path / "out" / name)
+        assert (summary.kind, summary.station, summary.overall) == ("accept", name, "PASS")
+
+
 def test_ctrl_c_reaches_every_station(two_stations, tmp_path):
     """SIGINT to the parallel run goes to each run, which gives its device back and ends 130; so does the whole."""
     out = tmp_path / "out"

@@ -7,6 +7,7 @@ for an LSS master to give them one.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import os
@@ -123,17 +124,27 @@ def serve(
         print("Ctrl-C stops the simulator.", flush=True)
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    if ready_line:  # started by a tester (sim_process): stop when it is gone (its end of our stdin closes)
+        threading.Thread(target=_stop_at_end_of_input, args=(stop,), name="parent-watch", daemon=True).start()
     try:
         while not stop.wait(1.0):
             pass
     except KeyboardInterrupt:
         pass
-    log.info("stopping: %s", "SIGTERM" if stop.is_set() else "Ctrl-C")
+    log.info("stopping: %s", "SIGTERM or the tester gone" if stop.is_set() else "Ctrl-C")
     host.shutdown()  # the memory is written on every store, so nothing is left to save here
     sys.stdout.flush()
     sys.stderr.flush()
     # the web-socket server's threads make the interpreter's own shutdown take ~0.1 s, every run's end
     os._exit(0)
+
+
+def _stop_at_end_of_input(stop: threading.Event) -> None:
+    """Block until stdin ends (the process that started us ended, also by SIGKILL), then ask serve to stop."""
+    with contextlib.suppress(OSError, ValueError):
+        while sys.stdin.buffer.read(4096):
+            pass
+    stop.set()
 
 
 def _bind(option: str, text: str, serve_at: Callable[[tuple[str, int]], tuple[str, int]]) -> tuple[str, int]:

@@ -1,0 +1,50 @@
+"""A simulator started by a tester never outlives it: killed with SIGKILL (no clean-up of its own), the
+tester's end of the simulator's stdin closes and the simulator stops, freeing its ports."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+TESTER = """
+import time
+from encoder_conformance.sim_process import start_simulator
+sim = start_simulator("waycon-sx")
+print("SIMPID", sim.process.pid, flush=True)
+time.sleep(120)
+"""
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def test_simulator_stops_when_its_tester_is_killed():
+    tester = subprocess.Popen([sys.executable, "-c", TESTER], cwd=REPO, stdout=subprocess.PIPE, text=True)
+    try:
+        assert tester.stdout is not None
+        line = tester.stdout.readline()
+        assert line.startswith("SIMPID "), line
+        simulator = int(line.split()[1])
+        assert _alive(simulator)
+        tester.send_signal(signal.SIGKILL)
+        tester.wait(10)
+        deadline = time.monotonic() + 15
+        while _alive(simulator) and time.monotonic() < deadline:
+            time.sleep(0.05)  # polling a process that is not our child: no event to wait on
+        still = _alive(simulator)
+        if still:
+            os.kill(simulator, signal.SIGKILL)
+        assert not still, "the simulator lived on after its tester was killed (an orphan holding its ports)"
+    finally:
+        if tester.poll() is None:
+            tester.kill()
