@@ -73,11 +73,17 @@ def _cmd_profile_validate(args: argparse.Namespace, extra: list[str]) -> int:
 
     status = 0
     for name in usage.profile_files(args.files):
+        try:  # every file is checked and every problem shown, also after one that is missing
+            usage.check_profile("profile", name)
+        except UsageError as exc:
+            print(f"encoder-conformance profile: {exc}", file=sys.stderr)
+            status = RunExit.USAGE_ERROR
+            continue
         try:
             loaded = load_profile(name)
         except ProfileError as exc:
             print(exc, file=sys.stderr)
-            status = 1
+            status = status or 1
             continue
         profile = loaded.profile
         open_todos = f", {len(profile.todo)} assumptions unconfirmed (todo:)" if profile.todo else ""

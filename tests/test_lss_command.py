@@ -23,7 +23,7 @@ import pytest
 
 from encoder_conformance.bus_config import BusConfig
 from encoder_conformance.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand
-from encoder_conformance.cli import build_parser
+from encoder_conformance.cli import main as cli_main
 from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.dut.lss_find import error_text
 from encoder_conformance.dut.lss_master import LssAnswer
@@ -218,13 +218,11 @@ def test_error_codes_in_words():
     (["lss", "set-node-id", "--serial", "1", "--vendor", "1", "5", "--can-interface", "virtual"], "go together"),
 ])
 def test_bad_combinations_are_usage_errors(argv, message, capsys):
-    def parse_and_run() -> None:  # argparse refuses some while parsing, the commands the rest
-        args, extra = build_parser().parse_known_args(argv)
-        args.func(args, extra)
-
-    with pytest.raises(SystemExit) as stop:
-        parse_and_run()
-    assert stop.value.code == RunExit.USAGE_ERROR
+    try:  # argparse refuses some while parsing (SystemExit), the commands the rest (main's exit status)
+        status = cli_main(argv)
+    except SystemExit as stop:
+        status = stop.code
+    assert status == RunExit.USAGE_ERROR
     assert message in capsys.readouterr().err
 
 
