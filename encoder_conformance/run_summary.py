@@ -8,7 +8,6 @@ Pure data (no pytest): the plugin fills it (plugin/run_record.py), everything el
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -184,9 +183,3 @@ class RunSummary:
         path = folder_or_file / SUMMARY_FILE if folder_or_file.is_dir() else folder_or_file
         return cls.from_json(path.read_text(encoding="utf-8"))
 
-
-def count_outcomes(results: Iterable[TestResult]) -> dict[str, int]:
-    counts: dict[str, int] = {}
-    for result in results:
-        counts[result.outcome] = counts.get(result.outcome, 0) + 1
-    return counts

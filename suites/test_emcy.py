@@ -173,14 +173,20 @@ def test_no_emcy_in_stopped(dut, emcy, back_to_preoperational, evidence):
     assert not sent, f"EMCY in stopped after {trigger.name}\n{format_frames(sent)}"
 
 
+def _bus_trigger(kind, dut, settings_journal, evidence):
+    """A trigger the tester fires on the bus, with what its verdict rests on; skips where the device lacks it."""
+    why = kind.available(dut)
+    if why is not None:
+        pytest.skip(f"not applicable: {why}")
+    trigger = kind(dut, settings_journal.write)
+    evidence.rests_on(*trigger.basis)
+    return trigger
+
+
 def test_emcy_on_sync_length(dut, emcy, settings_journal, evidence):
     """With 1019h = 8 (SYNC with counter), a SYNC carrying its counter gives no EMCY 8240h and a SYNC without the
     counter byte gives EMCY 8240h (unexpected SYNC data length): an EMCY trigger without RPDOs."""
-    why = SyncLengthError.available(dut)
-    if why is not None:
-        pytest.skip(f"not applicable: {why}")
-    trigger = SyncLengthError(dut, settings_journal.write)
-    evidence.rests_on(*trigger.basis)
+    trigger = _bus_trigger(SyncLengthError, dut, settings_journal, evidence)
     cob_id = emcy.cob_id()
     right = dut.send(trigger.sync_cob_id, b"\x01")
     wrong = dut.frames.quiet_period(lambda m: cob_id.matches(m) and emcy_code(m) == trigger.code,
@@ -192,11 +198,7 @@ def test_emcy_on_sync_length(dut, emcy, settings_journal, evidence):
 def test_emcy_on_heartbeat_consumer_timeout(dut, emcy, settings_journal, evidence):
     """1016h.01 watching a node the tester plays: one heartbeat of it, then silence: the time-out's EMCY (8130h, or
     the code the manual gives) comes no sooner than the consumer time after that heartbeat."""
-    why = HeartbeatTimeout.available(dut)
-    if why is not None:
-        pytest.skip(f"not applicable: {why}")
-    trigger = HeartbeatTimeout(dut, settings_journal.write)
-    evidence.rests_on(*trigger.basis)
+    trigger = _bus_trigger(HeartbeatTimeout, dut, settings_journal, evidence)
     beat = trigger.fire()
     frame = emcy.wait(beat, trigger, f"after {trigger.name}", judged=True)
     sent = dut.frames.since(beat, lambda m: m.arbitration_id == 0x700 + trigger.producer)

@@ -12,7 +12,7 @@ from ..run_summary import RunSummary, TestResult, area_of
 from . import acceptance, lifecycle
 from .evidence import EVIDENCE
 from .options import bench_settings, settings_of
-from .reporting import IDENTITY, report_dir
+from .reporting import IDENTITY, report_dir, skip_reason
 
 SUMMARY = pytest.StashKey[RunSummary]()
 _STARTED = pytest.StashKey[float]()
@@ -60,7 +60,7 @@ def _identity_rejected(config: pytest.Config, reason: str) -> TestResult:
 def _message(report: pytest.TestReport) -> str:
     longrepr = report.longrepr
     if isinstance(longrepr, tuple):  # a skip: (file, line, "Skipped: reason")
-        return str(longrepr[2]).removeprefix("Skipped: ")
+        return skip_reason(report)
     crash = getattr(longrepr, "reprcrash", None)
     text = str(crash.message) if crash is not None else str(longrepr or "")
     return text[:MESSAGE_LIMIT]
