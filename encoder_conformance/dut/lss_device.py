@@ -86,6 +86,23 @@ class LssDevice:
     def leave(self) -> Mark:
         return self.master.switch_global(LssState.WAITING)
 
+    def sent_after_request(self, mark: Mark, window: float) -> list[can.Message]:
+        """The node's frames within ``window`` after the LSS request at ``mark``, less those that crossed it:
+        within the master's silence window (the profile's LSS response window plus the tester's margin) one
+        frame per COB-ID may already have been on its way when the request arrived (in the device's transmit
+        buffer, or sent by a twin's thread that looked just before). A device that goes on sending shows a
+        second frame of that COB-ID, or frames after the silence window."""
+        crossing_s = min(window, self.master.silence_s)
+        early = self.dut.frames_from_node(mark, crossing_s)
+        later = self.dut.frames_from_node(self.dut.frames.mark(), window - crossing_s)
+        seen: set[int] = set()
+        repeated = []
+        for msg in early:
+            if msg.arbitration_id in seen:
+                repeated.append(msg)
+            seen.add(msg.arbitration_id)
+        return repeated + later
+
     # -- a node-ID other than the DUT's ------------------------------------------------------------
     def free_node_id(self) -> int:
         """A node-ID nobody answers SDO at (the next ones after the device's)."""

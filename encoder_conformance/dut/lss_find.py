@@ -103,7 +103,7 @@ def any_identified(master: LssMaster, low: LssAddress, high: LssAddress) -> bool
     values = (low.vendor, low.product, low.revision, high.revision, low.serial, high.serial)
     for command, value in zip(IDENTIFY_RANGE_COMMANDS, values, strict=True):
         master.request(command, struct.pack("<I", value))
-    return master.answer(LssCommand.IDENTIFY_SLAVE, mark) is not None
+    return master.answer(LssCommand.IDENTIFY_SLAVE, mark, master.response_s) is not None
 
 
 def find_revision(master: LssMaster, vendor: int, product: int, serial: int,

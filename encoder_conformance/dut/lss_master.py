@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import struct
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import can
@@ -33,6 +34,13 @@ WINDOW_FLOOR_S = 0.01
 #: after an answer, how long other slaves' copies of it may still arrive (on a real bus identical
 #: answers merge into one frame; a simulated bus delivers each)
 ECHO_S = 0.003
+#: an answer the test expects is waited for this long at least (then 4 x the profile's window): the profile's
+#: window is what the device owes, not what a loaded tester host needs to see the answer (a late answer is
+#: a slow host far more often than a slow device; SDO answers are waited for the same way)
+ANSWER_FLOOR_S = 0.3
+#: a silence (an answer that must not come) is watched for the profile's window plus the tester's latency;
+#: the same margin as ``device.TESTER_MARGIN_S``
+SILENCE_MARGIN_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -68,7 +76,9 @@ class LssMaster:
     def __init__(self, send: Send, frames: FrameLog, response_s: float) -> None:
         self._send = send
         self.frames = frames
-        self.response_s = response_s
+        self.response_s = response_s  # the profile's window: what the device owes (search steps wait this)
+        self.answer_timeout_s = max(ANSWER_FLOOR_S, 4 * response_s)  # an expected answer is waited for this long
+        self._silence = False  # inside ``no_answer_expected``
         self.steps = 0  # frames sent (fastscan cost, for the report)
         self.latencies: list[float] = []  # seconds each answer took
         self._several = False  # more than one slave answered the fastscan reset: wait for their copies
@@ -81,11 +91,29 @@ class LssMaster:
         self.steps += 1
         return mark
 
+    @property
+    def silence_s(self) -> float:
+        """How long an answer that must not come is watched for: the profile's window plus the tester's margin."""
+        return self.response_s + SILENCE_MARGIN_S
+
+    @contextmanager
+    def no_answer_expected(self) -> Iterator[None]:
+        """Within it, services wait ``silence_s`` for their answer instead of ``answer_timeout_s``: for checks
+        that a request goes unanswered (only a silence costs the whole wait)."""
+        saved, self._silence = self._silence, True
+        try:
+            yield
+        finally:
+            self._silence = saved
+
     def answer(self, command: int, mark: Mark, timeout: float | None = None) -> can.Message | None:
-        """The first slave frame with ``command`` after ``mark``, within the response window. How long an
-        answer took (on the host's clock, from the wait's start) is kept in ``latencies``."""
+        """The first slave frame with ``command`` after ``mark``: within ``timeout``, else ``answer_timeout_s``
+        (``silence_s`` inside ``no_answer_expected``). How long an answer took (on the host's clock, from the
+        wait's start) is kept in ``latencies``."""
+        if timeout is None:
+            timeout = self.silence_s if self._silence else self.answer_timeout_s
         start = time.perf_counter()
-        found = self.frames.wait_for(self._is_answer(command), self.response_s if timeout is None else timeout, mark)
+        found = self.frames.wait_for(self._is_answer(command), timeout, mark)
         if found is not None:
             self.latencies.append(time.perf_counter() - start)
         return found
@@ -103,8 +131,13 @@ class LssMaster:
         return lambda m: m.is_rx and m.arbitration_id == SLAVE_COB_ID and bool(m.data) and m.data[0] == command
 
     def answers(self, command: int, mark: Mark, window: float | None = None) -> list[can.Message]:
-        """Every slave frame with ``command`` in the response window after ``mark`` (waits the whole window)."""
-        return self.frames.quiet_period(self._is_answer(command), self.response_s if window is None else window, mark)
+        """Every slave frame with ``command`` after ``mark``: with ``window``, those within it (waits the whole
+        window); else the first as ``answer`` waits for it, and the others within the response window after it."""
+        if window is None:
+            if self.answer(command, mark) is None:
+                return []
+            window = self.response_s
+        return self.frames.quiet_period(self._is_answer(command), window, mark)
 
     # -- state -------------------------------------------------------------------------------------
     def switch_global(self, state: LssState) -> Mark:
@@ -168,7 +201,7 @@ class LssMaster:
     # -- fastscan ----------------------------------------------------------------------------------
     def _fastscan_step(self, id_number: int, bit_checked: int, sub: int, next_sub: int) -> bool:
         mark = self.request(LssCommand.FASTSCAN, struct.pack("<IBBB", id_number, bit_checked, sub, next_sub))
-        if self.answer(LssCommand.IDENTIFY_SLAVE, mark) is None:
+        if self.answer(LssCommand.IDENTIFY_SLAVE, mark, self.response_s) is None:  # silence means a 1 bit
             return False
         if self._several:
             self.frames.quiet_period(lambda m: False, ECHO_S)  # the other slaves' copies land before the next step
@@ -196,7 +229,7 @@ class LssMaster:
         step first; if no slave has it, none moved on and that part is scanned bit by bit as usual."""
         self._several = False
         mark = self.request(LssCommand.FASTSCAN, struct.pack("<IBBB", 0, FASTSCAN_RESET_BIT, 0, 0))
-        if self.answer(LssCommand.IDENTIFY_SLAVE, mark) is None:
+        if self.answer(LssCommand.IDENTIFY_SLAVE, mark, self.response_s) is None:  # a scan's own late-answer rules
             return None
         self._several = len(self.answers(LssCommand.IDENTIFY_SLAVE, mark, ECHO_S)) > 1
         address = []
