@@ -1,7 +1,8 @@
 """Run the suites against the simulator once per named fault and tabulate which tests catch which fault.
 
 A conformance test that no fault can make fail proves nothing; the matrix shows it. Each run
-is a separate pytest process (the same command a user runs), parsed from its JUnit XML. A fault
+is a separate pytest session in its own process (the same session a user's command runs; forked from a
+pre-loaded server, ``suite_runner``), parsed from its JUnit XML. A fault
 the suites can only see through a rule they infer (``fault_catalogue.JUDGED_STRICTLY``) runs with
 ``--strict-inferred``, so that its broken rule fails instead of warning; every other run (and the
 baseline) is judged as a user's run is.
@@ -12,8 +13,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import subprocess
-import sys
 import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -22,6 +21,7 @@ from pathlib import Path
 from .fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
 from .paths import REPO_ROOT, SUITES_DIR
 from .plugin.verdicts import STRICT_OPTION
+from .suite_runner import run_pytest
 
 _ENTRY_PARAM = re.compile(r"\[0x[0-9A-F]{4}\.[0-9A-F]{2} .*\]$")  # names may hold brackets: "Kv [1/s]"
 
@@ -81,7 +81,7 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     """One pytest run of suites/ (``targeted``: the fault's own modules) against the twin with ``fault``
     (strict about inferred rules where the fault is in JUDGED_STRICTLY)."""
     folder = workdir / (fault or "no-fault")
-    command = [sys.executable, "-m", "pytest", *_suite_paths(fault, targeted), "-q", "-p", "no:cacheprovider",
+    command = [*_suite_paths(fault, targeted), "-q", "-p", "no:cacheprovider",
                "--device-profile", profile, "--report-dir", str(folder), "--tb=no",
                "--history", "off"]  # a fault's run says nothing about a device: not in the history
     if fault:
@@ -91,15 +91,14 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     if select:
         command += ["-k", select]
     env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
-    completed = subprocess.run(command, cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=600)
+    completed = run_pytest(command, REPO_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
     junit = folder / "junit.xml"
     outcomes = _parse_junit(junit) if junit.exists() else {}
     preflight = _preflight_outcome(folder)
     if preflight == "failed" or select is None:  # a run limited by -k does not claim the start-up check
         outcomes[PREFLIGHT] = preflight
     if not outcomes or outcomes == {PREFLIGHT: "passed"}:
-        output = f"{completed.stdout[-3000:]}\n{completed.stderr[-3000:]}"
-        raise RuntimeError(f"no results from {' '.join(command)}:\n{output}")
+        raise RuntimeError(f"no results from pytest {' '.join(command)}:\n{completed.output[-6000:]}")
     return RunResult(fault, completed.returncode, outcomes)
 
 

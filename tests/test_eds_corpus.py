@@ -74,5 +74,5 @@ def twin_runs(tmp_path_factory):
 @pytest.mark.parametrize("name", IDS)
 def test_twin_of_the_draft_passes_the_suites(name: str, twin_runs):
     completed = twin_runs[name]
-    assert completed.returncode == 0, f"{name}: the twin of its own draft fails:\n{completed.stdout[-3000:]}"
-    assert "draft profile:" in completed.stdout, "a run with a draft profile says so"
+    assert completed.returncode == 0, f"{name}: the twin of its own draft fails:\n{completed.output[-3000:]}"
+    assert "draft profile:" in completed.output, "a run with a draft profile says so"

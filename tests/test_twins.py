@@ -1,13 +1,12 @@
 """Every device profile's simulated twin passes the full suite; a wrong profile fails on identity.
 
-Each run is a separate pytest process against the simulator in its own process, exactly as
-`encoder-conformance run --profile ID` does it. Run times are printed for the notes.
+Each run is a pytest session in its own process (forked from a pre-loaded server: suite_runner) against the
+simulator in its own process, as `encoder-conformance run --profile ID` runs it. Run times are printed for
+the notes.
 """
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -15,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.profile.loader import iter_profile_ids, load_profile
+from encoder_conformance.suite_runner import SessionResult, run_pytest
 
 REPO = Path(__file__).resolve().parents[1]
 #: every shipped profile, and the self-test variants with the optional PDO features none of them has (inhibit
@@ -34,11 +34,12 @@ def _expected_cost(profile_id: str) -> float:
 PARALLEL_RUNS = 2
 
 
-def run_suite(tmp_path: Path, *args: str) -> tuple[subprocess.CompletedProcess[str], float]:
-    command = [sys.executable, "-m", "pytest", str(REPO / "suites"), "-q", "-p", "no:cacheprovider",
-               "--tb=line", "--report-dir", str(tmp_path / "report"), *args]
+def run_suite(tmp_path: Path, *args: str) -> tuple[SessionResult, float]:
+    """One pytest session of suites/ in its own process (forked from the pre-loaded server, suite_runner)."""
+    command = [str(REPO / "suites"), "-q", "-p", "no:cacheprovider", "--tb=line", "--report-dir",
+               str(tmp_path / "report"), *args]
     start = time.monotonic()
-    completed = subprocess.run(command, cwd=REPO, capture_output=True, text=True, timeout=600)
+    completed = run_pytest(command, REPO, tmp_path / "pytest-output.txt", timeout=600)
     return completed, time.monotonic() - start
 
 
@@ -60,8 +61,8 @@ def test_each_full_run_takes_well_under_a_minute(twin_runs, capsys):
     with capsys.disabled():
         print("\nfull suite against each twin (run time, pytest summary):")
         for profile, (_, completed, seconds) in sorted(twin_runs.items()):
-            lines = completed.stdout.strip().splitlines()
-            print(f"  {Path(profile).stem:32s} {seconds:5.1f} s  {lines[-1] if lines else completed.stderr[-300:]}")
+            lines = completed.output.strip().splitlines()
+            print(f"  {Path(profile).stem:32s} {seconds:5.1f} s  {lines[-1] if lines else '(no output)'}")
     slow = {p: round(s) for p, (_, _, s) in twin_runs.items() if s >= 60}
     assert not slow, f"runs of a minute or more: {slow}"
 
@@ -69,7 +70,7 @@ def test_each_full_run_takes_well_under_a_minute(twin_runs, capsys):
 @pytest.mark.parametrize("profile", PROFILES, ids=lambda profile: Path(profile).stem)
 def test_twin_passes_its_profile(profile, twin_runs):
     folder, completed, _ = twin_runs[profile]
-    assert completed.returncode == 0, f"{profile} twin fails its own profile:\n{completed.stdout[-4000:]}"
+    assert completed.returncode == 0, f"{profile} twin fails its own profile:\n{completed.output[-4000:]}"
     assert (folder / "report" / "report.html").exists()
     assert (folder / "report" / "junit.xml").exists()
     assert not (folder / "report" / "allure-results").exists(), "allure results are written only with --allure"
@@ -80,15 +81,15 @@ def test_wrong_profile_fails_on_identity_without_timeouts(tmp_path):
     completed, seconds = run_suite(tmp_path, "--device-profile", "wachendorff-wdga-mt",
                                    "--sim-profile", "siko-wx58m-1212-mt")
     assert completed.returncode != 0
-    assert "wrong device for profile wachendorff-wdga-mt" in completed.stdout
-    assert "0x00000195" in completed.stdout  # the vendor-id the device really reports
-    assert "No SDO response" not in completed.stdout
+    assert "wrong device for profile wachendorff-wdga-mt" in completed.output
+    assert "0x00000195" in completed.output  # the vendor-id the device really reports
+    assert "No SDO response" not in completed.output
     assert seconds < 30, f"wrong-profile run took {seconds:.0f} s; expected a fast, single-reason failure"
 
 
 def test_allure_results_on_request(tmp_path):
     """--allure writes allure-pytest results (one result file per test) into the report folder."""
     completed, _ = run_suite(tmp_path, "--device-profile", "waycon-sx", "-k", "test_identity", "--allure")
-    assert completed.returncode == 0, completed.stdout[-3000:]
+    assert completed.returncode == 0, completed.output[-3000:]
     results = list((tmp_path / "report" / "allure-results").glob("*-result.json"))
     assert results, "no allure result files"
