@@ -2,9 +2,10 @@
 their histogram beside it, as a self-contained SVG (560 x 192 px, the size of the former 7 x 2.4 in at 80 dpi).
 
 Hand-written rather than drawn with a plotting library: the chart is two panels of lines, dots and bars, and
-matplotlib (which drew it before) cost 1.1 s to import and ~0.5 s of CPU per plot, about 3 s of a 30 s full
-run on a 2-core CI that runs ~30 such runs. This renderer takes ~1 ms per plot and adds no dependency; the
-SVG is a few kB of text (a browser draws it; the report embeds it as an image)."""
+matplotlib (which drew it before) cost ~1 s to import and 0.2-0.5 s of CPU per plot (the lower figure on a
+developer machine, the higher on the loaded 2-core CI): 1.5-3 s of a 30 s full run, on a CI that runs ~30
+such runs. This renderer takes ~1 ms per plot of 50 samples (~4 ms for 1000) and adds no dependency; the SVG
+is 5-10 kB of text for 50 samples, about half the former PNG (the report embeds it as an image)."""
 
 from __future__ import annotations
 
