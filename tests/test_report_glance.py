@@ -7,9 +7,12 @@ against the WDGA twin with a heartbeat fault (banner before pytest-html's table,
 
 from __future__ import annotations
 
+import base64
 import json
+import re
 from pathlib import Path
 from types import SimpleNamespace
+from xml.etree import ElementTree
 
 import can
 import pytest
@@ -224,3 +227,16 @@ def test_trace_all_keeps_passed_traces(tmp_path):
     traces = sorted(p.name for p in (tmp_path / "report" / "traces").iterdir())
     assert traces == ["test_heartbeat_frame_format.asc", "test_heartbeat_frame_format.log"]
     assert "traces/test_heartbeat_frame_format.log" in (tmp_path / "report" / "report.html").read_text()
+
+
+def test_end_to_end_timing_plot_embedded_as_svg(fault_run):
+    """The heartbeat period test (a timing test) carries its plot: an SVG data URI that decodes and parses, with
+    the measurement's name as its title and one dot per sample."""
+    folder, _ = fault_run
+    page = (folder / "report.html").read_text(encoding="utf-8")
+    plots = re.findall(r"data:image/svg\+xml;base64,([A-Za-z0-9+/=]+)", page)
+    assert plots
+    for plot in plots:
+        root = ElementTree.fromstring(base64.b64decode(plot))
+        assert root.findtext("{http://www.w3.org/2000/svg}title")
+        assert len(list(root.iter("{http://www.w3.org/2000/svg}circle"))) >= 50

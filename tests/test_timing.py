@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import re
 import threading
+from xml.etree import ElementTree
 
 import pytest
+from hypothesis import example, given
+from hypothesis import strategies as st
 
 from encoder_conformance.checks import check_periodic
 from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe
@@ -13,6 +17,7 @@ from encoder_conformance.profile.model import HeartbeatTolerance
 from encoder_conformance.timing import schedule_fit
 
 PERIOD_MS = 50.0
+_SVG = "{http://www.w3.org/2000/svg}"
 TOLERANCE = HeartbeatTolerance()  # max(2 ms, 10 %) = 5 ms at 50 ms; 5 % of the frames may be late
 
 
@@ -102,7 +107,7 @@ def test_timing_summary_percentiles_and_error():
     assert summary.worst_error == 50.0
 
 
-def test_timing_measurement_gives_junit_figures_csv_and_a_small_png():
+def test_timing_measurement_gives_junit_figures_csv_and_a_small_svg():
     evidence = Evidence()
     record = evidence.timing("heartbeat interval", [50.0, 50.2, 49.8, 56.7], nominal_ms=50, low_ms=45, high_ms=55,
                              clock="host clock", basis="inferred", judged="fitted period")
@@ -111,9 +116,10 @@ def test_timing_measurement_gives_junit_figures_csv_and_a_small_png():
     assert properties["timing heartbeat interval limits_ms"] == "[45.00 .. 55.00] ms"
     assert record.outside() == 1
     assert record.csv().splitlines()[:2] == ["n,interval_ms", "0,50.000"]
-    png = record.png()
-    assert png.startswith(b"\x89PNG")
-    assert len(png) < 60_000
+    svg = record.svg()
+    assert svg.startswith("<svg")
+    assert svg is record.svg()
+    assert len(svg) < 20_000
 
 
 def test_frame_clock_says_which_clock_judged():
@@ -126,10 +132,41 @@ def test_frame_clock_says_which_clock_judged():
     assert "just before send" in frame_clock({"interface": "remote"}, simulated=True).describe(own_frames_too=True)
 
 
-@pytest.mark.parametrize("samples", [[], [50.0], [49.9, 50.0, 50.1, 72.0]], ids=["none", "one", "one late"])
-def test_timing_plot_renders_any_sample_count(samples):
-    """A PNG for every capture, also one that caught no frame (the report must not break on it)."""
-    from encoder_conformance.plugin.timing_plot import render_png
+_MS = st.floats(min_value=-1e4, max_value=1e4, allow_nan=False)
 
-    png = render_png("heartbeat interval", samples, 50.0, 45.0, 55.0, "interval")
-    assert png.startswith(b"\x89PNG")
+
+@given(samples=st.lists(_MS, max_size=120), nominal=_MS, low=st.none() | _MS, high=st.none() | _MS)
+@example(samples=[], nominal=50.0, low=45.0, high=55.0)
+@example(samples=[50.0], nominal=50.0, low=45.0, high=55.0)
+@example(samples=[3.0] * 20, nominal=3.0, low=None, high=None)
+@example(samples=[50.0] * 5, nominal=50.0, low=50.0, high=50.0)
+@example(samples=[49.9, 50.0, 50.1, 72.0], nominal=50.0, low=45.0, high=55.0)
+def test_timing_plot_renders_any_sample_count(samples, nominal, low, high):
+    """A well-formed SVG for every capture, also one that caught no frame or only equal values (the report must
+    not break on it): the title, one dot per sample, red exactly for those outside the band, no NaN."""
+    from encoder_conformance.plugin.timing_plot import RED, render_svg, within
+
+    svg = render_svg("heartbeat <1017h> & co", samples, nominal, low, high, "interval")
+    root = ElementTree.fromstring(svg)
+    numbers = re.findall(r"='([^']*)'", svg)  # every attribute value: coordinates, sizes, colours
+    assert not [v for v in numbers if re.search(r"nan|inf", v, re.IGNORECASE)]
+    texts = [t.text for t in root.iter(f"{_SVG}text")]
+    assert "heartbeat <1017h> & co" in texts
+    assert "interval #" in texts
+    dots = list(root.iter(f"{_SVG}circle"))
+    assert len(dots) == len(samples)
+    red = [n for n, dot in enumerate(dots) if dot.get("fill") == RED]
+    assert red == [n for n, v in enumerate(samples) if not within(low, high, v)]
+    inside = [(0.0 <= float(dot.get(a)) <= limit) for dot in dots for a, limit in (("cx", 560), ("cy", 192))]
+    assert all(inside)
+
+
+def test_plot_scale_round_ticks_and_labels():
+    """Axis ticks at 1, 2, 2.5 or 5 times a power of ten, labelled with the decimals the step needs."""
+    from encoder_conformance.plugin.plot_scale import Scale, nice_step, tick_labels
+
+    assert [nice_step(raw) for raw in (2.8, 0.22, 1.0, 0.0)] == [5.0, 0.25, 1.0, 1.0]
+    assert Scale(43.1, 57.2, 157, 23).ticks() == [45.0, 50.0, 55.0]
+    assert tick_labels([45.0, 47.5, 50.0]) == ["45.0", "47.5", "50.0"]
+    assert tick_labels([-0.1 + 0.1, 0.25]) == ["0.00", "0.25"]
+    assert Scale.padded(3.0, 3.0, 0, 100)(3.0) == 50.0  # an empty range is centred, not a division by zero

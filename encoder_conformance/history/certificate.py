@@ -5,8 +5,9 @@ carries its own print CSS (A4 portrait, one page) so any browser prints it as it
 (autoescaped: a device name is device data, not markup); it comes with pytest-html already.
 
 PDF: WeasyPrint, when installed (``pip install -e ".[pdf]"``). Chosen because it renders the same
-HTML and print CSS (``@page``) faithfully with a small pure-Python package (~5 MB beside what
-matplotlib already brings), while xhtml2pdf understands only a subset of CSS and pulls in ReportLab,
+HTML and print CSS (``@page``) faithfully with a small pure-Python package (~5 MB of its own, plus
+Pillow and fontTools, ~50 MB installed, which it brings itself now that the timing plots no longer
+use matplotlib), while xhtml2pdf understands only a subset of CSS and pulls in ReportLab,
 and no browser is on a station by default. WeasyPrint needs the Pango system library: present on
 this project's machines (measured: import and one page 0.9 s on an idle 2-core machine, 2 s on a
 loaded one), possibly missing on a fresh one. So the PDF is optional and never fails a run: without

@@ -8,6 +8,7 @@ import html
 from dataclasses import dataclass, field
 
 from ..timing import TimingSummary
+from .timing_plot import render_svg
 
 #: the figures each timing test gives JUnit (as properties "timing <name> <figure>_ms") and the report table
 REPORTED = ("mean", "p50", "p95", "p99", "max")
@@ -29,7 +30,7 @@ class TimingMeasurement:
     judged: str
     sample_label: str = "interval"  # what one sample is, for the plot's axis and the CSV
     unit: str = "ms"
-    _png: bytes | None = field(default=None, repr=False)
+    _svg: str | None = field(default=None, repr=False)
 
     @property
     def summary(self) -> TimingSummary:
@@ -58,14 +59,12 @@ class TimingMeasurement:
     def csv(self) -> str:
         return f"n,{self.sample_label}_{self.unit}\n" + "\n".join(f"{n},{v:.3f}" for n, v in enumerate(self.samples))
 
-    def png(self) -> bytes:
-        """The plot (rendered once, on first use: a run without timing tests never imports matplotlib)."""
-        if self._png is None:
-            from .timing_plot import render_png
-
-            self._png = render_png(self.name, self.samples, self.nominal, self.low, self.high, self.sample_label,
+    def svg(self) -> str:
+        """The plot as SVG markup (rendered once: the HTML report and allure may both ask for it)."""
+        if self._svg is None:
+            self._svg = render_svg(self.name, self.samples, self.nominal, self.low, self.high, self.sample_label,
                                    self.unit)
-        return self._png
+        return self._svg
 
     def html_table(self) -> str:
         summary = self.summary
