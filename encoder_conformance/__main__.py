@@ -1,8 +1,8 @@
 import sys
 
 try:
-    from .cli import main
+    from .cli import console_main
 except KeyboardInterrupt:  # Ctrl-C while Python is still importing: nothing was touched
     sys.exit(130)
 
-sys.exit(main())
+console_main()

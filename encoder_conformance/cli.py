@@ -332,5 +332,20 @@ def main(argv: list[str] | None = None) -> int:
         os._exit(interrupted_by(EARLY_SIGNALS[-1]) if EARLY_SIGNALS else RunExit.INTERRUPTED)
 
 
+def console_main() -> None:
+    """The command (console script and ``python -m``): ``main``, then end the process at once. Skipping the
+    interpreter's finalisation (tearing down a heap of pytest items, hypothesis and pydantic models) saves
+    0.3-0.6 s after a run's verdict, measured after a Ctrl-C, where every tenth of a second counts against
+    "ends within 2 s". Nothing is lost: the session is over, files and the history are closed, and only
+    daemon threads are left."""
+    import logging
+
+    status = main()
+    logging.shutdown()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    console_main()

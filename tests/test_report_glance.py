@@ -186,7 +186,7 @@ def fault_run(tmp_path_factory):
 
 def test_end_to_end_banner_before_pytest_html_table(fault_run):
     folder, completed = fault_run
-    assert completed.returncode == 1, completed.stdout[-3000:]
+    assert completed.returncode == 1, completed.output[-3000:]
     page = (folder / "report.html").read_text(encoding="utf-8")
     banner, identity, areas, failures, table = _positions(
         page, "class='g-banner g-fail'", "id='identity'", "id='areas'", "id='failures'", 'id="results-table"')
@@ -223,7 +223,7 @@ def test_end_to_end_report_folder_is_small(fault_run):
 def test_trace_all_keeps_passed_traces(tmp_path):
     completed = run_suite(tmp_path, "--device-profile", "wachendorff-wdga-mt", "-k", "test_heartbeat_frame_format",
                           "--bus-trace", "all")[0]
-    assert completed.returncode == 0, completed.stdout[-3000:]
+    assert completed.returncode == 0, completed.output[-3000:]
     traces = sorted(p.name for p in (tmp_path / "report" / "traces").iterdir())
     assert traces == ["test_heartbeat_frame_format.asc", "test_heartbeat_frame_format.log"]
     assert "traces/test_heartbeat_frame_format.log" in (tmp_path / "report" / "report.html").read_text()

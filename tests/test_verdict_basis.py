@@ -46,21 +46,21 @@ def runs(tmp_path_factory):
 
 def test_conformant_device_passes_with_warnings(runs):
     default, _ = runs
-    assert default.returncode == 0, default.stdout[-3000:]
-    assert "warnings: rules we only inferred were broken" in default.stdout
-    assert "inferred: 4 warning" in default.stdout
-    assert "[inferred: capabilities.tpdo_transmission_types (refusal: inferred)]" in default.stdout
+    assert default.returncode == 0, default.output[-3000:]
+    assert "warnings: rules we only inferred were broken" in default.output
+    assert "inferred: 4 warning" in default.output
+    assert "[inferred: capabilities.tpdo_transmission_types (refusal: inferred)]" in default.output
 
 
 def test_strict_inferred_fails_the_same_device(runs):
     _, strict = runs
-    assert strict.returncode == 1, strict.stdout[-3000:]
-    assert "inferred: 4 failed" in strict.stdout
+    assert strict.returncode == 1, strict.output[-3000:]
+    assert "inferred: 4 failed" in strict.output
 
 
 def test_junit_carries_basis_and_warning(tmp_path):
     completed = run_suite(tmp_path, *VARIANT, "-k", "value_domain and 1800")[0]
-    assert completed.returncode == 0, completed.stdout[-3000:]
+    assert completed.returncode == 0, completed.output[-3000:]
     properties = _properties(tmp_path / "report" / "junit.xml")
     case = next(v for k, v in properties.items() if "0x1800.02" in k)
     assert ("verdict", "warning") in case
@@ -74,9 +74,9 @@ def test_abort_code_family_mode(tmp_path):
     selection = ["--device-profile", WDGA, "--sim-fault", "write_ro_unsupported_access", "-k",
                  "test_read_only_entry_refuses_write and 0x1000"]
     exact = run_suite(tmp_path / "exact", *selection)[0]
-    assert exact.returncode == 1, exact.stdout[-3000:]
+    assert exact.returncode == 1, exact.output[-3000:]
     family = run_suite(tmp_path / "family", *selection, "--abort-codes", "family")[0]
-    assert family.returncode == 0, family.stdout[-3000:]
+    assert family.returncode == 0, family.output[-3000:]
     report = (tmp_path / "family" / "report" / "report.html").read_text(encoding="utf-8")
     assert "family (--abort-codes)" in report  # the mode is in the report's environment table
     assert "accepted by family" in report  # and the test's evidence says what was accepted

@@ -16,6 +16,7 @@ from .reporting import IDENTITY, report_dir, skip_reason
 
 SUMMARY = pytest.StashKey[RunSummary]()
 _STARTED = pytest.StashKey[float]()
+_RESULT = pytest.StashKey[TestResult]()  # the item's result once recorded (a teardown error may change it)
 KIND_OPTION = acceptance.KIND_OPTION
 MESSAGE_LIMIT = 1500  # characters of a failure kept in the summary (the HTML report has it all)
 
@@ -95,14 +96,15 @@ def note_report(item: pytest.Item, report: pytest.TestReport) -> None:
     trace = None
     if evidence is not None and evidence.trace_path is not None and folder is not None:
         trace = evidence.trace_path.relative_to(folder).as_posix()
-    existing = next((r for r in reversed(summary.results) if r.nodeid == item.nodeid), None)
+    existing = item.stash.get(_RESULT, None)
     if existing is not None:  # a teardown error after the call's verdict
         if outcome == "error":
             existing.outcome, existing.message = "error", message
         return
-    summary.results.append(TestResult(item.nodeid, area_of(item.nodeid), outcome, basis,  # type: ignore[arg-type]
-                                      source or (evidence.spec if evidence else None), message,
-                                      round(report.duration, 3), trace))
+    result = TestResult(item.nodeid, area_of(item.nodeid), outcome, basis,  # type: ignore[arg-type]
+                        source or (evidence.spec if evidence else None), message, round(report.duration, 3), trace)
+    item.stash[_RESULT] = result
+    summary.results.append(result)
 
 
 def completed(session: pytest.Session) -> RunSummary | None:
