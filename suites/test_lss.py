@@ -26,6 +26,7 @@ from encoder_conformance.cia305 import (
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.lss_device import LssDevice, expect_success
 from encoder_conformance.dut.lss_master import LssAddress
+from encoder_conformance.dut.power import HOW_TO_CONFIGURE
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.model import resolve_node_id_expression
@@ -264,6 +265,9 @@ def unconfigured(lss: LssDevice, pytestconfig: pytest.Config) -> LssDevice:
     stores = not lss.applies_on_reset or "node_id" in lss.auto_stored
     if stores and not settings_of(pytestconfig).allow_destructive:
         pytest.skip("destructive here (the device stores the node-ID to apply it): run with --allow-destructive")
+    if not lss.applies_on_reset and lss.power_cycle is None:
+        pytest.skip(f"needs a power switch: {HOW_TO_CONFIGURE}; the device applies a node-ID only at power-on "
+                    f"(quirk lss_only_in_states)")
     lss.apply_node_id(UNCONFIGURED_NODE_ID)
     return lss
 
