@@ -1,12 +1,12 @@
 """Run pytest sessions (a suite against a twin) in children forked from a pre-loaded server.
 
 The fault matrix and the self-tests run the suites a few hundred times, each as its own pytest session,
-as a user runs them. As separate interpreters (``subprocess``), each spent ~1.5 s of a 3.5 s targeted run
-importing pytest, python-can, canopen, pydantic and this library before its first test (measured: 3.5 s
-as a subprocess, 2.0 s forked). multiprocessing's forkserver start method (stdlib) imports them once in a
-single-threaded server and forks a fresh child per session: each child is a new process with its own
-pytest session, its own simulator and nothing shared with the caller (or with the other children) but
-the imported modules.
+as a user runs them. As separate interpreters (``subprocess``), each spent ~1.5 s importing pytest,
+python-can, canopen, pydantic and this library before its first test (measured on one targeted fault run,
+median of 3: 3.7 s as a subprocess, 2.3 s forked). multiprocessing's forkserver start method (stdlib)
+imports them once in a single-threaded server and forks a fresh child per session: each child is a new
+process with its own pytest session, its own simulator and nothing shared with the caller (or with the
+other children) but the imported modules.
 
 Not preloaded: the pytest plugins found through entry points (pytest-html, allure-pytest, hypothesis):
 pytest marks them for assertion rewriting and warns when they are already imported.

@@ -30,6 +30,15 @@ from .frames import FrameLog, Mark, format_frames
 #: them: SDO round trips to the twin p99 < 20 ms; 50 ms leaves room. A silence window is what the device
 #: owes plus this margin; an expected frame is waited for with the generous limits (boot-up, SDO timeout).
 TESTER_MARGIN_S = 0.05
+#: an answer the device owes is waited for 4 x what it owes, and at least this long: a late answer is a loaded
+#: tester host far more often than a slow device (SDO and LSS answers alike)
+ANSWER_FLOOR_S = 0.3
+
+
+def answer_window(device_s: float) -> float:
+    """How long to wait for an answer the device owes within ``device_s`` (a silence: ``silence_window``)."""
+    return max(ANSWER_FLOOR_S, 4 * device_s)
+
 #: exact: the code CiA 301 (or the manual, through a quirk) names for the situation; family: any code of
 #: its family (the same code but for the last digit, e.g. 06090031h for 06090030h), as the CiA
 #: conformance test tool accepts
@@ -58,7 +67,7 @@ class DeviceUnderTest:
         self.node_id = node_id
         self.node = canopen.RemoteNode(node_id, canopen.ObjectDictionary())
         network.add_node(self.node)
-        self.node.sdo.RESPONSE_TIMEOUT = max(0.3, 4 * profile.timing.sdo_response_max_ms / 1000)
+        self.node.sdo.RESPONSE_TIMEOUT = answer_window(profile.timing.sdo_response_max_ms / 1000)
         self._lost: str | None = None
         self.stopping: str | None = None  # why the run is ending early (Ctrl-C, SIGTERM)
         self.tester_notes: list[str] = []  # what the tester saw that is not a verdict (drained into evidence)

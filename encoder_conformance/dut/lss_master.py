@@ -27,6 +27,7 @@ from ..cia305 import (
     LssCommand,
     LssState,
 )
+from .device import TESTER_MARGIN_S, answer_window
 from .frames import FrameLog, Mark
 
 #: the shortest response window a learned one may be (``LssMaster.learned_window``)
@@ -34,13 +35,6 @@ WINDOW_FLOOR_S = 0.01
 #: after an answer, how long other slaves' copies of it may still arrive (on a real bus identical
 #: answers merge into one frame; a simulated bus delivers each)
 ECHO_S = 0.003
-#: an answer the test expects is waited for this long at least (then 4 x the profile's window): the profile's
-#: window is what the device owes, not what a loaded tester host needs to see the answer (a late answer is
-#: a slow host far more often than a slow device; SDO answers are waited for the same way)
-ANSWER_FLOOR_S = 0.3
-#: a silence (an answer that must not come) is watched for the profile's window plus the tester's latency;
-#: the same margin as ``device.TESTER_MARGIN_S``
-SILENCE_MARGIN_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -77,7 +71,7 @@ class LssMaster:
         self._send = send
         self.frames = frames
         self.response_s = response_s  # the profile's window: what the device owes (search steps wait this)
-        self.answer_timeout_s = max(ANSWER_FLOOR_S, 4 * response_s)  # an expected answer is waited for this long
+        self.answer_timeout_s = answer_window(response_s)  # an expected answer is waited for this long
         self._silence = False  # inside ``no_answer_expected``
         self.steps = 0  # frames sent (fastscan cost, for the report)
         self.latencies: list[float] = []  # seconds each answer took
@@ -94,7 +88,7 @@ class LssMaster:
     @property
     def silence_s(self) -> float:
         """How long an answer that must not come is watched for: the profile's window plus the tester's margin."""
-        return self.response_s + SILENCE_MARGIN_S
+        return self.response_s + TESTER_MARGIN_S
 
     @contextmanager
     def no_answer_expected(self) -> Iterator[None]:
