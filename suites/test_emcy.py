@@ -83,7 +83,7 @@ def test_emcy_cob_id_valid_bit(dut, emcy, settings_journal, evidence):
     valid = found & ~COB_ID_INVALID
     settings_journal.write(EMCY_COB_ID, 0, (valid | COB_ID_INVALID).to_bytes(4, "little"))
     mark = trigger.fire()
-    sent = dut.frames.quiet_period(is_any_emcy, trigger.window_s(), mark)
+    sent = dut.frames.quiet_period(is_any_emcy, trigger.silence_s(), mark)
     assert not sent, (f"1014h = {valid | COB_ID_INVALID:08X}h (not valid): EMCY sent after {trigger.name}\n"
                       f"{format_frames(sent)}")
     dut.write(EMCY_COB_ID, 0, valid.to_bytes(4, "little"))
@@ -104,11 +104,11 @@ def test_emcy_inhibit_time_spaces_emcys(dut, emcy, settings_journal, back_to_pre
     mark = dut.frames.mark()
     frames: list[can.Message] = []
     actions = itertools.cycle([trigger.fire, trigger.clear] if trigger.clears else [trigger.fire])
-    deadline = time.monotonic() + (INHIBIT_SAMPLES + 1) * 2 * (INHIBIT_MS / 1000 + trigger.window_s())
+    deadline = time.monotonic() + (INHIBIT_SAMPLES + 1) * 2 * (INHIBIT_MS / 1000 + trigger.answer_s())
     with LatencyProbe(twin_lateness) as probe:
         while len(frames) < INHIBIT_SAMPLES + 1 and time.monotonic() < deadline:
             after = next(actions)()
-            if dut.frames.wait_for(cob_id.matches, INHIBIT_MS / 1000 + trigger.window_s(), after) is not None:
+            if dut.frames.wait_for(cob_id.matches, INHIBIT_MS / 1000 + trigger.answer_s(), after) is not None:
                 frames = dut.frames.since(mark, cob_id.matches)
     host = probe.result()
     spacing = [(b.timestamp - a.timestamp) * 1000 for a, b in itertools.pairwise(frames)]
@@ -163,7 +163,7 @@ def test_no_emcy_in_stopped(dut, emcy, back_to_preoperational, evidence):
     stop = dut.nmt("stop")
     dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000, stop)
     mark = trigger.fire()
-    sent = dut.frames.quiet_period(cob_id.matches, trigger.window_s(), mark)
+    sent = dut.frames.quiet_period(cob_id.matches, trigger.silence_s(), mark)
     found = dut.profile.quirk_of(fx.EmcyInStopped)
     return_to_preoperational(dut)
     if found is not None:
@@ -190,7 +190,7 @@ def test_emcy_on_sync_length(dut, emcy, settings_journal, evidence):
     cob_id = emcy.cob_id()
     right = dut.send(trigger.sync_cob_id, b"\x01")
     wrong = dut.frames.quiet_period(lambda m: cob_id.matches(m) and emcy_code(m) == trigger.code,
-                                    trigger.window_s(), right)
+                                    trigger.silence_s(), right)
     assert not wrong, f"EMCY 8240h after a SYNC with counter 1 (1019h = 8)\n{format_frames(wrong)}"
     emcy.wait(trigger.fire(), trigger, f"after {trigger.name}", judged=True)
 

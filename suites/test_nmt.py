@@ -30,7 +30,7 @@ TRANSITIONS = [
 def nmt(dut, settings_journal, back_to_preoperational, request, evidence) -> NmtObserver:
     """Observe the state by heartbeat, or by SDO answers and SYNC-driven TPDOs on devices without one."""
     if dut.profile.capabilities.heartbeat_producer:
-        return HeartbeatObserver(dut, request.getfixturevalue("heartbeat"))
+        return HeartbeatObserver(dut, request.getfixturevalue("state_heartbeat"))
     comm = request.getfixturevalue("sync_tpdo")
     if comm is None:
         pytest.skip("not applicable: no heartbeat and no SYNC-driven TPDO to observe the NMT state with")
@@ -238,7 +238,7 @@ def test_reset_communication_reloads_communication_parameters(dut, settings_jour
 def _boots_into(dut, settings_journal, evidence) -> int:
     """Reset node; after the boot-up, switch the heartbeat on (RAM only) and return the state it reports."""
     dut.reset_node_and_wait()
-    period = dut.profile.timing.heartbeat_test_period_ms
+    period = dut.profile.timing.heartbeat_state_period_ms
     mark = dut.frames.mark()
     settings_journal.write(0x1017, 0, period.to_bytes(2, "little"))
     beat = dut.wait_heartbeat(mark, (dut.profile.timing.nmt_settle_ms + 3 * period) / 1000)

@@ -128,7 +128,7 @@ class DeviceValues:
         self.writes: list[Write] = []
         self.stored: dict[tuple[int, int], Tracked] = {}
         autostart = profile.params_of(fx.NmtAutostartObject)
-        period = profile.timing.heartbeat_test_period_ms
+        period = profile.timing.heartbeat_state_period_ms  # states, not timing: each change shows within ~1 period
         # 1017h also where the device stores every write itself (as the heartbeat fixture writes it): the model
         # then takes the written value as the stored one
         if profile.capabilities.heartbeat_producer and _stored_by_command(profile, 0x1017, 0, also=("auto",)):

@@ -35,7 +35,7 @@ from ..cia301 import (
 )
 from ..profile import quirk_effects as fx
 from .actuator import BenchActuator, ErrorStimulus
-from .device import DeviceUnderTest
+from .device import DeviceUnderTest, answer_window
 from .frames import Mark
 
 Write = Callable[[int, int, bytes], None]
@@ -44,7 +44,6 @@ BENCH_REGISTER_BITS = 0x08  # 1001h bit 3: temperature
 BENCH_OTHER_CODE = 0x5000  # device hardware (CiA 301 table 21)
 SYNC_OVERFLOW = 8  # 1019h while the SYNC-length trigger is prepared
 HEARTBEAT_TIMEOUT_MS = 50  # 1016h time of the watched producer
-EMCY_WINDOW_S = 0.5  # how long an EMCY may take after its cause (the wait ends when it comes)
 
 
 @dataclass(frozen=True)
@@ -88,6 +87,7 @@ class EmcyTrigger:
     repeatable = True
     #: ``clear`` makes the cause go away (the device owes the error-reset EMCY)
     clears = False
+    _dut: DeviceUnderTest
 
     def fire(self) -> Mark:
         raise NotImplementedError
@@ -96,8 +96,16 @@ class EmcyTrigger:
         raise NotImplementedError(f"{self.name} cannot make the cause go away")
 
     def window_s(self) -> float:
-        """How long the EMCY may take after ``fire``."""
-        return EMCY_WINDOW_S
+        """How long the device may take to send the EMCY after ``fire`` (profile timing.emcy_response_max_ms)."""
+        return self._dut.profile.timing.emcy_response_max_ms / 1000
+
+    def answer_s(self) -> float:
+        """How long to wait for an EMCY the device owes (the wait ends when it comes)."""
+        return answer_window(self.window_s())
+
+    def silence_s(self) -> float:
+        """How long to watch for an EMCY the device must not send: what it would owe plus the tester's margin."""
+        return self._dut.silence_window(self.window_s() * 1000)
 
 
 class BenchError(EmcyTrigger):
@@ -176,7 +184,7 @@ class HeartbeatTimeout(EmcyTrigger):
         return self._dut.send(0x700 + self.producer, bytes([NmtState.OPERATIONAL]))
 
     def window_s(self) -> float:
-        return HEARTBEAT_TIMEOUT_MS / 1000 + EMCY_WINDOW_S
+        return HEARTBEAT_TIMEOUT_MS / 1000 + super().window_s()
 
 
 def choose_trigger(dut: DeviceUnderTest, bench: BenchActuator, write: Write,

@@ -407,10 +407,18 @@ class Timing(StrictModel):
         "default is this suite's inference (a device that is slower widens the windows a silence is checked in)")
     nmt_settle_ms: float = Field(default=100, gt=0, description="NMT command to new state visible")
     store_max_ms: float = Field(default=1000, gt=0)
+    emcy_response_max_ms: float = Field(
+        default=100, gt=0, description="an error's cause to its EMCY; CiA 301 gives no bound, so the default is this "
+        "suite's inference (an expected EMCY is waited for 4 x this, at least 0.3 s; a check that no EMCY comes "
+        "watches this plus the tester's 50 ms margin)")
     lss_response_ms: float = Field(
         default=50, gt=0, description="LSS request to the slave's answer; CiA 305 gives no bound, so the default "
         "is this suite's inference (each LSS request nobody should answer waits this long)")
     heartbeat_test_period_ms: int = Field(default=50, ge=1, description="1017h value used by the tests")
+    heartbeat_state_period_ms: int = Field(
+        default=10, ge=1, description="1017h value where a test watches the heartbeat's state byte, not its timing "
+        "(NMT state tests): each state change shows within about one period, so a short one is waited for less; "
+        "our choice, not a CiA value (raise it for a device that refuses or cannot keep 10 ms)")
     heartbeat_intervals: int = Field(
         default=50, ge=50, description="intervals measured per periodic check (heartbeat, event timer): at least 50, "
         "so that p95/p99 of the intervals mean something")
