@@ -198,13 +198,16 @@ def _changes(found: DeviceValues, model: NmtModel) -> list[Write]:
 
 #: a walk through every transition and check, run before the generated sequences (which, a few under the CI
 #: profile, may leave some out): each command to the node and to all nodes, commands to another node in
-#: operational and stopped, reads in each state, SYNCs in and outside operational, both resets after changes
+#: operational and stopped, reads in each state, SYNCs in and outside operational, both resets after changes;
+#: ``change_other`` changes the values ``change_all`` may leave as stored (the armed SYNC TPDO's COB-ID where it
+#: is stored valid), so that a state change or reset communication that reloads them shows on every profile
 TOUR = [
     ("change_all",), ("state_command", "start", "node"), ("sync",), ("read_all",),
     ("state_command", "pre-operational", "other node"), ("state_command", "stop", "all nodes"), ("read_all",),
     ("sync",), ("state_command", "start", "other node"), ("state_command", "pre-operational", "node"),
-    ("read_all",), ("state_command", "start", "all nodes"), ("sync",), ("state_command", "stop", "node"),
-    ("state_command", "start", "node"), ("state_command", "pre-operational", "all nodes"),
+    ("read_all",), ("change_other",), ("state_command", "start", "all nodes"), ("sync",),
+    ("state_command", "stop", "node"), ("state_command", "start", "node"),
+    ("state_command", "pre-operational", "all nodes"), ("read_all",),
     ("reset", "reset-communication", "all nodes"), ("read_all",), ("change_all",), ("state_command", "stop", "node"),
     ("reset", "reset-node", "node"), ("read_all",), ("change_all",), ("state_command", "start", "node"), ("sync",),
 ]
@@ -409,6 +412,14 @@ def test_nmt_sequences_follow_the_cia301_model(dut, settings_journal, back_to_pr
             """Every followed value to another value than stored (the SYNC TPDO armed: type 1, valid)."""
             for write in _changes(found, self.model):
                 self.write(write)
+
+        def change_other(self) -> None:
+            """Every followed value to one that is neither stored nor current, where the writes offer one."""
+            for key, tracked in self.model.values.items():
+                other = next((w for w in found.writes
+                              if w.key == key and w.value not in (tracked.stored, tracked.current)), None)
+                if other is not None:
+                    self.write(other)
 
         def read_all(self) -> None:
             for key in keys if self.model.sdo_answered else keys[:1]:  # in stopped one unanswered read will do
