@@ -9,8 +9,16 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
+from encoder_conformance.plugin import (
+    bus_trace,
+    hypothesis_profiles,
+    lifecycle,
+    reporting,
+    run_record,
+    selection,
+    verdicts,
+)
 from encoder_conformance.plugin import history_hook as history
-from encoder_conformance.plugin import hypothesis_profiles, lifecycle, reporting, run_record, selection, verdicts
 from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence",
@@ -112,6 +120,7 @@ def pytest_keyboard_interrupt(excinfo) -> None:
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int):
     lifecycle.give_back(session.config)  # after Ctrl-C or a stop: first thing, while the bus is still open
     result = yield
+    bus_trace.write_unsettled(session.config)  # a test stopped before its teardown report keeps its trace
     if not lifecycle.ended_early(session.config):
         reporting.fail_all_skipped(session)
     lifecycle.final_exit_status(session)
