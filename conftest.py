@@ -6,6 +6,8 @@ profile once, selects tests by capability, and sets up the report outputs.
 
 from __future__ import annotations
 
+import gc
+
 import pytest
 
 from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
@@ -63,6 +65,10 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     lifecycle.note_collected(session)
+    if lifecycle.state_of(session.config) is not None:
+        # what a conformance run has built so far (modules, profile, ~700 items) lives until its end: the
+        # garbage collector's full passes during the tests need not walk it again and again
+        gc.freeze()
 
 
 @pytest.hookimpl(wrapper=True)
