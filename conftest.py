@@ -52,6 +52,8 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     reporting.start_background_writers(session.config)
     run_record.start(session.config)
     lifecycle.start(session.config)
+    if lifecycle.state_of(session.config) is not None:
+        gc.disable()  # until the tests are collected (a full pass during collection took 60-100 ms): see below
 
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
@@ -69,6 +71,7 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         # what a conformance run has built so far (modules, profile, ~700 items) lives until its end: the
         # garbage collector's full passes during the tests need not walk it again and again
         gc.freeze()
+        gc.enable()
 
 
 @pytest.hookimpl(wrapper=True)
