@@ -6,11 +6,21 @@ profile once, selects tests by capability, and sets up the report outputs.
 
 from __future__ import annotations
 
+import gc
+
 import pytest
 
 from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
+from encoder_conformance.plugin import (
+    bus_trace,
+    hypothesis_profiles,
+    lifecycle,
+    reporting,
+    run_record,
+    selection,
+    verdicts,
+)
 from encoder_conformance.plugin import history_hook as history
-from encoder_conformance.plugin import hypothesis_profiles, lifecycle, reporting, run_record, selection, verdicts
 from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence",
@@ -42,6 +52,8 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     reporting.start_background_writers(session.config)
     run_record.start(session.config)
     lifecycle.start(session.config)
+    if lifecycle.state_of(session.config) is not None:
+        gc.disable()  # until the tests are collected (a full pass during collection took 60-100 ms): see below
 
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
@@ -55,6 +67,11 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     lifecycle.note_collected(session)
+    if lifecycle.state_of(session.config) is not None:
+        # what a conformance run has built so far (modules, profile, ~700 items) lives until its end: the
+        # garbage collector's full passes during the tests need not walk it again and again
+        gc.freeze()
+        gc.enable()
 
 
 @pytest.hookimpl(wrapper=True)
@@ -112,6 +129,7 @@ def pytest_keyboard_interrupt(excinfo) -> None:
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int):
     lifecycle.give_back(session.config)  # after Ctrl-C or a stop: first thing, while the bus is still open
     result = yield
+    bus_trace.write_unsettled(session.config)  # a test stopped before its teardown report keeps its trace
     if not lifecycle.ended_early(session.config):
         reporting.fail_all_skipped(session)
     lifecycle.final_exit_status(session)

@@ -17,7 +17,7 @@ from xml.etree import ElementTree
 import can
 import pytest
 
-from encoder_conformance.plugin import reporting
+from encoder_conformance.plugin import bus_trace, reporting
 from encoder_conformance.plugin.evidence import EVIDENCE, Evidence
 from encoder_conformance.plugin.glance import Deviation, PageContext, render, skip_reason_key
 from encoder_conformance.plugin.options import TRACE_OPTION
@@ -173,6 +173,48 @@ def test_trace_kept_by_policy_and_teardown_failure(tmp_path, policy, teardown_fa
     assert trace.exists() == kept
     assert trace.with_suffix(".log").exists() == kept
     assert (item.stash[EVIDENCE].trace_path is not None) == kept
+
+
+def _frames() -> list[can.Message]:
+    return [can.Message(timestamp=1_700_000_000.0 + i / 1000, arbitration_id=0x581 + (i % 2) * 0x80,
+                        data=bytes([0x43, 0x00, 0x10, 0x00, i, 0, 0, 0]), is_rx=bool(i % 3), is_remote_frame=i == 4,
+                        dlc=8) for i in range(12)]
+
+
+def test_held_trace_writes_what_the_live_writers_wrote(tmp_path):
+    """A trace held in memory (plugin/bus_trace.py) writes the same ASC and candump files as python-can's writers
+    fed frame by frame; the ASC header's date is when the trace began, not when it is written."""
+    live = tmp_path / "live.asc"
+    asc, log = can.ASCWriter(str(live)), can.CanutilsLogWriter(str(live.with_suffix(".log")))
+    held = bus_trace.BusTrace(tmp_path / "traces" / "held.asc")
+    for msg in _frames():
+        asc.on_message_received(msg)
+        log.on_message_received(msg)
+        held.on_message_received(msg)
+    asc.stop()
+    log.stop()
+    held.write()
+    assert held.path.with_suffix(".log").read_text() == live.with_suffix(".log").read_text()
+    live_lines, held_lines = live.read_text().splitlines(), held.path.read_text().splitlines()
+    assert held_lines[1:] == live_lines[1:]
+    assert held_lines[0] == "date " + asc._format_header_datetime(held.began)
+
+
+def test_trace_written_only_when_kept_or_never_settled(tmp_path):
+    """settle writes a kept trace and drops the rest; one never settled (its test stopped by Ctrl-C before its
+    teardown report) is written at the session's end."""
+    config = SimpleNamespace(stash=pytest.Stash())
+    kept, dropped, stopped = (bus_trace.BusTrace(tmp_path / "traces" / f"{n}.asc") for n in ("k", "d", "s"))
+    for trace in (kept, dropped, stopped):
+        bus_trace.opened(config, trace)  # type: ignore[arg-type]
+        for msg in _frames():
+            trace.on_message_received(msg)
+    bus_trace.settle(config, kept, keep=True)  # type: ignore[arg-type]
+    bus_trace.settle(config, dropped, keep=False)  # type: ignore[arg-type]
+    assert sorted(p.name for p in (tmp_path / "traces").iterdir()) == ["k.asc", "k.log"]
+    bus_trace.write_unsettled(config)  # type: ignore[arg-type]
+    assert sorted(p.name for p in (tmp_path / "traces").iterdir()) == ["k.asc", "k.log", "s.asc", "s.log"]
+    assert kept.frames == dropped.frames == []  # settled: the frames are let go
 
 
 @pytest.fixture(scope="module")

@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from ..basis import BASES, Basis
+from .bus_trace import BusTrace
 from .timing_record import TimingMeasurement
 
 __all__ = ["BASES", "EVIDENCE", "Basis", "Evidence", "InferredProblem", "Measurement", "TimingMeasurement"]
@@ -57,7 +58,8 @@ class Evidence:
     measurements: list[Measurement] = field(default_factory=list)
     deviations: list[tuple[str, str]] = field(default_factory=list)  # (quirk id, text)
     notes: list[str] = field(default_factory=list)
-    trace_path: Path | None = None
+    trace_path: Path | None = None  # where the test's trace goes if kept (traces/<test>.asc, and .log)
+    trace: BusTrace | None = None  # its frames, until the verdict decides (reporting.settle_trace)
     keep_trace: bool = False  # kept under --bus-trace failed: the test failed or warned, or other verdicts rest on it
     basis: Basis | None = None  # set where a test knows better than its spec marker (see verdict_basis)
     basis_source: str | None = None  # the clause or manual section the verdict rests on

@@ -11,6 +11,7 @@ import pytest
 
 from ..paths import REPO_ROOT, SUITES_DIR
 from ..run_summary import RunSummary
+from . import bus_trace
 from .allure_writer import BackgroundWriter, write_in_background
 from .evidence import EVIDENCE
 from .glance import Deviation, PageContext, render, skip_reason_key
@@ -63,6 +64,11 @@ def configure_outputs(config: pytest.Config) -> None:
     if config.getoption("--allure") and not getattr(option, "allure_report_dir", None):
         option.allure_report_dir = str(folder / "allure-results")
         option.clean_alluredir = True
+
+
+def allure_active(config: pytest.Config) -> bool:
+    """Whether allure-pytest writes results in this run (--allure, or its own --alluredir)."""
+    return bool(getattr(config.option, "allure_report_dir", None))
 
 
 def start_background_writers(config: pytest.Config) -> None:
@@ -191,7 +197,7 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
         for name, value in timing.properties():
             add_property(item, report, name, value)
     folder = report_dir(item.config)
-    if evidence.trace_path and evidence.trace_path.exists() and folder:
+    if evidence.trace_path is not None and folder:  # written at the teardown if kept (settle_trace), else unlinked
         relative = evidence.trace_path.relative_to(folder)
         extras.append(html_extras.url(relative.as_posix(), name=TRACE_LINKS[0]))
         extras.append(html_extras.url(relative.with_suffix(".log").as_posix(), name=TRACE_LINKS[1]))
@@ -201,16 +207,21 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
 
 
 def settle_trace(item: pytest.Item) -> None:
-    """After the teardown (the trace writers have stopped): with --bus-trace failed, a test that passed or
-    skipped loses its trace files and the report its links; a failure, an error in any phase (teardown too)
-    or a warning keeps them."""
+    """After the teardown (the test's frames are all in): with --bus-trace failed, a test that passed or
+    skipped loses its trace and the report its links; a failure, an error in any phase (teardown too) or a
+    warning keeps them, written to their files now (plugin/bus_trace.py)."""
     evidence = item.stash.get(EVIDENCE, None)
     if evidence is None or evidence.trace_path is None:
         return
-    if trace_policy(item.config) != "failed" or evidence.keep_trace:
+    keep = trace_policy(item.config) != "failed" or evidence.keep_trace
+    trace = evidence.trace
+    if trace is not None:
+        bus_trace.settle(item.config, trace, keep)
+    if keep:
         return
-    for path in (evidence.trace_path, evidence.trace_path.with_suffix(".log")):
-        path.unlink(missing_ok=True)
+    if trace is None or trace.written:  # files on disk already (allure attached them)
+        for path in (evidence.trace_path, evidence.trace_path.with_suffix(".log")):
+            path.unlink(missing_ok=True)
     evidence.trace_path = None
     call = item.stash.get(_CALL_REPORT, None)  # pytest-html reads the call's extras at the teardown's logreport
     if call is not None:

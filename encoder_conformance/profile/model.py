@@ -11,6 +11,7 @@ This module is over 400 lines because it is the one schema of a profile file: it
 from __future__ import annotations
 
 import re
+from functools import cached_property
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
@@ -243,6 +244,12 @@ class ObjectSpec(StrictModel):
 
     def entries(self) -> dict[int, EntrySpec]:
         """Sub-index -> entry; a VAR is sub-index 0. Entries inherit the object's manual reference."""
+        return dict(self.entry_table)
+
+    @cached_property
+    def entry_table(self) -> dict[int, EntrySpec]:
+        """``entries()`` made once (the object is frozen; its entries too): a WDGA run asked ~10,000 times, each
+        time copying every sub-index's model to inherit the manual (0.2-0.4 s of the run)."""
         if self.subs is None:
             return {0: EntrySpec(**self._var_fields())}
         return {
