@@ -35,7 +35,7 @@ def _store_by_reboot(dut, params: fx.StoreRebootsWithoutReply) -> None:
     request = sdo_frames.expedited_download_request(params.index, params.subindex, params.signature_bytes)
     request = bytes([0x22]) + request[1:]  # the manual's frame: download, size not indicated
     mark = dut.frames.mark()
-    reply = dut.sdo_request(request)
+    reply = dut.sdo_request(request, timeout=dut.sdo_silence_s)  # a reply that must not come: a silence window
     assert reply is None, f"documented: no SDO reply to the store command; observed {reply.describe()}"
     boot = dut.wait_bootup(mark, timeout=dut.profile.timing.store_max_ms / 1000)
     assert boot is not None, (
