@@ -184,6 +184,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "manufacturer_store_not_persisted": (
                 "the manufacturer store object (quirk manufacturer_store_object) saves nothing"
             ),
+            "store_reboot_confirmed": "the store-by-reboot command (quirk store_reboots_without_reply) is answered",
         },
     ),
     (  # LSS (CiA 305)
@@ -347,6 +348,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
     "guarding_heartbeat_coexist": "guarding_heartbeat_exclusive",
     "reload_not_immediate": "reload_immediate",
     "manufacturer_store_not_persisted": "manufacturer_store_object",
+    "store_reboot_confirmed": "store_reboots_without_reply",
     "type_255_timer_0_sends": "transmission_type_255_timer_0_disables",
     "send_repeat_counter_ignored": "pdo_send_repeat_counters",
     "forced_bits_not_applied": "bits_forced_at_init",

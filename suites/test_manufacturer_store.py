@@ -36,8 +36,9 @@ def _store_by_reboot(dut, params: fx.StoreRebootsWithoutReply) -> None:
     request = bytes([0x22]) + request[1:]  # the manual's frame: download, size not indicated
     mark = dut.frames.mark()
     reply = dut.sdo_request(request, timeout=dut.sdo_silence_s)  # a reply that must not come: a silence window
-    assert reply is None, f"documented: no SDO reply to the store command; observed {reply.describe()}"
+    # the boot-up is waited for first: a failed check leaves the device up for the put-back that follows
     boot = dut.wait_bootup(mark, timeout=dut.profile.timing.store_max_ms / 1000)
+    assert reply is None, f"documented: no SDO reply to the store command; observed {reply.describe()}"
     assert boot is not None, (
         f"no boot-up within {dut.profile.timing.store_max_ms:.0f} ms after the store command (the manual: reboot)"
     )

@@ -58,6 +58,7 @@ class StoreCommands:
         """Carry out a store/restore command; True when ``key`` was one (the value is not kept)."""
         if self.reboot is not None and key == self.reboot.key:
             self._store_and_reboot(value, self.reboot)
+            return True  # confirmed: only a device that answers the command (fault store_reboot_confirmed)
         if self.extra_store is not None and key == self.extra_store.key:
             self._manufacturer_store(value, self.extra_store)
             return True
@@ -142,7 +143,12 @@ class StoreCommands:
             self._encoder.persist(self._nvm, None)
         reboot_ms = self._profile.simulator.bootup_delay_ms if params.reboot_ms is None else params.reboot_ms
         self._reboot(reboot_ms / 1000)
-        raise SdoNoReply
+        if not self.confirms_store_by_reboot():
+            raise SdoNoReply
+
+    def confirms_store_by_reboot(self) -> bool:
+        """The manual's store-by-reboot command gets no SDO reply."""
+        return False
 
 
 @breaks(StoreCommands, "store_not_persisted")
@@ -167,6 +173,12 @@ class RestoreIneffective(StoreCommands):
 class ReloadNotImmediate(StoreCommands):
     def load_set(self, sub: int, sets: ParameterSets) -> None:
         return  # the values become current only after a reset
+
+
+@breaks(StoreCommands, "store_reboot_confirmed")
+class StoreRebootConfirmed(StoreCommands):
+    def confirms_store_by_reboot(self) -> bool:
+        return True  # an SDO download confirmation, then the reboot
 
 
 @breaks(StoreCommands, "manufacturer_store_not_persisted")
