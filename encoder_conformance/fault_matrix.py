@@ -14,7 +14,7 @@ import json
 import os
 import re
 import xml.etree.ElementTree as ET
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -104,15 +104,16 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
 
 def run_matrix(profile: str, faults: list[str], workdir: Path, select: str | None = None,
                workers: int = 2, targeted: bool = False) -> tuple[RunResult, list[RunResult]]:
-    """The fault-free baseline plus one run per fault (``workers`` runs in parallel).
+    """The fault-free baseline plus one run per fault (``workers`` runs in parallel; the baseline is one of
+    them, not a run before the others).
 
     ``targeted``: each fault runs only against the suite modules it is made for (the baseline
     still runs everything), which proves the same two things at a fraction of the time.
     """
-    baseline = run_suite(profile, None, workdir, select)
     with ThreadPoolExecutor(max_workers=workers) as pool:
+        baseline = pool.submit(run_suite, profile, None, workdir, select)
         results = list(pool.map(lambda f: run_suite(profile, f, workdir, select, targeted), faults))
-    return baseline, results
+        return baseline.result(), results
 
 
 def run_until_caught(profile: str, faults: list[str], workdir: Path, select: str | None = None,
@@ -120,7 +121,8 @@ def run_until_caught(profile: str, faults: list[str], workdir: Path, select: str
                      targeted: bool = False) -> tuple[RunResult, list[RunResult]]:
     """Like run_matrix, but stop once every passing test has failed under some fault.
 
-    ``faults`` is tried in order, ``workers`` at a time; faults in ``must_try`` always run.
+    ``faults`` is tried in order, ``workers`` at a time: a new run starts as soon as one ends (no run waits
+    for a slower one beside it); faults in ``must_try`` always run.
     """
     baseline = run_suite(profile, None, workdir, select)
     tests = baseline.keys_with("passed")
@@ -129,15 +131,23 @@ def run_until_caught(profile: str, faults: list[str], workdir: Path, select: str
         faults = [f for f in faults if modules & set(TARGET_MODULES[f])]
         must_try = must_try & frozenset(faults)
     results: list[RunResult] = []
+    waiting = list(faults)
+    running: set[Future[RunResult]] = set()
+
+    def done() -> bool:
+        caught = set().union(*(r.keys_with("failed") | r.keys_with("error") for r in results))
+        return tests <= caught and must_try <= {r.fault for r in results}
+
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        for start in range(0, len(faults), workers):
-            caught = set().union(*(r.keys_with("failed") | r.keys_with("error") for r in results))
-            tried = {r.fault for r in results}
-            if tests <= caught and must_try <= tried:
+        while waiting or running:
+            while waiting and len(running) < workers and not done():
+                fault = waiting.pop(0)
+                running.add(pool.submit(run_suite, profile, fault, workdir, select, targeted))
+            if not running:
                 break
-            batch = faults[start : start + workers]
-            results += list(pool.map(lambda f: run_suite(profile, f, workdir, select, targeted), batch))
-    return baseline, results
+            finished, running = wait(running, return_when=FIRST_COMPLETED)
+            results += [future.result() for future in finished]
+    return baseline, sorted(results, key=lambda r: faults.index(r.fault))  # in the order tried, not finished
 
 
 def format_matrix(baseline: RunResult, results: list[RunResult]) -> str:

@@ -94,7 +94,8 @@ def test_emcy_inhibit_time_spaces_emcys(dut, emcy, settings_journal, back_to_pre
                                         evidence):
     """1015h = 20 ms, a new error (or the error going away) right after each EMCY: no two EMCYs closer than 20 ms
     (>= 20 intervals; a tolerance for the tester's clock). A device that drops the events inside the inhibit time
-    passes too; one that sends too few EMCYs to measure is not judged."""
+    passes too; one that sends too few EMCYs to measure is not judged (two events in a row unanswered end the
+    capture: the second came after the inhibit time, so even a device that drops events owed an EMCY)."""
     evidence.rests_on("cia", "CiA 301 §7.5.2 object 1015h (inhibit time EMCY, 100 us units)")
     _writable(dut, EMCY_INHIBIT_TIME, "inhibit time EMCY")
     trigger = emcy.trigger(repeatable=True)
@@ -105,11 +106,15 @@ def test_emcy_inhibit_time_spaces_emcys(dut, emcy, settings_journal, back_to_pre
     frames: list[can.Message] = []
     actions = itertools.cycle([trigger.fire, trigger.clear] if trigger.clears else [trigger.fire])
     deadline = time.monotonic() + (INHIBIT_SAMPLES + 1) * 2 * (INHIBIT_MS / 1000 + trigger.answer_s())
+    unanswered = 0  # actions in a row without an EMCY: past the inhibit time, a device that drops events answers
     with LatencyProbe(twin_lateness) as probe:
-        while len(frames) < INHIBIT_SAMPLES + 1 and time.monotonic() < deadline:
+        while len(frames) < INHIBIT_SAMPLES + 1 and time.monotonic() < deadline and unanswered < 2:
             after = next(actions)()
-            if dut.frames.wait_for(cob_id.matches, INHIBIT_MS / 1000 + trigger.answer_s(), after) is not None:
-                frames = dut.frames.since(mark, cob_id.matches)
+            if dut.frames.wait_for(cob_id.matches, INHIBIT_MS / 1000 + trigger.answer_s(), after) is None:
+                unanswered += 1
+                continue
+            unanswered = 0
+            frames = dut.frames.since(mark, cob_id.matches)
     host = probe.result()
     spacing = [(b.timestamp - a.timestamp) * 1000 for a, b in itertools.pairwise(frames)]
     evidence.timing(f"EMCY {cob_id.can_id or 0:03X}h spacing, inhibit time {INHIBIT_MS} ms", spacing,
