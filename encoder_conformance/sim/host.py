@@ -1,4 +1,7 @@
-"""The simulator host: one CAN bus, one receive thread, one scheduler, any number of nodes.
+"""The simulator host: one CAN bus, frames handled one at a time, one scheduler, any number of nodes.
+
+Frames are handled by a receive thread of the host, or (served to other processes) in the server thread
+that received them.
 
 Nodes on the same host also hear each other (a real bus delivers every frame to every other
 node). The host can serve its bus to other processes through python-can-remote. A device with

@@ -5,7 +5,7 @@ channel and access rules, store commands, EMCY, TPDO engine, encoder function an
 own behaviours), each with only the collaborators it uses, lets each register for the objects and
 events it cares about (``sim/hooks.py``), and dispatches received frames. Faults are put in when a
 behaviour is built (``assemble``, ``sim/faults.py``). Frames arrive through ``on_frame`` (from the
-host's receive thread); everything timed runs on the shared DeadlineScheduler; outgoing frames
+host, one at a time); everything timed runs on the shared DeadlineScheduler; outgoing frames
 go through the ``send`` function the host gives.
 """
 
