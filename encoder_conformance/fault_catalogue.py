@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+from .readings import variants
+
 #: (the suite modules a group of faults is made for, the group). The CI fault matrix runs each
 #: fault against its own modules only; ``encoder-conformance fault-matrix`` can run the full product.
 FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
@@ -325,16 +327,13 @@ FAULTS: dict[str, str] = {name: text for _, group in FAULT_GROUPS for name, text
 #: CiA where the profile's rule is only our inference (a warning; --strict-inferred fails it), one that
 #: answers with an abort code of the right family (--abort-codes). They stay out of the fault matrix;
 #: tests/test_verdict_basis.py shows what each option makes of them.
-VARIANTS: dict[str, str] = {
-    "cia301_transmission_types": (
-        "18xxh sub 2 accepts every transmission type CiA 301 defines (0..240, 252..255), also those the "
-        "profile leaves out because its manual does not list them"
-    ),
-    "write_ro_unsupported_access": (
-        "writes to ro/const objects abort with 06010000h (unsupported access), the family of CiA 301's "
-        "06010002h: fails with --abort-codes exact, passes with --abort-codes family"
-    ),
+#: conformant variants that are not an open reading: a device judged by --abort-codes (passes only with family)
+ABORT_FAMILY_VARIANTS: dict[str, str] = {
+    "write_ro_unsupported_access": "writes to ro/const objects abort with 06010000h (unsupported access), the "
+                                   "family of CiA 301's 06010002h: fails with --abort-codes exact, passes with family",
 }
+#: conformant variants: each open reading's (encoder_conformance.readings) and the abort-family ones
+VARIANTS: dict[str, str] = {**variants(), **ABORT_FAMILY_VARIANTS}
 #: every name the simulator's --fault takes
 SIMULATOR_DEVIATIONS: dict[str, str] = {**FAULTS, **VARIANTS}
 #: fault -> the suite modules (file stems under suites/) it is made for
