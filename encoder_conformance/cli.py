@@ -1,5 +1,5 @@
 """Command line: ``encoder-conformance run | accept | restore | lss | sim | sim-control | profile | faults |
-fault-matrix``.
+fault-matrix | readings | variant-matrix``.
 
 Exit codes of ``run``, ``restore`` and ``lss`` follow exit_codes.RunExit; a usage error (bad option,
 unreadable profile) is 4 for every command.
@@ -21,6 +21,7 @@ from .exit_codes import RunExit, interrupted_by
 from .history.cli import add_history_parser
 from .lss_cli import add_lss_parser
 from .paths import DEFAULT_PROFILE
+from .readings_cli import add_readings_parsers
 from .run_cli import add_run_parser
 
 
@@ -304,6 +305,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     faults = sub.add_parser("faults", help="list the simulator's named faults")
     faults.set_defaults(func=_cmd_faults)
+    add_readings_parsers(sub)
     return parser
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from .readings import variants
+from .readings import variant_modules, variants
 
 #: (the suite modules a group of faults is made for, the group). The CI fault matrix runs each
 #: fault against its own modules only; ``encoder-conformance fault-matrix`` can run the full product.
@@ -338,7 +338,8 @@ VARIANTS: dict[str, str] = {**variants(), **ABORT_FAMILY_VARIANTS}
 SIMULATOR_DEVIATIONS: dict[str, str] = {**FAULTS, **VARIANTS}
 #: fault -> the suite modules (file stems under suites/) it is made for
 TARGET_MODULES: dict[str, tuple[str, ...]] = {
-    name: modules for modules, group in FAULT_GROUPS for name in group
+    **{name: modules for modules, group in FAULT_GROUPS for name in group},
+    **variant_modules(),
 }
 
 

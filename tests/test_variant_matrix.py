@@ -1,0 +1,64 @@
+"""Every reading the texts allow passes: the suites against each conformant variant of the twin.
+
+The open readings (encoder_conformance/readings/) list each point where CiA or a manual leaves a choice,
+with the sentence it comes from; each has a variant of the twin that plays the reading the default twin
+does not. Here every variant runs against the suite modules its point concerns, on every representative
+profile where it applies: 0 failures, and at least one test judged per run.
+"""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from encoder_conformance.fault_catalogue import FAULTS, TARGET_MODULES, VARIANTS
+from encoder_conformance.paths import SUITES_DIR
+from encoder_conformance.readings import all_readings
+from encoder_conformance.variant_matrix import REPRESENTATIVE_PROFILES, format_runs, plan, run_variants
+
+#: a source a vendor can look up: a CiA document with its version and a section or table, or a manual's section
+_CITABLE = re.compile(r"(CiA 30[1-9]|CiA 4\d\d)( v\d[\d.]*)? (§|table )\d|manual|M §|§\d")
+
+
+def test_every_reading_is_complete_and_citable():
+    """Each point says what is open, where the text says so, which readings pass, and what plays the other."""
+    problems = []
+    for reading in all_readings():
+        if len(reading.readings) < 2:
+            problems.append(f"{reading.point}: fewer than two readings")
+        if not _CITABLE.search(reading.source):
+            problems.append(f"{reading.point}: source names no document and section: {reading.source!r}")
+        if re.search(r"\w+\.(md|py|yaml|txt)\b|reference/|seeds/", reading.source):
+            problems.append(f"{reading.point}: source names a file of this repository: {reading.source!r}")
+        missing = [m for m in reading.modules if not (SUITES_DIR / f"{m}.py").exists()]
+        if missing or not reading.modules:
+            problems.append(f"{reading.point}: suite modules {missing or 'none'} do not exist")
+        if reading.variant in FAULTS:
+            problems.append(f"{reading.point}: variant {reading.variant} is also a fault")
+    assert problems == []
+    assert len({r.point for r in all_readings()}) == len(all_readings()), "a point id is used twice"
+
+
+def test_every_variant_is_in_the_catalogue_with_its_modules():
+    for reading in all_readings():
+        assert VARIANTS[reading.variant] == reading.variant_text
+        assert TARGET_MODULES[reading.variant] == reading.modules
+
+
+def test_every_reading_applies_to_some_representative_profile():
+    """A reading no profile can play is never tried: the matrix would prove nothing about it."""
+    planned = {reading.point for reading, _ in plan()}
+    assert sorted({r.point for r in all_readings()} - planned) == []
+
+
+@pytest.fixture(scope="module")
+def variant_runs(tmp_path_factory):
+    return run_variants(plan(REPRESENTATIVE_PROFILES), tmp_path_factory.mktemp("variants"), workers=2)
+
+
+def test_every_conformant_variant_passes_on_every_profile_where_it_applies(variant_runs):
+    print(format_runs(variant_runs))
+    failing = [f"{run.reading.variant} on {run.profile}: {run.bad or f'exit {run.result.returncode}'}"
+               f"{'' if run.judged else ' (no test judged)'}" for run in variant_runs if not run.ok]
+    assert failing == [], format_runs(variant_runs)
