@@ -18,6 +18,7 @@ from encoder_conformance.plugin import (
     reporting,
     run_record,
     selection,
+    shuffle,
     verdicts,
 )
 from encoder_conformance.plugin import history_hook as history
@@ -35,6 +36,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     opts.add_options(parser)
     run_record.add_option(parser.getgroup("encoder-conformance"))
     history.add_option(parser.getgroup("encoder-conformance"))
+    shuffle.add_option(parser.getgroup("encoder-conformance"))
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -62,6 +64,7 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     selection.apply_capability_marks(config, items)
+    shuffle.shuffle(config, items)  # --shuffle SEED: a test that inherits a state shows
     selection.destructive_last(items)
 
 
@@ -103,7 +106,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]):
 
 
 def pytest_report_header(config: pytest.Config) -> list[str]:
-    return reporting.header_lines(config)
+    return [*reporting.header_lines(config), *shuffle.header(config)]
 
 
 @pytest.hookimpl(optionalhook=True)
