@@ -15,6 +15,7 @@ from encoder_conformance.plugin import (
     bus_trace,
     hypothesis_profiles,
     lifecycle,
+    outcomes,
     reporting,
     run_record,
     selection,
@@ -25,7 +26,7 @@ from encoder_conformance.plugin import history_hook as history
 from encoder_conformance.plugin import options as opts
 
 pytest_plugins = ["fixtures.bus", "fixtures.simulator", "fixtures.dut", "fixtures.periodic", "fixtures.evidence",
-                  "fixtures.emcy",
+                  "fixtures.emcy", "fixtures.tpdo",
                   "fixtures.lss", "fixtures.encoder",
                   "encoder_conformance.plugin.progress"]
 
@@ -93,13 +94,16 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
 def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]):
     outcome = yield
     report = outcome.get_result()
-    if call.excinfo is not None and isinstance(call.excinfo.value, BusLostError):
+    exc = call.excinfo.value if call.excinfo is not None else None
+    if isinstance(exc, BusLostError):
         # the tester lost its bus: not the device's failure, and the test did not run to its end
         report.outcome = "skipped"
-        report.longrepr = (str(item.path), item.location[1] or 0, f"not run to the end: {call.excinfo.value}")
-    elif call.excinfo is not None and isinstance(call.excinfo.value, DutLostError):
-        report.longrepr = f"could not test: {call.excinfo.value}"  # one line: the device is gone
-    verdicts.judge(item, report)  # a broken inferred rule: a warning, or a failure with --strict-inferred
+        report.longrepr = (str(item.path), item.location[1] or 0, f"not run to the end: {exc}")
+    elif isinstance(exc, DutLostError):
+        report.longrepr = str(exc)  # one line: the device is gone (note_loss adds the last frames sent)
+    outcomes.classify(item, call, report)  # no finding about the device: an internal error of the tool
+    lifecycle.note_loss(item, report)  # the device stopped answering in this test: it fails, naming the frames
+    verdicts.judge(item, report, exc)  # a broken inferred rule: a warning, or a failure with --strict-inferred
     reporting.attach_evidence(item, call, report)
     run_record.note_report(item, report)
     lifecycle.note_report(item.config, report)

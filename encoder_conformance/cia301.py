@@ -56,6 +56,7 @@ class EmcyCode(IntEnum):
     """EMCY error codes (CiA 301 §7.2.7.1 table 21) the simulator and the suites name."""
 
     ERROR_RESET = 0x0000  # error reset or no error
+    COMMUNICATION = 0x8100  # communication, generic (CANopenNode's code for a SYNC time-out)
     HEARTBEAT = 0x8130  # life guard error or heartbeat error
     SYNC_LENGTH = 0x8240  # unexpected SYNC data length
 
@@ -151,6 +152,7 @@ class SdoAbortCode(IntEnum):
     CANNOT_STORE = 0x08000020
     LOCAL_CONTROL = 0x08000021
     WRONG_STATE = 0x08000022
+    NO_DATA = 0x08000024  # no data available (e.g. an empty entry of the error history 1003h)
 
 
 def block_crc(data: bytes) -> int:

@@ -75,3 +75,17 @@ ERROR_MANUFACTURER = 0xFF  # byte 2 then holds the manufacturer's code
 BIT_TIMING_TABLE_0: dict[int, int] = {0: 1_000_000, 1: 800_000, 2: 500_000, 3: 250_000, 4: 125_000,
                                       6: 50_000, 7: 20_000, 8: 10_000}
 AUTO_BIT_RATE_INDEX = 9  # automatic bit-rate detection
+
+#: Where each LSS rule comes from, as a vendor looks it up: CiA 305 v3.0.0 "Layer setting services (LSS) and
+#: protocols", by the heading of its service or protocol (its section numbers were not at hand to be cited)
+CIA305 = "CiA 305 v3.0.0 (layer setting services and protocols)"
+CLAUSE_FSA = "CiA 305 v3.0.0, LSS FSA (services per LSS state)"
+CLAUSE_SWITCH_GLOBAL = "CiA 305 v3.0.0, switch state global service and protocol"
+CLAUSE_SWITCH_SELECTIVE = "CiA 305 v3.0.0, switch state selective service and protocol"
+CLAUSE_CONFIGURE_NODE_ID = "CiA 305 v3.0.0, configure node-ID service and protocol"
+CLAUSE_CONFIGURE_BIT_TIMING = "CiA 305 v3.0.0, configure bit timing parameters (table 0)"
+CLAUSE_ACTIVATE_BIT_TIMING = "CiA 305 v3.0.0, activate bit timing parameters service and protocol"
+CLAUSE_STORE = "CiA 305 v3.0.0, store configuration service and protocol"
+CLAUSE_INQUIRE = "CiA 305 v3.0.0, inquire LSS address and inquire node-ID services"
+CLAUSE_IDENTIFY = "CiA 305 v3.0.0, LSS identify remote slave and identify non-configured remote slave services"
+CLAUSE_FASTSCAN = "CiA 305 v3.0.0, LSS fastscan service and protocol"

@@ -77,12 +77,12 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
         {
             "dead_after_short_frame": "after an SDO frame shorter than 8 bytes the SDO server never answers again",
             "double_abort": "every SDO abort frame is sent twice",
-            "answers_short_frame_with_garbage": "an SDO frame shorter than 8 bytes is answered with its own bytes "
-                                                "padded to 8",
+            "answers_short_frame_with_garbage": "an SDO frame under 8 bytes is answered with its bytes padded to 8",
             "answers_client_abort": "a client's abort transfer request is answered (with the same frame)",
-            "crashes_on_interleaved_initiate": "an initiate request while a segmented transfer is open stops the SDO "
-                                               "server until a reset",
+            "crashes_on_interleaved_initiate": "a 2nd initiate in a segmented transfer stops SDO until a reset",
             "emcy_on_unknown_command": "an abort for an unknown SDO command specifier also sends an EMCY (8100h)",
+            "silent_after_reserved_command": "after an SDO request with ccs 7 (reserved): no SDO answer, no heartbeat",
+            "sdo_reply_wrong_mux": "SDO initiate responses and aborts name the next sub-index (start-up check fails)",
         },
     ),
     (  # NMT
@@ -251,6 +251,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
                                           "produce SYNC",
             "sync_restricted_can_id_accepted": "1005h accepts restricted CAN-IDs",
             "sync_cob_id_ignored": "SYNC is taken on 080h whatever 1005h says",
+            "sync_producer_never_stops": "a SYNC producer keeps sending SYNC after 1006h is set back to 0",
         },
     ),
     (  # the generated sequences against the reference model (and the preset checks)
@@ -378,6 +379,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #:   size indicator (rather than refusing it) is our reading of CiA 301 §7.2.4.3.3 ("unspecified number of bytes").
 #: - emcy_on_unknown_command: that a refused SDO request draws no EMCY is our reading of CiA 301 §7.2.7.1.
 #: - sync_length_unchecked: CiA 301 names EMCY 8240h (unexpected SYNC data length) but does not require it.
+#: - open_transfer_blocks_requests: a server's handling of a transfer left open is ours; serial_unset: the format.
 #: Judged without it (the rule that catches them is documented):
 #: - work_area_flags_swapped: 02h above / 04h below is CiA 406 6400h and WDGA T 6.9; only the edges are
 #:   inferred, and the swap shows at every position outside the area, not only at an edge;
@@ -388,10 +390,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #: - the position, preset, speed and TPDO faults, cam_polarity_ignored, cam_on_unscaled_value and
 #:   cam_low_order_ignored break CiA 406 or the profile's manual directly.
 JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored", "sync_tpdo_late",
-                                             "unsized_download_takes_four_bytes",
-                                             "emcy_on_unknown_command",
-                                             "sync_length_unchecked",
-                                             "serial_unset"})  # the serial format rule is ours without a manual
+                                             "unsized_download_takes_four_bytes", "emcy_on_unknown_command",
+                                             "sync_length_unchecked", "serial_unset", "open_transfer_blocks_requests"})
 
 
 def faults_for(effects: Iterable[str]) -> list[str]:

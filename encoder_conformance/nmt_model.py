@@ -13,13 +13,25 @@ this model side by side and compares them after every step.
 - §7.3.2.2.4 (services per state): SDO in pre-operational and operational, PDO in operational only,
   NMT and error control (heartbeat: 04h stopped, 05h operational, 7Fh pre-operational) in all.
 - §7.2.8.3.1: a command is obeyed when its node-ID is the node's own or 0 (all nodes).
+- A write of a PDO's communication or mapping parameter (1400h-1BFFh) outside pre-operational may be refused with
+  08000022h (§7.2.4.3.17 table 22, "present device state"; open reading pdo-config-refused-in-operational: the WDGA
+  manual restricts PDO parameterisation to pre-operational, M §8.5.1): the value then stays.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .cia301 import COMMUNICATION_AREA, NmtCommand, NmtState
+from .cia301 import (
+    COMMUNICATION_AREA,
+    RPDO_COMMUNICATION,
+    RPDO_MAPPING,
+    TPDO_COMMUNICATION,
+    TPDO_MAPPING,
+    NmtCommand,
+    NmtState,
+    SdoAbortCode,
+)
 
 __all__ = ["NmtModel", "Tracked"]
 
@@ -32,6 +44,7 @@ COMMAND_TARGET = {
 #: the init event of each reset, as quirk ``bits_forced_at_init`` names it
 RESET_EVENT = {NmtCommand.RESET_NODE: "nmt_81h", NmtCommand.RESET_COMMUNICATION: "nmt_82h"}
 HEARTBEAT_TIME = (0x1017, 0)
+PDO_PARAMETERS = (RPDO_COMMUNICATION, RPDO_MAPPING, TPDO_COMMUNICATION, TPDO_MAPPING)
 
 
 @dataclass
@@ -112,6 +125,12 @@ class NmtModel:
     def may_write(self, key: tuple[int, int]) -> bool:
         """An SDO write of ``key`` is answered and accepted in the present state."""
         return self.sdo_answered and (not self.values[key].preop_only or self.state is NmtState.PRE_OPERATIONAL)
+
+    def refusal_allowed(self, key: tuple[int, int], code: int) -> bool:
+        """A refused write of ``key`` with abort ``code`` is a reading CiA 301 allows: a PDO parameter refused with
+        08000022h (present device state) outside pre-operational."""
+        pdo = any(key[0] in area for area in PDO_PARAMETERS)
+        return pdo and code == SdoAbortCode.WRONG_STATE and self.state is not NmtState.PRE_OPERATIONAL
 
     def write(self, key: tuple[int, int], value: int) -> None:
         tracked = self.values[key]

@@ -3,7 +3,10 @@
 Connects to the device the snapshot was taken from (the serial number must match), resets it,
 writes back and stores what differs from the stored snapshot, then the values that were in use.
 An encoder's preset objects are never written back as values (a snapshot of an older run may hold
-them): its reference point is given back by presetting, where the snapshot recorded it.
+them): its reference point is given back by presetting, where the snapshot recorded it. A device with LSS that an
+LSS test had moved (the snapshot lists the node-IDs it gave it) or that does not answer at its node-ID is looked
+for and put back first (``dut/lss_custody.py``): at those node-IDs, by its LSS address, unconfigured, after reset
+communication, after a power cycle where power commands are given.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from .dut.custody import Custody, RestoreRecord
 from .dut.device import DeviceUnderTest, wake_if_silent
 from .dut.frames import FrameLog
 from .dut.identity import read_identity
-from .dut.lss_device import LssDevice
+from .dut.lss_custody import Changes, LssCustody
 from .dut.lss_master import LssAddress, LssMaster
 from .dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
 from .dut.reference_point import preset_keys
@@ -63,14 +66,16 @@ def restore_from_snapshot(request: RestoreRequest) -> int:
     except BusSetupError as exc:
         return _fail(str(exc), RunExit.COULD_NOT_TEST)
     try:
-        node_id = request.node_id or snapshot.node_id
+        # a device with LSS belongs at the snapshot's node-ID: --node-id says where else it may be now
+        node_id = snapshot.node_id if loaded.profile.capabilities.lss else request.node_id or snapshot.node_id
         dut = DeviceUnderTest(network, frames, loaded.profile, node_id)
-        problem = _wrong_device(dut, snapshot, request.force)
-        if problem and problem.startswith("no answer") and loaded.profile.capabilities.lss:
+        moved = bool(snapshot.lss_node_ids) and loaded.profile.capabilities.lss
+        problem = None if moved else _wrong_device(dut, snapshot, request.force)
+        if moved or (problem and problem.startswith("no answer") and loaded.profile.capabilities.lss):
             recovered = _lss_recover(dut, snapshot, request)
             if recovered is not None:
-                return _fail(f"{problem}; by LSS: {recovered}", RunExit.COULD_NOT_TEST)
-            print(f"node-ID {node_id} given back by LSS (the device did not answer at it)")
+                return _fail(f"{problem + '; ' if problem else ''}{recovered}", RunExit.NOT_RESTORED)
+            print(f"node-ID {node_id} given back by LSS")
             problem = _wrong_device(dut, snapshot, request.force)
         if problem:
             return _fail(problem, RunExit.COULD_NOT_TEST)
@@ -123,24 +128,28 @@ def _lss_address(snapshot: Snapshot) -> LssAddress | None:
 
 
 def _lss_recover(dut: DeviceUnderTest, snapshot: Snapshot, request: RestoreRequest) -> str | None:
-    """A run stopped while an LSS test had moved the device (or made it unconfigured): select it by the
-    snapshot's LSS address and give it its node-ID back; None, or why not."""
+    """A run stopped while an LSS test had moved the device (or made it unconfigured): look for it wherever it may
+    be and give it its node-ID back; None, or one line saying where it is and what to run."""
     address = _lss_address(snapshot)
-    if address is None or "switch_selective" not in dut.profile.capabilities.lss:
-        return "the snapshot or the profile does not give the LSS address needed to select the device"
+    if address is None:
+        return "the snapshot does not give the LSS address (1018h sub 1..4) needed to select the device"
     master = LssMaster(lambda cob_id, data: dut.network.send_message(cob_id, data), dut.frames,
                        dut.profile.timing.lss_response_ms / 1000)
     power: Callable[[], None] | None = None
     if request.power_off_command and request.power_on_command:
         switch = BenchPower(ShellPowerSwitch(request.power_off_command, request.power_on_command))
-
-        def cycle() -> None:
-            switch.cycle()
-            wake_if_silent(dut)  # a device that detects the bit rate waits for bus traffic
-
-        power = cycle
+        power = switch.cycle
+    candidates = frozenset(snapshot.lss_node_ids) | ({request.node_id} if request.node_id else set())
+    hint = (f"encoder-conformance restore --from {request.snapshot_path} again"
+            + ("" if power else " (or give --power-off-cmd CMD --power-on-cmd CMD)"))
+    custody = LssCustody(dut, master, address, snapshot.node_id, None, power, candidates, hint)
+    # what a test may have stored is unknown here: store the node-ID as found again where the device can
     with dut.custody():
-        return LssDevice(dut, master, address, None, power).recover()
+        problem = custody.put_back(Changes(node_id=True, bit_timing=False, stored=True))
+    if problem is None:
+        snapshot.lss_node_ids.clear()
+        snapshot.save(request.snapshot_path)
+    return problem
 
 
 def _print(record: RestoreRecord) -> None:

@@ -3,6 +3,10 @@ verdict per area and overall. Written by every run as ``run-summary.json`` in it
 the report's first screen, the acceptance certificate and the history database.
 
 Pure data (no pytest): the plugin fills it (plugin/run_record.py), everything else reads it.
+
+Outcomes: "failed" is a finding about the device; "error" is an internal error of the tool (an exception that
+is no finding about the device: plugin/outcomes.py), counted in no area and no verdict but the overall
+INTERNAL ERROR of a run where nothing failed.
 """
 
 from __future__ import annotations
@@ -51,7 +55,8 @@ MODULE_AREAS: dict[str, str] = {
 SERIAL_KEYS = ("serial number (1018h.4)", "serial number (650Bh)", "serial number (label)")
 
 Outcome = Literal["passed", "failed", "warning", "skipped", "error"]
-Verdict = Literal["PASS", "FAIL", "PASS WITH WARNINGS", "COULD NOT TEST", "NOT RUN"]
+Verdict = Literal["PASS", "FAIL", "PASS WITH WARNINGS", "COULD NOT TEST", "INTERNAL ERROR", "NOT RUN"]
+INTERNAL_ERROR_TEXT = "internal error of the tool: please report it"
 
 
 def area_of(nodeid: str) -> str:
@@ -95,9 +100,10 @@ class AreaVerdict:
         return "PASS" if self.passed else "NOT RUN"
 
     def count(self, outcome: Outcome) -> None:
-        name = {"passed": "passed", "failed": "failed", "error": "failed", "warning": "warnings",
-                "skipped": "skipped"}[outcome]
-        setattr(self, name, getattr(self, name) + 1)
+        """Count a test's outcome; an internal error of the tool ("error") is no verdict about the device."""
+        name = {"passed": "passed", "failed": "failed", "warning": "warnings", "skipped": "skipped"}.get(outcome)
+        if name is not None:
+            setattr(self, name, getattr(self, name) + 1)
 
 
 @dataclass
@@ -116,6 +122,8 @@ class RunSummary:
     results: list[TestResult] = field(default_factory=list)
     exit_code: int | None = None
     could_not_test: str | None = None  # why the run stopped before it could judge the device
+    device_failed: str | None = None  # the finding that stopped the run (start-up check, a device gone silent)
+    not_run: int = 0  # tests collected but not run (the run stopped early)
     device_restored: bool | None = None
     report_dir: str | None = None
 
@@ -146,11 +154,18 @@ class RunSummary:
         if self.could_not_test:
             return "COULD NOT TEST"
         verdicts = {area.verdict for area in self.areas()}
-        if "FAIL" in verdicts or self.device_restored is False:
+        if "FAIL" in verdicts or self.device_restored is False or self.device_failed:
             return "FAIL"
+        if self.internal_errors:
+            return "INTERNAL ERROR"  # the run did not judge what those tests check: no PASS
         if not verdicts - {"NOT RUN"}:
             return "NOT RUN"
         return "PASS WITH WARNINGS" if "PASS WITH WARNINGS" in verdicts else "PASS"
+
+    @property
+    def internal_errors(self) -> list[TestResult]:
+        """Tests that ended in an internal error of the tool (outside every area verdict)."""
+        return self.with_outcome("error")
 
     def failing_areas(self) -> list[str]:
         return [area.area for area in self.areas() if area.verdict == "FAIL"]

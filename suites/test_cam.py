@@ -12,7 +12,8 @@ device, step by step so that the hysteresis history is the device's. What each r
 - hysteresis: holding past the edge when leaving is firm (CiA 406 6330h..6337h, M §7.5.6); where an
   inactive cam switches on (at the edge) is our inference;
 - a low limit above the high limit: refused where the manual says so (quirk ``cam_low_below_high``),
-  elsewhere only observed (CiA 406 leaves it open; conformance-landscape §3.3).
+  elsewhere only observed (CiA 406 v3.2, objects 6310h-6317h CAM low limit and 6320h-6327h CAM high limit, does
+  not say how a window with the low limit above the high limit reads; vendors differ).
 """
 
 from __future__ import annotations
@@ -458,7 +459,8 @@ def test_low_limit_above_high_limit(cam_channel: CamChannel, evidence: Evidence)
 
 def _observe_low_above_high(cam_channel: CamChannel, cam: Cam, evidence: Evidence) -> None:
     """No verdict: note whether the device refuses low > high, or how it reads such a window."""
-    evidence.rests_on("inferred", "CiA 406 leaves a low limit above the high limit open (conformance-landscape §3.3)")
+    evidence.rests_on("inferred", "CiA 406 v3.2, objects 6310h-6317h and 6320h-6327h (CAM low / high limit): a low "
+                      "limit above the high limit is left open")
     swapped = Cam(cam.high, cam.low)
     cam_channel.configure({0: Cam(cam.low, cam.high)}, enable=1)
     high_object, low_object = od.cam_limit_objects(0)[1], od.cam_limit_objects(0)[0]

@@ -6,7 +6,9 @@ test_emcy_history.py.
 Errors come from a trigger the bench and the device offer (fixtures/emcy.py: the bench's error stimulus, else the
 bus triggers). A bench run adds entries to the device's error history (1003h) with each error; clearing them needs
 the clear (1003h sub 0 = 0), which only test_emcy_history's clearing test sends. Settings the tests change (1014h,
-1015h, 1019h, 1016h) are put back afterwards (on a SIKO each write of 1014h is stored by the device itself).
+1015h, 1019h, 1016h) are put back afterwards (on a SIKO each write of 1014h is stored by the device itself); an error
+still active after a test (a bus trigger's) is cleared by NMT reset communication (fixtures/emcy.py), so that no
+later test inherits it (a device may hold a communication error out of operational).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.profile import quirk_effects as fx
 from fixtures.dut import return_to_preoperational
+from fixtures.nmt_state import start_operational
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.7 (EMCY)"), pytest.mark.requires("emcy")]
 
@@ -153,13 +156,12 @@ def test_error_reset_emcy_when_cause_goes_away(dut, emcy, evidence):
 
 
 @pytest.mark.parametrize("state", ["pre-operational", "operational"])
-def test_emcy_sent_in_state(dut, emcy, back_to_preoperational, evidence, state):
-    """An error in pre-operational and in operational sends its EMCY."""
+def test_emcy_sent_in_state(dut, emcy, settings_journal, back_to_preoperational, evidence, state):
+    """An error in pre-operational and in operational (seen in the heartbeat) sends its EMCY."""
     evidence.rests_on("cia", STATE_CLAUSE)
     trigger = emcy.trigger()
     if state == "operational":
-        dut.nmt("start")
-        assert dut.responds(), "no SDO answer after NMT start"
+        start_operational(dut, settings_journal, evidence)
     emcy.wait(trigger.fire(), trigger, f"in {state}, after {trigger.name}")
 
 

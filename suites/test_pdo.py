@@ -1,8 +1,10 @@
 """TPDO transmission: every n-th SYNC, the event timer in and out of operational (CiA 301 §7.2.2.2, §7.5.2.35);
 the timing itself (event-timer period, SYNC latency, inhibit time) is in test_pdo_timing.
 
-Each test configures one TPDO through its communication parameter (put back afterwards),
-starts the device and counts or times that TPDO's frames.
+Each test configures one TPDO through its communication parameter (put back afterwards), starts the device and
+checks it got there (the heartbeat's state byte 05h), and counts or times that TPDO's frames. SYNCs are spaced by
+what the device owes: each waits for the TPDO it brings, or the profile's timing.pdo_response_max_ms (SYNC to TPDO)
+where none is due. No test starts with an error active or leaves one (fixture no_error_left).
 """
 
 from __future__ import annotations
@@ -13,13 +15,11 @@ from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.profile import quirk_effects as fx
+from fixtures.nmt_state import start_operational
 from fixtures.tpdo import configurable_tpdo as _configurable_tpdo
 
-pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos")]
-
-
-def _start(dut):
-    dut.nmt("start")
+pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos"),
+              pytest.mark.usefixtures("no_error_left")]
 
 
 def test_sync_tpdo_sent_on_every_nth_sync(dut, settings_journal, back_to_preoperational, evidence):
@@ -28,11 +28,14 @@ def test_sync_tpdo_sent_on_every_nth_sync(dut, settings_journal, back_to_preoper
     cob_id = dut.read_uint(comm, 1) & 0x7FF
     if dut.profile.entry(comm, 2).writable:
         settings_journal.write(comm, 2, bytes([every]))
-    _start(dut)
+    start_operational(dut, settings_journal, evidence)
     mark = dut.frames.mark()
     syncs = 3 * every
-    for _ in range(syncs):
-        dut.send_sync()
+    owed = dut.profile.timing.pdo_response_max_ms / 1000
+    for _ in range(syncs):  # each SYNC processed before the next: its TPDO came, or the time the device owes passed
+        dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id, owed, dut.send_sync())
+    evidence.note(f"{syncs} SYNCs, each after the TPDO the previous one brought or timing.pdo_response_max_ms "
+                  f"({owed * 1000:g} ms, SYNC to TPDO)")
     window = dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
     pdos = dut.pdos_counted(lambda m: m.is_rx and m.arbitration_id == cob_id, 3, mark, window)
     evidence.measure(f"TPDO {cob_id:03X}h frames for {syncs} SYNCs", len(pdos), "frames", 3, 3)
@@ -51,7 +54,7 @@ def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_
     if dut.profile.entry(comm, 2).writable:
         settings_journal.write(comm, 2, b"\xff")
     settings_journal.write(comm, 5, b"\x00\x00")
-    _start(dut)
+    start_operational(dut, settings_journal, evidence)
     control = shaft
     if control is None:
         evidence.note("hardware: only SYNCs are sent; turn the shaft during the test to cover position changes")

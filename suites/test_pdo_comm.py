@@ -2,8 +2,10 @@
 CAN-IDs, transmission types 0, 252/253 and 254/255, the SYNC start value with the SYNC counter (1019h), writes
 in pre-operational only (quirk), and that no trigger sends a TPDO after the device left operational.
 
-Each test configures one TPDO (put back afterwards, also on failure) in pre-operational, starts the device
-and watches that TPDO's frames; every pause is an observation window on the frame log.
+Each test configures one TPDO (put back afterwards, also on failure) in pre-operational, starts the device and
+checks it got there (the heartbeat's state byte 05h), and watches that TPDO's frames; every pause is an observation
+window on the frame log. No test starts with an error active or leaves one (fixture no_error_left: 1001h checked
+before and after, NMT reset communication where an error shows, noted in the evidence).
 """
 
 from __future__ import annotations
@@ -33,9 +35,11 @@ from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
 from fixtures.dut import return_to_preoperational
+from fixtures.nmt_state import start_operational
 from fixtures.tpdo import configurable_tpdo, maps_position
 
-pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.35 (TPDO communication parameter)"), pytest.mark.requires("tpdos")]
+pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.35 (TPDO communication parameter)"), pytest.mark.requires("tpdos"),
+              pytest.mark.usefixtures("no_error_left")]
 
 SYNC_TYPES = [1, *range(2, 241)]
 EVENT_TYPES = [255, 254]
@@ -55,10 +59,9 @@ def _is_tpdo(cob_id: int):
     return lambda m: m.is_rx and m.arbitration_id == cob_id and not m.is_remote_frame
 
 
-def _start(dut) -> None:
-    """NMT start; returns once the device answers SDO again (it handled the command)."""
-    dut.nmt("start")
-    assert dut.responds(), "no SDO answer after NMT start"
+def _start(dut, settings_journal, evidence) -> None:
+    """NMT start; returns once the heartbeat reports operational (``start_operational``)."""
+    start_operational(dut, settings_journal, evidence)
 
 
 def _window(dut) -> float:
@@ -168,7 +171,7 @@ def test_invalid_tpdo_sends_nothing(dut, settings_journal, back_to_preoperationa
 
     def frames(expected: bool = True) -> list[can.Message]:
         """The TPDOs of three SYNCs or five event-timer periods (up to the first where one is ``expected``)."""
-        _start(dut)
+        _start(dut, settings_journal, evidence)
         if trigger == "SYNC":
             found = _syncs(dut, 3, cob_id, until_first=expected)
         elif expected:
@@ -287,7 +290,7 @@ def test_rtr_answered(dut, settings_journal, back_to_preoperational, evidence):
     comm, how = _rtr_tpdo(dut, evidence, settings_journal)
     cob_id = dut.read_uint(comm, 1) & 0x7FF
     dlc = _rtr_dlc(dut, comm)
-    _start(dut)
+    _start(dut, settings_journal, evidence)
     if how == "type 253":
         unasked = _syncs(dut, 2, cob_id)
         assert not unasked, f"{comm:04X}h type 253 sent on SYNC:\n{format_frames(unasked[:5])}"
@@ -314,7 +317,7 @@ def test_rtr_not_answered_without_rtr_bit(dut, settings_journal, back_to_preoper
     if not cob & COB_ID_NO_RTR:
         pytest.skip(f"not applicable: {comm:04X}h.01 = {cob:08X}h allows RTR (bit 30 clear)")
     cob_id = cob & 0x7FF
-    _start(dut)
+    _start(dut, settings_journal, evidence)
     mark = dut.send(cob_id, bytes(_rtr_dlc(dut, comm)), remote=True)
     answers = dut.frames.quiet_period(_is_tpdo(cob_id), dut.pdo_silence_s, mark)
     evidence.measure(f"TPDO {cob_id:03X}h frames after a remote frame", len(answers), "frames", 0, 0)
@@ -330,7 +333,7 @@ def test_type_0_sends_on_sync_only_after_change(dut, settings_journal, back_to_p
     if not maps_position(dut, comm):
         pytest.skip(f"not applicable: {comm:04X}h maps no position value the shaft could change")
     cob_id = dut.read_uint(comm, 1) & 0x7FF
-    _start(dut)
+    _start(dut, settings_journal, evidence)
     _syncs(dut, 1, cob_id)  # whether the first SYNC after start sends is not this test's business
     standing = _syncs(dut, 3, cob_id)
     assert not standing, f"{comm:04X}h type 0: {len(standing)} TPDO(s) on SYNCs without a change:\n" \
@@ -353,7 +356,7 @@ def test_change_of_state_sends_event_tpdo(dut, settings_journal, back_to_preoper
                       "is a change of its position (e.g. WDGA T 8.46); CiA 406 leaves it to the manufacturer")
     comm, kind = _event_tpdo(dut, evidence, settings_journal, shaft)
     cob_id = dut.read_uint(comm, 1) & 0x7FF
-    _start(dut)
+    _start(dut, settings_journal, evidence)
     dut.frames.quiet_period(lambda m: False, _window(dut))  # a TPDO on entering operational is allowed
     standing = dut.frames.quiet_period(_is_tpdo(cob_id), dut.pdo_silence_s)
     mark = dut.frames.mark()
@@ -375,17 +378,19 @@ def _sync_counter(dut) -> None:
         pytest.skip("not applicable: the profile has no 1019h (SYNC counter overflow value)")
 
 
-def test_sync_start_value(dut, settings_journal, back_to_preoperational, evidence):
-    """1019h = 8, type 1, sub 6 = 5: SYNCs carrying the counters 1..8 give TPDOs on the SYNCs 5..8 only."""
-    evidence.rests_on("cia", "CiA 301 §7.5.2.35 (sub 6: the SYNC whose counter equals it is the first received)")
+def test_sync_start_value(dut, settings_journal, tpdo_while_invalid, back_to_preoperational, evidence):
+    """1019h = 8, type 1, sub 6 = 5: SYNCs carrying the counters 1..8 give TPDOs on the SYNCs 5..8 only. Sub 6 is
+    written (and put back) with the TPDO not valid, as CiA 301 lets a device require."""
+    evidence.rests_on("cia", "CiA 301 v4.2.0 §7.5.2.37 (sub 6: the SYNC whose counter equals it is the first "
+                             "received; it may change only while the TPDO is not valid)")
     _sync_counter(dut)
     comm, _ = configurable_tpdo(dut, 6, evidence, settings_journal, [1])
     overflow, start = 8, 5
     settings_journal.write(SYNC_COUNTER_OVERFLOW, 0, bytes([overflow]))
     settings_journal.write(comm, 2, b"\x01")
-    settings_journal.write(comm, 6, bytes([start]))
+    tpdo_while_invalid.write(comm, 6, bytes([start]))
     cob_id = dut.read_uint(comm, 1) & 0x7FF
-    _start(dut)
+    _start(dut, settings_journal, evidence)
     sent = []
     for counter in range(1, overflow + 1):
         mark = dut.send(SYNC_COB_ID, bytes([counter]))
@@ -476,7 +481,7 @@ def test_tpdo_parameters_writable_in_preoperational_only(dut, settings_journal, 
                     "may change")
     for comm, sub, _, _, _ in changes:
         settings_journal.remember(comm, sub)
-    _start(dut)
+    _start(dut, settings_journal, evidence)
     problems = []
     for comm, sub, size, value, wanted in changes:
         before = dut.read(comm, sub)
@@ -525,7 +530,7 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
                 dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
         return dut.frames.since(mark, is_this)
 
-    _start(dut)
+    _start(dut, settings_journal, evidence)
     running = stimulate()
     if trigger != "SYNC" and not running:
         pytest.skip(f"inconclusive: {comm:04X}h sent nothing on a change in operational (see "
@@ -536,5 +541,5 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
     late = stimulate(expected=False)
     evidence.measure(f"TPDO {cob_id:03X}h frames on {trigger} in {state}", len(late), "frames", 0, 0)
     assert not late, f"{len(late)} TPDO(s) on {cob_id:03X}h on {trigger} after NMT {state}:\n{format_frames(late[:5])}"
-    _start(dut)
+    _start(dut, settings_journal, evidence)
     assert stimulate(), f"no TPDO on {cob_id:03X}h on {trigger} after NMT start again"

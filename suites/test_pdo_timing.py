@@ -4,7 +4,8 @@
 Each test takes >= 50 samples from the frame log and records them as a timing measurement (statistics and
 a plot in the report, the figures in JUnit), saying which clock stamped the frames. The tester's host is
 watched while it measures (LatencyProbe): a figure that fails only where the host itself ran that late
-is inconclusive, not the device's.
+is inconclusive, not the device's. No test starts with an error active or leaves one (fixture no_error_left); the
+inhibit time is written with the TPDO not valid (CiA 301 v4.2.0 §7.5.2.37 lets a device require it).
 """
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
 from fixtures.tpdo import configurable_tpdo, mapped_bytes_of, maps_position
 
-pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos")]
+pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos"),
+              pytest.mark.usefixtures("no_error_left")]
 
 INHIBIT_CLAUSE = "CiA 301 §7.5.2.35 (inhibit time: types 254/255 only; a transmission inside it is delayed, not lost)"
 SYNCS = 50
@@ -91,7 +93,7 @@ def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, twi
             "profile timing.pdo_response_max_ms (CiA 301 gives no SYNC-to-TPDO bound)")
 
 
-def _inhibited_tpdo(dut, settings_journal, evidence, shaft, inhibit_ms: int) -> tuple[int, int]:
+def _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft, inhibit_ms: int) -> tuple[int, int]:
     """(comm, COB-ID) of a change-driven TPDO (254/255, event timer 0) with inhibit time ``inhibit_ms``; skips
     where the profile has no such TPDO or the bench cannot turn the shaft."""
     evidence.rests_on("cia", INHIBIT_CLAUSE)
@@ -109,16 +111,17 @@ def _inhibited_tpdo(dut, settings_journal, evidence, shaft, inhibit_ms: int) -> 
         settings_journal.write(comm, 5, b"\x00\x00")
     elif timer is not None and dut.read_uint(comm, 5):
         raise NoUsableTpdo(f"not applicable: {comm:04X}h.05 (event timer) is read-only and not 0", [])
-    settings_journal.write(comm, 3, (inhibit_ms * 10).to_bytes(2, "little"))
+    tpdo_while_invalid.write(comm, 3, (inhibit_ms * 10).to_bytes(2, "little"))
     evidence.note(f"{comm:04X}h: type {kind}, event timer 0, inhibit time {inhibit_ms} ms "
                   f"(sub 3 = {inhibit_ms * 10} x 100 us); TPDO on {cob_id:03X}h")
     return comm, cob_id
 
 
-def test_inhibit_time_spaces_tpdos(dut, settings_journal, back_to_preoperational, shaft, twin_lateness, evidence):
+def test_inhibit_time_spaces_tpdos(dut, settings_journal, tpdo_while_invalid, back_to_preoperational, shaft,
+                                   twin_lateness, evidence):
     """A change-driven TPDO with inhibit time 20 ms, the position changed right after each frame (inside every
     inhibit time): no two frames closer than 20 ms (>= 50 intervals; tolerance for the tester's clock)."""
-    comm, cob_id = _inhibited_tpdo(dut, settings_journal, evidence, shaft, INHIBIT_MS)
+    comm, cob_id = _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft, INHIBIT_MS)
     tolerance = dut.profile.timing.heartbeat_tolerance.allowed_ms(INHIBIT_MS)
 
     def is_tpdo(msg: can.Message) -> bool:
@@ -165,11 +168,12 @@ def test_inhibit_time_spaces_tpdos(dut, settings_journal, back_to_preoperational
         + ", ".join(f"#{n + 1}: {ms:.1f} ms" for n, ms in close[:8]))
 
 
-def test_inhibit_time_delays_events_not_drops(dut, settings_journal, back_to_preoperational, shaft, evidence):
+def test_inhibit_time_delays_events_not_drops(dut, settings_journal, tpdo_while_invalid, back_to_preoperational,
+                                              shaft, evidence):
     """A position change inside the inhibit time (50 ms) of a change-driven TPDO is sent when the time is over,
     not dropped: after the shaft stops, the last TPDO carries the position 6004h reads, within inhibit time +
     pdo_response_max_ms of the previous frame."""
-    comm, cob_id = _inhibited_tpdo(dut, settings_journal, evidence, shaft, HOLD_INHIBIT_MS)
+    comm, cob_id = _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft, HOLD_INHIBIT_MS)
     where = mapped_bytes_of(dut, comm, POSITION)
     if where is None:
         pytest.skip(f"not applicable: {comm:04X}h does not map the position value {POSITION:04X}h on byte bounds")

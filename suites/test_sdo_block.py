@@ -5,12 +5,15 @@ sequence number. Where the profile declares no block transfer (``capabilities.bl
 a block initiate must be refused with 05040001h (command specifier not valid); a device whose
 manual mentions block transfer without protocol detail (quirk effect ``block_transfer_unconfirmed``,
 e.g. WDGA M §8.3.2) may also serve it: either is recorded, neither fails. Written: a harmless
-16-bit entry (1017h where declared), put back.
+16-bit entry (1017h where declared), put back. Each test that opens a transfer closes it: where it
+did not end (a failure, a refusal), the ``closing`` fixture aborts it and watches the SDO silence
+window before the put-back, so that no read lands inside a sub-block the device still waits for.
 """
 
 from __future__ import annotations
 
 import struct
+from collections.abc import Iterator
 
 import pytest
 
@@ -30,6 +33,34 @@ BLOCK = "CiA 301 §7.2.4.3.9-16 (SDO block download / upload)"
 @pytest.fixture
 def sdo(dut) -> SdoProtocolClient:
     return SdoProtocolClient(dut)
+
+
+class OpenTransfers:
+    """The transfers a test opened; those not ``ended`` are aborted by the client at teardown."""
+
+    def __init__(self) -> None:
+        self.open: list[tuple[int, int]] = []
+
+    def opened(self, key: tuple[int, int]) -> tuple[int, int]:
+        self.open.append(key)
+        return key
+
+    def ended(self, key: tuple[int, int]) -> None:
+        self.open = [k for k in self.open if k != key]
+
+
+@pytest.fixture
+def closing(dut, sdo, settings_journal, evidence) -> Iterator[OpenTransfers]:
+    """Aborts (CiA 301 §7.2.4.3.17) every transfer the test left open, then watches the SDO silence window (an
+    abort is not answered), before ``settings_journal`` puts values back."""
+    transfers = OpenTransfers()
+    yield transfers
+    if not dut.usable:
+        return
+    for index, sub in transfers.open:
+        late = sdo.silent_after(sdo.abort(index, sub, SdoAbortCode.GENERAL_ERROR))
+        evidence.note(f"{index:04X}h.{sub:02X}: transfer left open by the test, aborted by the client"
+                      + (f"; the device then sent {[f.hex(' ').upper() for f in late]}" if late else ""))
 
 
 def _target(dut) -> tuple[int, int]:
@@ -54,12 +85,14 @@ def _longest_static(dut) -> tuple[int, int]:
 
 @pytest.mark.requires("block_sdo")
 @pytest.mark.parametrize("crc", [True, False], ids=["crc", "no-crc"])
-def test_block_upload(dut, sdo, crc, evidence):
+def test_block_upload(dut, sdo, crc, closing, evidence):
     """Block upload of the longest static entry (blksize 1: a sub-block per segment): the initiate response echoes
     it, sequence numbers count from 1, the size and (with CRC) the CRC match, the data is what a plain read gives."""
     evidence.rests_on("cia", BLOCK)
     key = _longest_static(dut)
-    result = sdo.block_upload(*key, blksize=1, crc=crc)
+    result = sdo.block_upload(*closing.opened(key), blksize=1, crc=crc)
+    if result.ok or result.abort is not None:
+        closing.ended(key)
     assert result.ok, f"block upload of {key[0]:04X}h.{key[1]:02X}:\n{result.describe()}"
     plain = sdo.upload(*key)
     assert result.data == plain.data, f"block upload {result.data.hex(' ')}, plain upload {plain.data.hex(' ')}"
@@ -67,7 +100,7 @@ def test_block_upload(dut, sdo, crc, evidence):
 
 @pytest.mark.requires("block_sdo")
 @pytest.mark.parametrize("crc", [True, False], ids=["crc", "no-crc"])
-def test_block_download(dut, sdo, crc, settings_journal, evidence):
+def test_block_download(dut, sdo, crc, settings_journal, closing, evidence):
     """Block download to a 16-bit entry: initiate, one segment, block acknowledgement, end (with or without CRC)
     confirmed, and the value read back."""
     evidence.rests_on("cia", BLOCK)
@@ -75,20 +108,24 @@ def test_block_download(dut, sdo, crc, settings_journal, evidence):
     current = dut.read(*key)
     value = _other_value(current)
     settings_journal.remember(*key, current)
-    result = sdo.block_download(*key, value, crc=crc)
+    result = sdo.block_download(*closing.opened(key), value, crc=crc)
+    if result.ok or result.abort is not None:
+        closing.ended(key)
     assert result.ok, f"block download of {value.hex(' ')} to {key[0]:04X}h.{key[1]:02X}:\n{result.describe()}"
     assert dut.read(*key) == value
 
 
 @pytest.mark.requires("block_sdo")
-def test_block_download_wrong_crc_refused(dut, sdo, settings_journal, evidence):
+def test_block_download_wrong_crc_refused(dut, sdo, settings_journal, closing, evidence):
     """A block download whose end carries a wrong CRC is refused with 05040004h; nothing is written."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.12 (end SDO block download: CRC), §7.2.4.3.17 05040004h")
     key = _target(dut)
     current = dut.read(*key)
     value = _other_value(current)
     settings_journal.remember(*key, current)
-    result = sdo.block_download(*key, value, crc_value=block_crc(value) ^ 0x5A5A)
+    result = sdo.block_download(*closing.opened(key), value, crc_value=block_crc(value) ^ 0x5A5A)
+    if result.abort is not None:
+        closing.ended(key)
     assert result.abort is not None, f"block download with a wrong CRC, no abort:\n{result.describe()}"
     judge_refusal(dut, result.abort, {SdoAbortCode.CRC_ERROR}, {SdoAbortCode.GENERAL_ERROR},
                   "block download with a wrong CRC", evidence)
@@ -110,24 +147,34 @@ def test_block_upload_invalid_block_size_refused(dut, sdo, blksize, evidence):
 
 
 @pytest.mark.requires("block_sdo")
-def test_block_download_wrong_sequence_number(dut, sdo, settings_journal, evidence):
-    """A first segment numbered 2 is not taken: the acknowledgement says no segment arrived in order (ackseq 0,
-    the client repeats) or the transfer aborts 05040003h (CTT SDO 27); repeated in order, the value is written."""
+def test_block_download_wrong_sequence_number(dut, sdo, settings_journal, closing, evidence):
+    """A first segment numbered 2 is not taken: the acknowledgement says no segment arrived in order (ackseq 0, at
+    once or after the device's sub-block time-out; the client repeats) or the transfer aborts 05040003h (CTT SDO 27,
+    or 05040000h after the time-out); repeated in order, the value is written."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.11 (ackseq: the last segment received in order), §7.2.4.3.17")
     key = _target(dut)
     current = dut.read(*key)
     value = _other_value(current)
     settings_journal.remember(*key, current)
-    started = sdo.block_download_initiate(*key, 2)
+    started = sdo.block_download_initiate(*closing.opened(key), 2)
     assert started is not None, "no response to initiate block download"
     assert started.raw[0] & 0xE3 == 0xA0, f"initiate block download refused: {started.describe()}"
-    ack = sdo.wait_response(sdo.send_block_segment(2, value, last=True))
+    # the device may wait for the rest of the sub-block until its time-out (open reading sdo-block-subblock-timeout)
+    timeout_ms = dut.profile.timing.sdo_transfer_timeout_ms
+    mark = sdo.send_block_segment(2, value, last=True)
+    ack = sdo.wait_response(mark, timeout=timeout_ms / 1000 + dut.sdo_timeout)
+    if ack is not None:
+        evidence.measure("segment out of sequence to the server's answer", round(_delay_s(dut, mark, ack) * 1000, 1),
+                         "ms", high=timeout_ms + dut.sdo_timeout * 1000)
     if ack is not None and ack.is_abort:
-        judge_refusal(dut, ack, {SdoAbortCode.SEQUENCE_NUMBER}, {SdoAbortCode.GENERAL_ERROR},
+        closing.ended(key)
+        judge_refusal(dut, ack, {SdoAbortCode.SEQUENCE_NUMBER, SdoAbortCode.TIMEOUT}, {SdoAbortCode.GENERAL_ERROR},
                       "block segment with sequence number 2 first", evidence)
         assert dut.read(*key) == current, "the aborted block download changed the value"
         return
-    assert ack is not None, "no block acknowledgement (nor abort) after a segment out of sequence"
+    assert ack is not None, (f"no block acknowledgement (nor abort) within the device's sub-block time-out "
+                             f"(timing.sdo_transfer_timeout_ms = {timeout_ms:g} ms) and the answer window after a "
+                             "segment out of sequence")
     assert ack.raw[0] & 0xE3 == 0xA2, f"not a block acknowledgement: {ack.describe()}"
     assert ack.raw[1] == 0, f"ackseq {ack.raw[1]} acknowledges a segment that came out of sequence (2 before 1)"
     ack = sdo.wait_response(sdo.send_block_segment(1, value, last=True))
@@ -136,8 +183,18 @@ def test_block_download_wrong_sequence_number(dut, sdo, settings_journal, eviden
     crc = block_crc(value) if started.raw[0] & 0x04 else 0  # both sides support CRC: the data's
     end = sdo.wait_response(dut.send_sdo(struct.pack("<BH5x", 0xC1 | 5 << 2, crc)))  # n = 5 unused bytes
     assert end is not None, "no response to end block download"
+    if end.raw[0] & 0xE3 == 0xA1 or end.is_abort:
+        closing.ended(key)
     assert end.raw[0] & 0xE3 == 0xA1, f"end block download after the repeated segment: {end.describe()}"
     assert dut.read(*key) == value, "the repeated block download was confirmed but the value is not written"
+
+
+def _delay_s(dut, mark, response) -> float:
+    """Seconds from the frame after ``mark`` (the segment sent) to ``response``."""
+    frames = dut.frames.since(mark)
+    sent = next((m.timestamp for m in frames if not m.is_rx), None)
+    got = next((m.timestamp for m in frames if m.is_rx and bytes(m.data) == response.raw), None)
+    return 0.0 if sent is None or got is None else got - sent
 
 
 def test_block_initiate_refused_without_block_transfer(dut, sdo, evidence):

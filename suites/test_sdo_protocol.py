@@ -15,7 +15,7 @@ import pytest
 from encoder_conformance.checks import expected_aborts, judge_refusal
 from encoder_conformance.cia301 import SdoAbortCode
 from encoder_conformance.dut.sdo_client import SdoProtocolClient, echoes
-from encoder_conformance.dut.sdo_frames import abort_name, upload_request
+from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name, upload_request
 from encoder_conformance.profile import datatypes
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocols)")
@@ -275,11 +275,35 @@ def _open_upload(dut, sdo) -> tuple[int, int]:
     return key
 
 
-def _next_initiate_served(dut, sdo, evidence, what: str) -> None:
-    """After an interrupted transfer, an upload of 1000h gets an answer echoing it (CiA 301: every initiate
-    request is answered); that it is served, not refused, is our reading (a warning)."""
+#: what an abort names (open readings sdo-request-while-transfer-open, sdo-request-taken-by-open-transfer)
+ABORT_NAMES_ITS_TRANSFER = ("CiA 301 §7.2.4.3.17 (abort SDO transfer: m is the multiplexer of the transfer "
+                            "aborted); §7.2.4.2: either side may abort at any time")
+
+
+def _next_initiate_served(dut, sdo, evidence, what: str, open_key: tuple[int, int] | None = None) -> None:
+    """After an interrupted transfer, an upload of 1000h gets an answer echoing it. Where ``open_key``'s transfer
+    was still open, the device may first abort that one (an abort naming it), and may take the request as a wrong
+    frame of it and leave it unanswered: then the request, sent again, is answered. That it is served, not
+    refused, is our reading (a warning)."""
     request = upload_request(0x1000, 0)
+    mark = dut.frames.mark()
     response = sdo.request(request)
+    frames = [bytes(m.data) for m in dut.frames.since(mark, sdo.is_response)]
+    before = frames[: frames.index(response.raw)] if response is not None and response.raw in frames else frames
+    ended = [raw for raw in before if open_key is not None and raw[0] == 0x80 and raw[1:4] == request_mux(open_key)]
+    others = [raw.hex(" ").upper() for raw in before if raw not in ended]
+    if others:
+        evidence.rests_on("cia", ABORT_NAMES_ITS_TRANSFER)
+    assert not others, (f"{what}: before the answer to the upload of 1000h the device sent {others}"
+                        + (f" (an abort of the open transfer names {open_key[0]:04X}h.{open_key[1]:02X})"
+                           if open_key else " (no transfer was open)"))
+    for raw in ended:
+        evidence.note(f"{what}: the device aborted the open transfer first ({SdoResponse(raw).describe()}), "
+                      f"allowed by {ABORT_NAMES_ITS_TRANSFER}")
+    if response is None and ended:
+        evidence.note(f"{what}: the upload of 1000h was taken as a wrong frame of the open transfer (no answer to "
+                      "it); sent again")
+        response = sdo.request(request)
     assert response is not None, f"{what}: no answer to the upload of 1000h"
     assert echoes(request, response.raw), f"{what}: the answer {response.describe()} does not echo 1000h.00"
     if response.is_abort:
@@ -288,13 +312,19 @@ def _next_initiate_served(dut, sdo, evidence, what: str) -> None:
                                   "to serve the next initiate request")
 
 
+def request_mux(key: tuple[int, int]) -> bytes:
+    """Bytes 1-3 of a frame about ``key``: index (little-endian) and sub-index."""
+    return upload_request(*key)[1:4]
+
+
 @pytest.mark.requires("segmented_sdo")
 def test_new_request_while_segmented_transfer_open(dut, sdo, evidence):
     """An initiate request in the middle of a segmented upload is answered (served, or refused with an abort
-    that echoes it); after a client abort the device serves requests as before."""
+    that echoes it), where the device may abort the open transfer first, or take the request as a wrong frame of
+    it and serve it sent again; after a client abort the device serves requests as before."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.6 (every initiate request is confirmed), §7.2.4.3.17")
     key = _open_upload(dut, sdo)
-    _next_initiate_served(dut, sdo, evidence, "new request during a segmented upload")
+    _next_initiate_served(dut, sdo, evidence, "new request during a segmented upload", open_key=key)
     sdo.abort(*key, SdoAbortCode.GENERAL_ERROR)
     assert dut.responds(), "the device stopped answering after a new request during a segmented upload"
 
@@ -317,14 +347,19 @@ def test_client_abort_ends_segmented_transfer(dut, sdo, evidence):
 @pytest.mark.requires("segmented_sdo")
 def test_transfer_left_open_does_not_block_the_server(dut, sdo, evidence):
     """A segmented upload left half-finished: whatever the device does with it (a timeout abort 05040000h naming
-    its entry, or nothing), it serves the next initiate request."""
+    its entry, or nothing; at the next request an abort naming it), it serves the next initiate request."""
     evidence.rests_on("inferred", "CiA 301 leaves open what a server does with a transfer left open; §7.2.4.3.17 "
                                   "05040000h (SDO protocol timed out)")
     key = _open_upload(dut, sdo)
     mark = dut.frames.mark()
+    ended = False
     for raw in sdo.silent_after(mark):
-        named = upload_request(*key)[1:4]
-        assert raw[0] != 0x80 or raw[1:4] == named, f"a timeout abort names another entry: {raw.hex(' ')}"
-        evidence.note(f"the device ended the transfer by itself: {raw.hex(' ').upper()}")
-    _next_initiate_served(dut, sdo, evidence, "after a transfer left open")
+        if raw[0] != 0x80 or raw[1:4] != request_mux(key):
+            evidence.rests_on("cia", ABORT_NAMES_ITS_TRANSFER)
+        assert raw[0] == 0x80, f"a frame after the transfer was left open, not an abort: {raw.hex(' ').upper()}"
+        assert raw[1:4] == request_mux(key), (f"an abort of the transfer left open ({key[0]:04X}h.{key[1]:02X}) "
+                                              f"names another entry: {raw.hex(' ').upper()}")
+        ended = True
+        evidence.note(f"the device ended the transfer by itself: {SdoResponse(raw).describe()}")
+    _next_initiate_served(dut, sdo, evidence, "after a transfer left open", open_key=None if ended else key)
     sdo.abort(*key, SdoAbortCode.TIMEOUT)

@@ -1,11 +1,15 @@
-"""The SYNC consumer's COB-ID 1005h (CiA 301 §7.5.2 object 1005h): bit 30 (generate SYNC) refused by a device that
-cannot produce SYNC, restricted CAN-IDs refused, and SYNC taken on the CAN-ID 1005h names.
+"""The SYNC COB-ID 1005h (CiA 301 v4.2.0 §7.5.2.5): bit 30 (generate SYNC) as the profile declares the device
+(capabilities.sync_producer: refused by a device that cannot produce SYNC, accepted by a producer, either where the
+profile says "may"), a producer's SYNC every 1006h µs and none with 1006h = 0, restricted CAN-IDs refused, and SYNC
+taken on the CAN-ID 1005h names.
 
 Not here: the SYNC counter 1019h (its reserved values, its write while 1006h is not 0, the SYNC start value) is
 checked with TPDOs in test_pdo_comm.py; a SYNC of the wrong length (EMCY 8240h) in test_emcy.py. 1006h
-(communication cycle period) and 1007h (synchronous window) are declared by no profile; bit 31 of 1005h is "do not
-care" in CiA 301, nothing to check. Every 1005h value a test changes is put back (on a SIKO each write is stored by
-the device itself, on a WayCon only by its store command, which no test sends).
+(communication cycle period) is written only by the producer test (put back to 0 first, so the SYNCs stop, then
+1005h; an error the device raised meanwhile, e.g. a SYNC time-out, cleared by reset communication: fixture
+no_error_left); 1007h (synchronous window) is declared by no profile; bit 31 of 1005h is "do not care" in CiA 301,
+nothing to check. Every 1005h value a test changes is put back (on a SIKO each write is stored by the device itself, on
+a WayCon only by its store command, which no test sends).
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import pytest
 from encoder_conformance.checks import abort_accepted
 from encoder_conformance.cia301 import (
     COB_ID_SYNC_GENERATE,
+    COMMUNICATION_CYCLE_PERIOD,
     RESTRICTED_CAN_IDS,
     SYNC_COB_ID_OBJECT,
     SdoAbortCode,
@@ -27,9 +32,12 @@ from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
 from fixtures.tpdo import configurable_tpdo
 
-pytestmark = [pytest.mark.spec("CiA 301 §7.5.2 object 1005h (COB-ID SYNC)"), pytest.mark.requires("sync_consumer")]
+pytestmark = [pytest.mark.spec("CiA 301 v4.2.0 §7.5.2.5 object 1005h (COB-ID SYNC)"),
+              pytest.mark.requires("sync_consumer"), pytest.mark.usefixtures("no_error_left")]
 
-CLAUSE = "CiA 301 §7.5.2 object 1005h (COB-ID SYNC)"
+CLAUSE = "CiA 301 v4.2.0 §7.5.2.5 object 1005h (COB-ID SYNC)"
+PRODUCER_PERIOD_US = 10000  # 1006h for the producer test: 10 ms
+PRODUCER_SYNCS = 3
 CODE_BASIS = "06090030h, the code CiA 301 gives for 1005h (CTT Other 10); any abort refuses the write"
 #: the ends of every restricted range (CiA 301 §7.3.5)
 RESTRICTED_PROBES = sorted({c for ids in RESTRICTED_CAN_IDS for c in (ids.start, ids.stop - 1)})
@@ -63,16 +71,64 @@ def _judge_code(dut, response: SdoResponse, value: int, what: str, evidence) -> 
 
 
 def test_sync_generate_bit_refused(dut, sync_cob_id, evidence):
-    """1005h with bit 30 set (the device generates SYNC) is refused by an encoder that cannot produce SYNC (no
-    profile declares a SYNC producer), and 1005h keeps its value."""
-    evidence.rests_on("cia", CLAUSE + ": a device that cannot generate SYNC refuses bit 30 = 1 with 06090030h")
+    """1005h with bit 30 set (the device generates SYNC): refused, 1005h unchanged, by a device the profile declares
+    unable to produce SYNC; accepted by a producer; either where the profile says "may" (what came is noted)."""
+    producer = dut.profile.capabilities.sync_producer
+    evidence.rests_on("cia", CLAUSE + ': a device that cannot generate SYNC refuses bit 30 = 1 with 06090030h; the '
+                      f"profile declares capabilities.sync_producer = {producer}")
     value = sync_cob_id | COB_ID_SYNC_GENERATE
     what = f"1005h = {value:08X}h (bit 30: generate SYNC)"
     response = _write(dut, value)
-    assert response.is_abort, f"{what}: accepted ({response.describe()}); the device cannot produce SYNC"
+    if not response.is_abort:
+        dut.write(SYNC_COB_ID_OBJECT, 0, sync_cob_id.to_bytes(4, "little"))  # bit 30 off again (1006h untouched)
+        assert producer, f"{what}: accepted ({response.describe()}); the profile says the device cannot produce SYNC"
+        evidence.note(f"{what}: accepted (a SYNC producer; capabilities.sync_producer = {producer}), put back")
+        return
+    assert producer is not True, f"{what}: refused ({response.describe()}); the profile declares a SYNC producer"
+    evidence.note(f"{what}: refused ({response.describe()})")
     _judge_code(dut, response, value, what, evidence)
     after = dut.read_uint(SYNC_COB_ID_OBJECT)
     assert after == sync_cob_id, f"after the refused {what}: 1005h reads {after:08X}h"
+
+
+def test_sync_producer_sends_every_cycle(dut, sync_cob_id, settings_journal, evidence):
+    """A SYNC producer (1005h bit 30 accepted) with 1006h = 10 ms sends SYNC on the 1005h CAN-ID, and none once 1006h
+    is 0 again; 1006h, then 1005h, are put back. Skipped where bit 30 is refused (the test above judges that)."""
+    evidence.rests_on("cia", "CiA 301 v4.2.0 §7.5.2.5 (1005h bit 30: the device generates SYNC), §7.5.2.6 (1006h: "
+                             "the SYNC period in µs; 0 = no SYNC transmitted)")
+    if not dut.profile.capabilities.sync_producer:
+        pytest.skip("not applicable: the profile declares no SYNC producer (capabilities.sync_producer)")
+    cycle = dut.profile.entry(COMMUNICATION_CYCLE_PERIOD, 0)
+    if cycle is None or not cycle.writable:
+        pytest.skip("not applicable: the profile has no writable 1006h (communication cycle period)")
+    if dut.read_uint(COMMUNICATION_CYCLE_PERIOD):
+        pytest.skip("not applicable: 1006h is not 0 as found (the bus's SYNC may be this device's)")
+    generating = sync_cob_id | COB_ID_SYNC_GENERATE
+    if _write(dut, generating).is_abort:
+        pytest.skip(f"not applicable: 1005h = {generating:08X}h refused (the device does not generate SYNC)")
+    can_id = sync_cob_id & 0x7FF
+
+    def is_own_sync(msg) -> bool:
+        return msg.is_rx and msg.arbitration_id == can_id and not msg.is_remote_frame
+
+    settings_journal.remember(COMMUNICATION_CYCLE_PERIOD, 0)
+    mark = dut.frames.mark()
+    try:
+        dut.write(COMMUNICATION_CYCLE_PERIOD, 0, PRODUCER_PERIOD_US.to_bytes(4, "little"))
+        period_s = PRODUCER_PERIOD_US / 1e6
+        window = (PRODUCER_SYNCS + 1) * period_s + dut.pdo_silence_s
+        syncs = dut.frames.wait_count(is_own_sync, PRODUCER_SYNCS, window, mark)
+    finally:
+        dut.write(COMMUNICATION_CYCLE_PERIOD, 0, bytes(4))  # stop the SYNCs before anything else
+    stopped = dut.frames.mark()
+    late = dut.frames.quiet_period(is_own_sync, 2 * period_s + dut.pdo_silence_s, stopped)
+    dut.write(SYNC_COB_ID_OBJECT, 0, sync_cob_id.to_bytes(4, "little"))
+    evidence.measure(f"SYNCs on {can_id:03X}h within {window * 1000:.0f} ms of 1006h = {PRODUCER_PERIOD_US} us",
+                     len(syncs), "frames", PRODUCER_SYNCS, None)
+    assert len(syncs) >= PRODUCER_SYNCS, (
+        f"1005h = {generating:08X}h, 1006h = {PRODUCER_PERIOD_US} us: {len(syncs)} SYNC(s) on {can_id:03X}h within "
+        f"{window * 1000:.0f} ms\n{format_frames(dut.frames.since(mark)[-8:])}")
+    assert not late, f"1006h = 0: still {len(late)} SYNC(s) on {can_id:03X}h\n{format_frames(late[:5])}"
 
 
 def test_sync_restricted_can_id_refused(dut, sync_cob_id, evidence):

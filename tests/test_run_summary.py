@@ -26,9 +26,16 @@ def test_area_verdicts_and_overall():
     verdicts = {a.area: a.verdict for a in summary.areas()}
     assert verdicts == {"identity": "PASS", "NMT": "PASS", "PDO": "PASS WITH WARNINGS"}
     assert summary.overall == "PASS WITH WARNINGS"
-    failing = _summary(("test_identity", "passed"), ("test_emcy", "error"), ("test_pdo", "warning"))
+    failing = _summary(("test_identity", "passed"), ("test_emcy", "failed"), ("test_pdo", "warning"))
     assert failing.overall == "FAIL"
     assert failing.failing_areas() == ["EMCY"]
+    # an internal error of the tool ("error") is no verdict about the device: in no area, no PASS either
+    broken = _summary(("test_identity", "passed"), ("test_emcy", "error"), ("test_pdo", "warning"))
+    assert broken.overall == "INTERNAL ERROR"
+    assert broken.failing_areas() == []
+    assert "EMCY" not in {a.area for a in broken.areas()}
+    broken.results.append(broken.results[0].__class__("suites/test_nmt.py::t", "NMT", "failed"))
+    assert broken.overall == "FAIL"
 
 
 def test_not_restored_fails_and_could_not_test_wins():

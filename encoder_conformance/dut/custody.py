@@ -189,6 +189,18 @@ class Custody:
             self.snapshot.save(self.snapshot_path)
         return self.snapshot
 
+    def note_lss_node_id(self, node_id: int) -> None:
+        """An LSS test is about to give the device ``node_id``: the snapshot file says so before it happens."""
+        if self.snapshot is not None and node_id not in self.snapshot.lss_node_ids:
+            self.snapshot.lss_node_ids.append(node_id)
+            self._save()
+
+    def lss_settled(self) -> None:
+        """The LSS put-back brought the device back to its node-ID: nothing left to look for."""
+        if self.snapshot is not None and self.snapshot.lss_node_ids:
+            self.snapshot.lss_node_ids.clear()
+            self._save()
+
     def stored_changes_since_snapshot(self) -> list[str]:
         """After the tests sent store commands: reset node and list the stored values that now differ."""
         if self.snapshot is None or self.watch.total == 0:
@@ -230,7 +242,7 @@ class Custody:
         dut = self.dut
         snapshot = self.snapshot
         assert snapshot is not None
-        if dut.lost:
+        if dut.lost and not (dut.device_lost and dut.reset_and_reach()):  # a silent device: one NMT reset node
             raise DutLostError(dut.lost)
         if self.power is not None and self.power.ensure_on():  # Ctrl-C between power off and on
             record.written.append(f"power switched on again ({self.power.description})")

@@ -16,7 +16,7 @@ from typing import Literal
 
 import can
 import canopen
-from canopen.sdo.exceptions import SdoCommunicationError
+from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from ..cia301 import NMT_COMMAND_NAMES, SDO_REQUEST_BASE, SYNC_COB_ID
 from ..errors import BusLostError, DutLostError, RunInterrupted
@@ -45,9 +45,27 @@ def answer_window(device_s: float) -> float:
 AbortCodeMode = Literal["exact", "family"]
 STALE_REQUESTS = 8  # an SDO reply that fits one of this many requests before the current one is a late answer
 
-__all__ = ["DeviceUnderTest", "HeartbeatSample", "wake_if_silent"]
+__all__ = ["DeviceUnderTest", "HeartbeatSample", "SdoAborted", "wake_if_silent"]
 #: failed probes in a row before the device counts as gone (one late answer on a busy PC is not a dead device)
 LOST_AFTER_PROBES = 2
+#: the tester's frames a lost device's verdict names (the last sent before it stopped answering)
+LAST_SENT = 6
+
+
+class SdoAborted(SdoAbortedError):
+    """canopen's SdoAbortedError as the dut layer raises it (``except SdoAbortedError`` still catches it).
+
+    canopen's own ``__eq__`` reads ``other.code`` of whatever it is compared with: hypothesis, comparing the
+    failures it found with the exceptions in their context, crashed with AttributeError (issue 26). This one is
+    equal only to an abort with the same code, and is raised outside canopen's except block, so that canopen's
+    exception never travels in the context of a test's failure.
+    """
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, SdoAbortedError) and self.code == other.code
+
+    def __hash__(self) -> int:
+        return hash(self.code)
 
 
 @dataclass(frozen=True)
@@ -69,6 +87,8 @@ class DeviceUnderTest:
         network.add_node(self.node)
         self.node.sdo.RESPONSE_TIMEOUT = answer_window(profile.timing.sdo_response_max_ms / 1000)
         self._lost: str | None = None
+        self.bench_failure: str | None = None  # the bench failed (power switch): nothing about the device shown
+        self.lost_frames = ""  # the last frames the tester sent before the device stopped answering
         self.stopping: str | None = None  # why the run is ending early (Ctrl-C, SIGTERM)
         self.tester_notes: list[str] = []  # what the tester saw that is not a verdict (drained into evidence)
         self.abort_codes: AbortCodeMode = "exact"  # how SDO abort codes are judged (--abort-codes)
@@ -77,8 +97,13 @@ class DeviceUnderTest:
     # -- liveness ------------------------------------------------------------------------
     @property
     def lost(self) -> str | None:
-        """Why the device can no longer be tested (bus gone, device silent, wrong device), or None."""
-        return self.frames.closed_reason or self._lost
+        """Why the device can no longer be tested (bus gone, bench failed, device silent), or None."""
+        return self.frames.closed_reason or self.bench_failure or self._lost
+
+    @property
+    def device_lost(self) -> bool:
+        """The device itself stopped answering (a finding about it), not the bus or the bench."""
+        return self._lost is not None and not self.frames.closed_reason and not self.bench_failure
 
     @property
     def bus_lost(self) -> bool:
@@ -92,13 +117,25 @@ class DeviceUnderTest:
     def _check_alive(self) -> None:
         if self.frames.closed_reason:
             raise BusLostError(self.frames.closed_reason)
-        if self._lost:
-            raise DutLostError(f"device stopped answering earlier: {self._lost}")
-        if self.stopping and not getattr(self._custody, "active", False):
+        in_custody = getattr(self._custody, "active", False)
+        if self.bench_failure or (self._lost and not in_custody):  # the restore may still try to reach it
+            raise DutLostError(f"device stopped answering earlier: {self.lost}")
+        if self.stopping and not in_custody:
             raise RunInterrupted(self.stopping)
 
-    def mark_lost(self, reason: str) -> None:
+    def mark_lost(self, reason: str, sent: list[can.Message] | None = None) -> None:
+        """The device stopped answering: later calls fail at once; the frames sent last (``sent``, default the
+        log's) are kept for the verdict."""
+        if self._lost is None:
+            self.lost_frames = format_frames((self._sent_last() if sent is None else sent)[-LAST_SENT:]) or "  (none)"
         self._lost = self._lost or reason
+
+    def _sent_last(self) -> list[can.Message]:
+        return [m for m in self.frames.last(60) if not m.is_rx]
+
+    def mark_bench_failed(self, reason: str) -> None:
+        """The bench (power switch, drive) failed: the run cannot go on, and nothing about the device was shown."""
+        self.bench_failure = self.bench_failure or reason
 
     def stop(self, reason: str) -> None:
         """The run is ending early: from now on only ``custody()`` may talk to the device."""
@@ -142,14 +179,21 @@ class DeviceUnderTest:
             return self.node.sdo.upload(index, sub)
         except SdoCommunicationError as exc:
             raise self._timeout(f"SDO upload {index:04X}h.{sub:02X}", exc, mark) from None
+        except SdoAbortedError as exc:
+            code = exc.code
+        raise SdoAborted(code)  # outside canopen's except block: see SdoAborted
 
     def write(self, index: int, sub: int, data: bytes) -> None:
         self._check_alive()
         mark = self.frames.mark()
         try:
             self.node.sdo.download(index, sub, data)
+            return
         except SdoCommunicationError as exc:
             raise self._timeout(f"SDO download {index:04X}h.{sub:02X}", exc, mark) from None
+        except SdoAbortedError as exc:
+            code = exc.code
+        raise SdoAborted(code)  # outside canopen's except block: see SdoAborted
 
     def read_uint(self, index: int, sub: int = 0) -> int:
         return int.from_bytes(self.read(index, sub), "little")
@@ -160,8 +204,10 @@ class DeviceUnderTest:
     def _timeout(self, what: str, exc: Exception, since: Mark) -> AssertionError:
         """A request went unanswered: the device is gone only if it stays silent on every channel
         (a stopped device answers no SDO but still sends its heartbeat)."""
+        sent = self._sent_last()  # before the probes: what the device went silent after
         if not any(self.responds() for _ in range(LOST_AFTER_PROBES)) and not self.heard_since(since):
-            self.mark_lost(f"no answer to {what} nor to {LOST_AFTER_PROBES} probes of 1000h, and no frame from it")
+            self.mark_lost(f"no answer to {what} nor to {LOST_AFTER_PROBES} probes of 1000h, and no frame from it",
+                           sent)
         return AssertionError(f"{what}: {exc}\nlast frames:\n{format_frames(self.frames.last(12))}")
 
     def heard_since(self, mark: Mark) -> bool:

@@ -1,11 +1,9 @@
-"""The device under test seen through LSS (CiA 305): its LSS address, node-ID and bit rate as found,
-the services its profile declares, and the put-back after a test that changed its node-ID.
+"""The device under test seen through LSS (CiA 305 v3.0.0): its LSS address, node-ID and bit rate as found,
+the services its profile declares, the waits a test owes it, and the put-back after a test.
 
-A test may move the device to another node-ID or make it unconfigured (255); ``put_back`` brings it
-to the node-ID it was found at, whatever state a failed or interrupted test left it in: leave the
-configuration state, and if the node does not answer at its node-ID, select it by its LSS address,
-configure the original node-ID and apply it (NMT reset communication, or store + power cycle on a
-device that applies a node-ID only at power-on).
+A test may move the device to another node-ID or make it unconfigured (255); it says so first (``moving_to``,
+which the run's snapshot records, so that ``restore --from`` looks there too). ``put_back`` finds the device
+wherever the test left it and brings it back (``dut/lss_custody.py``).
 """
 
 from __future__ import annotations
@@ -16,10 +14,18 @@ from dataclasses import dataclass, field
 
 import can
 
-from ..cia305 import BIT_TIMING_TABLE_0, MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand, LssState
+from ..cia305 import (
+    BIT_TIMING_TABLE_0,
+    FASTSCAN_RESET_BIT,
+    MASTER_COB_ID,
+    UNCONFIGURED_NODE_ID,
+    LssCommand,
+    LssState,
+)
 from ..profile import quirk_effects as fx
 from .device import DeviceUnderTest
 from .frames import Mark
+from .lss_custody import Changes, LssCustody, failure
 from .lss_master import LssAddress, LssAnswer, LssMaster
 from .sdo_frames import upload_request
 
@@ -41,6 +47,10 @@ class LssDevice:
     moved_to: set[int] = field(default_factory=set)  # node-IDs a test gave the device
     made_unconfigured: bool = False
     start: Mark | None = None  # before the test's first LSS frame
+    unconfigured_since: Mark | None = None  # before the reset or power-on that made it unconfigured
+    on_move: Callable[[int], None] | None = None  # told each node-ID before a test gives it (the run's snapshot)
+    on_settled: Callable[[], None] | None = None  # told when the device is back where it was found
+    restore_hint: str = ""  # the command that finishes a put-back later (``restore --from``)
 
     def __post_init__(self) -> None:
         self.start = self.dut.frames.mark()
@@ -73,14 +83,6 @@ class LssDevice:
         if "switch_selective" in self.services:
             return self.master.switch_selective(self.address)
         self.master.switch_global(LssState.CONFIGURATION)
-        return True
-
-    def _select_within(self, seconds: float) -> bool:
-        """Select the device, retrying while it may still be starting (after a power cycle)."""
-        deadline = time.monotonic() + seconds
-        while not self.select():
-            if time.monotonic() > deadline:
-                return False
         return True
 
     def leave(self) -> Mark:
@@ -128,19 +130,60 @@ class LssDevice:
         """NMT reset communication addressed to ``node_id`` (the device's active node-ID)."""
         return self.dut.nmt("reset-communication", node_id=node_id)
 
-    def apply_node_id(self, new_id: int) -> Mark:
-        """Configure ``new_id`` instead of the node-ID in use and make it active; returns a mark before it
-        becomes active. On a device that applies it only at power-on: store configuration and a power cycle."""
-        assert self.select(), f"switch state selective to {self.address.describe()}: no answer (44h)"
-        if new_id == UNCONFIGURED_NODE_ID:
+    def moving_to(self, node_id: int) -> None:
+        """A test is about to give the device ``node_id`` (255: unconfigured): custody looks there afterwards."""
+        if node_id == UNCONFIGURED_NODE_ID:
             self.made_unconfigured = True
         else:
-            self.moved_to.add(new_id)
-        expect_success(self.master.configure_node_id(new_id), f"configure node-ID {new_id}")
+            self.moved_to.add(node_id)
+        if self.on_move is not None:
+            self.on_move(node_id)
+
+    def configure_for(self, new_id: int) -> LssAnswer | None:
+        """Select the device and configure ``new_id`` (pending); the answer."""
+        assert self.select(), f"switch state selective to {self.address.describe()}: no answer (44h)"
+        self.moving_to(new_id)
+        return self.master.configure_node_id(new_id)
+
+    def apply_configured(self) -> Mark:
+        """Make the configured node-ID active; a mark before it does. CiA 305 v3: NMT reset communication; a
+        device that applies it only at power-on: store configuration and a power cycle."""
         if self.applies_on_reset:
             self.leave()
             return self.reset_communication(self.node_id)
         return self._store_and_power_cycle()
+
+    def apply_node_id(self, new_id: int) -> Mark:
+        """Configure ``new_id`` instead of the node-ID in use and make it active; returns a mark before it
+        becomes active."""
+        expect_success(self.configure_for(new_id), f"configure node-ID {new_id}")
+        return self.apply_configured()
+
+    def wait_unconfigured(self, since: Mark) -> str | None:
+        """Wait, at most the profile's boot-up time after ``since`` (the reset or power-on), until the device shows
+        it is unconfigured: it answers identify non-configured, a fastscan reset, or inquire node-ID with FFh.
+        Returns how it showed it; None where it did not (a device with none of these services: None once the
+        boot-up time passed without a boot-up at its old node-ID)."""
+        deadline = since.time + self.dut.profile.timing.bootup_max_ms / 1000
+        while time.monotonic() < deadline:
+            with self.master.no_answer_expected():  # each look waits the LSS silence window, not the answer window
+                if "identify_non_configured" in self.services:
+                    if self.master.identify_non_configured():
+                        return "identify non-configured answered"
+                elif "fastscan" in self.services:
+                    reset = self.master.request(LssCommand.FASTSCAN, bytes(4) + bytes([FASTSCAN_RESET_BIT, 0, 0]))
+                    if self.master.answer(LssCommand.IDENTIFY_SLAVE, reset) is not None:
+                        return "fastscan reset answered"
+                elif {"switch_selective", "inquire_node_id"} <= self.services:
+                    if self.master.switch_selective(self.address):
+                        active = self.master.inquire_node_id()
+                        self.leave()
+                        if active == UNCONFIGURED_NODE_ID:
+                            return "inquire node-ID answered FFh"
+                else:
+                    booted = self.wait_bootup_at(self.node_id, since, deadline - time.monotonic())
+                    return None if booted is not None else "no boot-up within the boot-up time"
+        return None
 
     def _store_and_power_cycle(self) -> Mark:
         """Store (unless the device stores by itself) and power-cycle; a mark before the power went off."""
@@ -153,68 +196,34 @@ class LssDevice:
         self.power_cycle()
         return mark
 
-    # -- put back ----------------------------------------------------------------------------------
+    # -- put back ---------------------------------------------------------------------------------
     def _sent(self, command: int) -> bool:
         """Did the test send this LSS request?"""
         return bool(self.dut.frames.since(self.start, lambda m: not m.is_rx and m.arbitration_id == MASTER_COB_ID
                                           and bool(m.data) and m.data[0] == command))
 
+    def changes(self) -> Changes:
+        """What the test may have changed: the LSS configure and store requests it sent (the frame log)."""
+        stored = self._sent(LssCommand.STORE_CONFIGURATION)
+        node_id = self._sent(LssCommand.CONFIGURE_NODE_ID)
+        bit_timing = self._sent(LssCommand.CONFIGURE_BIT_TIMING)
+        auto = (node_id and "node_id" in self.auto_stored) or (bit_timing and "bit_timing" in self.auto_stored)
+        return Changes(node_id=node_id or bool(self.moved_to) or self.made_unconfigured, bit_timing=bit_timing,
+                       stored=stored or auto)
+
+    def custody(self) -> LssCustody:
+        """The search and put-back for this device (``dut/lss_custody.py``)."""
+        return LssCustody(self.dut, self.master, self.address, self.node_id, self.bit_index, self.power_cycle,
+                          frozenset(self.moved_to), self.restore_hint)
+
     def put_back(self) -> str | None:
-        """The device at its node-ID again, as found, with nothing else pending; None, or what could not be
-        put back. Costs a few frames where the test only configured values it never applied."""
-        self.leave()
-        if not self._sent(LssCommand.CONFIGURE_NODE_ID) and not self._sent(LssCommand.CONFIGURE_BIT_TIMING):
-            return None
-        moved = bool(self.moved_to) or self.made_unconfigured
-        if not moved or self.answers_at(self.node_id, timeout=self.dut.sdo_silence_s):
-            return self._configure_as_found()
-        return self.recover()
-
-    def recover(self) -> str | None:
-        """The device does not answer at its node-ID (moved, or unconfigured): select it by its LSS address,
-        configure its node-ID and apply it; None, or what could not be done."""
-        if not self._select_within(self.dut.profile.timing.bootup_max_ms / 1000):
-            return f"the device does not answer at node-ID {self.node_id} nor to its LSS address"
-        active = self.master.inquire_node_id() if "inquire_node_id" in self.services else None
-        problem = failure(self.master.configure_node_id(self.node_id), f"configure node-ID {self.node_id}")
-        if problem:
-            return f"{problem} (to put the device back)"
-        if self.applies_on_reset:
-            mark = self.leave()  # an unconfigured device starts now
-            for node_id in {active, *self.moved_to} - {None, UNCONFIGURED_NODE_ID}:
-                mark = self.reset_communication(node_id)  # type: ignore[arg-type]
-        else:
-            try:
-                mark = self._store_and_power_cycle()
-            except AssertionError as exc:
-                return f"node-ID {self.node_id} configured and stored, not applied: {exc}; switch the device off and on"
-        if self.wait_bootup_at(self.node_id, mark) is None and not self.answers_at(self.node_id):
-            return f"after configure node-ID {self.node_id} the device does not answer at it"
-        return None
-
-    def _configure_as_found(self) -> str | None:
-        """Pending node-ID and bit timing back to the ones in use (a later reset must not apply a test's)."""
-        if not self.select():
-            return f"the device does not answer to its LSS address {self.address.describe()}"
-        problems = []
-        if self._sent(LssCommand.CONFIGURE_NODE_ID):
-            problems.append(failure(self.master.configure_node_id(self.node_id), f"configure node-ID {self.node_id}"))
-        if self._sent(LssCommand.CONFIGURE_BIT_TIMING) and self.bit_index is not None:
-            problems.append(failure(self.master.configure_bit_timing(self.bit_index),
-                                    f"configure bit timing {self.bit_index}"))
-        if self._sent(LssCommand.STORE_CONFIGURATION):  # what the test stored must not wait for a power cycle
-            problems.append(failure(self.master.store_configuration(), "store configuration"))
-        self.leave()
-        return "; ".join(p for p in problems if p) or None
-
-
-def failure(answer: LssAnswer | None, what: str) -> str | None:
-    """None for an LSS answer with error 0, else what went wrong with ``what``."""
-    if answer is None:
-        return f"{what}: no answer"
-    if answer.error != 0:
-        return f"{what}: error {answer.error} (specific {answer.specific})"
-    return None
+        """The device at its node-ID again, as found (node-ID and bit timing: active, pending and stored), wherever
+        the test left it; None, or one line saying what could not be done, where the device is and what to run.
+        Costs one frame where the test configured nothing."""
+        problem = self.custody().put_back(self.changes())
+        if problem is None and self.on_settled is not None:
+            self.on_settled()
+        return problem
 
 
 def expect_success(answer: LssAnswer | None, what: str) -> LssAnswer:

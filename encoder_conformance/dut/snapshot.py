@@ -91,6 +91,9 @@ class Snapshot:
     #: device has no preset, or in a snapshot from before the reference point was recorded
     reference_found: ReferencePoint | None = None
     reference_stored: ReferencePoint | None = None
+    #: node-IDs an LSS test gave the device (255: unconfigured) and has not put back yet: where a later
+    #: ``restore --from`` looks for it (absent in snapshots of older runs)
+    lss_node_ids: list[int] = field(default_factory=list)
     taken_at: str = field(default_factory=lambda: time.strftime("%Y-%m-%dT%H:%M:%S%z"))
     format: str = FORMAT
 

@@ -9,12 +9,16 @@ alternated are aborted; a segment response echoes the toggle bit.
 
 The judge follows the transfer the device has open, as far as its answers tell. Where they do not
 (an initiate aborted while a transfer was open: the device may go on with the old one), the state is
-unknown and segments are judged only as frames.
+unknown and segments are judged only as frames. An initiate while a transfer is open may draw an abort
+naming the open transfer first (either side may abort at any time, CiA 301 §7.2.4.2), then its own
+answer, or that abort alone (the request taken as a wrong frame of the open transfer): open readings
+sdo-request-while-transfer-open and sdo-request-taken-by-open-transfer.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import pairwise
 
 from ..dut.sdo_frames import ABORT_SCS, ANSWER_SCS, answers
 from .strategies import Request
@@ -75,12 +79,45 @@ class Judge:
 
     def judge(self, exchanges: list[Exchange]) -> list[str]:
         problems: list[str] = []
-        for exchange in exchanges:
-            problems += [f"request {_hex(exchange.request.frame)}: {p}" for p in self._one(exchange)]
+        for n, exchange in enumerate(exchanges):
+            rest = exchanges[n + 1 :]
+            if len(exchange.replies) == 1 and rest:
+                self._pull_back_late_answer(exchange, rest)
+            problems += [f"request {_hex(exchange.request.frame)}: {p}" for p in self._one(exchange, rest[:1] or None)]
         return problems
 
-    def _one(self, exchange: Exchange) -> list[str]:
+    def _pull_back_late_answer(self, exchange: Exchange, rest: list[Exchange]) -> None:
+        """An initiate about the open transfer's own entry drew an abort naming it, and its answer came after the
+        next request was sent (so it went to that one): the answer is pulled back, and each later request's first
+        reply with it where that one has two or owes none (the device answers in order)."""
+        frame, first = exchange.request.frame, exchange.replies[0]
+        if not rest[0].replies or not self._ends_open_transfer(frame, first, answered=True):
+            return
+        late = rest[0].replies[0]
+        if late == first or not fits(frame, late):
+            return  # the same frame twice is a second reply, not an answer
+        exchange.replies.append(rest[0].replies.pop(0))
+        for earlier, later in pairwise(rest):
+            spare = len(later.replies) >= 2 or (later.replies and not reply_required(later.request.frame))
+            if earlier.replies or not reply_required(earlier.request.frame) or not spare:
+                break
+            earlier.replies.append(later.replies.pop(0))
+
+    def _ends_open_transfer(self, frame: bytes, reply: bytes, answered: bool = False) -> bool:
+        """An abort naming the open transfer in answer to an initiate about another entry, or about the same one
+        where an answer follows (``answered``; see the docstring)."""
+        transfer = self.transfer
+        return (isinstance(transfer, Transfer) and len(frame) == 8 and _ccs(frame) in INITIATE_CCS
+                and (frame[1:4] != transfer.mux or answered) and len(reply) == 8 and reply[0] == ABORT
+                and reply[1:4] == transfer.mux)
+
+    def _one(self, exchange: Exchange, following: list[Exchange] | None = None) -> list[str]:
         frame, replies = exchange.request.frame, exchange.replies
+        if replies and self._ends_open_transfer(frame, replies[0], answered=len(replies) > 1):
+            self.transfer = None
+            replies = replies[1:]
+            if not replies:
+                return []  # taken as a wrong frame of the open transfer: the request itself is not answered
         if _ccs(frame) == 4:
             self.transfer = None
             return [f"{len(replies)} repl{'y' if len(replies) == 1 else 'ies'} to an abort transfer request, which "
@@ -89,8 +126,17 @@ class Judge:
             return self._short(replies)
         if not replies:
             return ["no reply (CiA 301: every SDO request but an abort is confirmed)"]
+        judged = self._reply(exchange.request, replies[0])
+        following = following[0] if following else None
+        if len(replies) > 1 and following is not None and all(
+                self._ends_open_transfer(following.request.frame, extra, bool(following.replies))
+                for extra in replies[1:]):
+            moved = replies[1:]  # the abort that ended the open transfer came for the next initiate
+            following.replies[:0] = moved
+            del exchange.replies[-len(moved):]
+            replies = replies[:1]
         problems = [f"{len(replies)} replies to one request: {', '.join(map(_hex, replies))}"][: len(replies) - 1]
-        return problems + self._reply(exchange.request, replies[0])
+        return problems + judged
 
     def _short(self, replies: list[bytes]) -> list[str]:
         if not replies:

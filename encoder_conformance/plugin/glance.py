@@ -2,7 +2,8 @@
 
 In this order: the overall verdict as a coloured banner (profile, date, serial), the device's identity, the
 verdict per area with its counts, the failures (expected vs observed, the clause or manual section they rest
-on, links to the frame trace), the warnings (rules we only inferred). Below, folded: device custody (its
+on, links to the frame trace), the internal errors of the tool (outside every verdict), the warnings (rules
+we only inferred). Below, folded: device custody (its
 alarms stay unfolded when the device was not given back), verdicts by basis, the profile's documented
 deviations, skips by reason, settings with their sources.
 
@@ -18,11 +19,11 @@ from dataclasses import dataclass, field
 from html import escape
 from pathlib import PurePosixPath
 
-from ..run_summary import AREAS, RunSummary, TestResult
+from ..run_summary import AREAS, INTERNAL_ERROR_TEXT, RunSummary, TestResult
 
 #: the banner's colour per overall verdict
 VERDICT_CLASS = {"PASS": "pass", "FAIL": "fail", "PASS WITH WARNINGS": "warn", "COULD NOT TEST": "none",
-                 "NOT RUN": "none"}
+                 "INTERNAL ERROR": "int", "NOT RUN": "none"}
 
 KIND_NAMES = {"run": "conformance run", "accept": "acceptance check"}
 
@@ -41,6 +42,7 @@ CSS = """<style>
 .glance td.n{text-align:right;font-variant-numeric:tabular-nums}
 .g-banner{padding:10px 16px;border-radius:4px;color:#fff;margin:4px 0 8px}
 .g-banner .g-word{font-size:30px;font-weight:bold;margin-right:18px}
+.g-int{background:#6a1b9a}.g-item.g-i{border-left-color:#6a1b9a}
 .g-pass{background:#1e7e34}.g-fail{background:#c62828}.g-warn{background:#e69500}.g-none{background:#757575}
 .glance .g-v-pass{color:#1e7e34;font-weight:bold}.glance .g-v-fail{color:#c62828;font-weight:bold}
 .glance .g-v-warn{color:#b36b00;font-weight:bold}.glance .g-v-none{color:#888}
@@ -86,7 +88,7 @@ def render(summary: RunSummary, context: PageContext | None = None) -> str:
         parts.append(f"<div class='g-draft'><b>{escape(context.draft)}</b>"
                      f"<details><summary>the assumptions (todo: in the profile)</summary><ol>{items}</ol></details>"
                      "</div>")
-    parts += [_identity(summary), _areas(summary), _failures(summary), _warnings(summary),
+    parts += [_identity(summary), _areas(summary), _failures(summary), _internal_errors(summary), _warnings(summary),
               _custody(summary, context.custody), _by_basis(summary, context.inferred_mode),
               _deviations(summary, context.deviations), _skips(summary), _settings(summary, context.environment),
               "</div>"]
@@ -102,11 +104,16 @@ def _banner(summary: RunSummary) -> str:
     verdict = summary.overall
     counts = Counter(r.outcome for r in summary.results)
     figures = ", ".join(f"{counts[key]} {label if counts[key] > 1 else label.removesuffix('s')}"
-                        for key, label in (("passed", "passed"), ("failed", "failed"), ("error", "errors"),
+                        for key, label in (("passed", "passed"), ("failed", "failed"), ("error", "internal errors"),
                                            ("warning", "warnings"), ("skipped", "skipped")) if counts[key])
     serial = f" &middot; serial {escape(summary.serial)}" if summary.serial else ""
     duration = f", {summary.duration_s:.0f} s" if summary.duration_s else ""
     why = f"<div>could not test: {escape(summary.could_not_test)}</div>" if summary.could_not_test else ""
+    if summary.device_failed:
+        why += f"<div>the run stopped: {escape(summary.device_failed)}; {summary.not_run} test(s) not run</div>"
+    if summary.internal_errors:
+        why += (f"<div>{len(summary.internal_errors)} {INTERNAL_ERROR_TEXT} (outside every verdict: see "
+                "<a href='#internal-errors' style='color:#fff'>below</a>)</div>")
     if summary.device_restored is False:
         why += "<div>the device was NOT given back as found: see the custody lines below</div>"
     return (f"<div class='g-banner g-{VERDICT_CLASS.get(verdict, 'none')}' id='verdict'>"
@@ -165,10 +172,19 @@ def _item(result: TestResult, css: str) -> str:
 
 
 def _failures(summary: RunSummary) -> str:
-    failed = summary.with_outcome("failed", "error")
+    failed = summary.with_outcome("failed")
     if not failed:
         return "<h2 id='failures'>Failures: none</h2>"
     return f"<h2 id='failures'>Failures ({len(failed)})</h2>" + "".join(_item(r, "") for r in failed)
+
+
+def _internal_errors(summary: RunSummary) -> str:
+    errors = summary.internal_errors
+    if not errors:
+        return ""
+    return (f"<h2 id='internal-errors'>Internal errors of the tool ({len(errors)}): please report them</h2>"
+            "<p class='g-small'>not findings about the device: counted in no area and no verdict</p>"
+            + "".join(_item(r, "g-i") for r in errors))
 
 
 def _warnings(summary: RunSummary) -> str:

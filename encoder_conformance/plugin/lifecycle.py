@@ -1,9 +1,15 @@
 """The run as a bench sees it: custody of the device, one reason when it is gone, exit codes, Ctrl-C.
 
 pre-flight and snapshot (the dut fixture) -> tests -> give the device back (end of the run, or at
-once on Ctrl-C/SIGTERM, or after the bus or device is lost) -> report. When the device or the bus
-is gone, the run stops with one message and exit code COULD_NOT_TEST; the tests not run are
-reported as not run. The exit status follows exit_codes.RunExit.
+once on Ctrl-C/SIGTERM, or after the bus or device is lost) -> report. The exit status follows
+exit_codes.RunExit, and tells the three outcomes apart (shared DESIGN §8):
+
+- FAIL (NON_CONFORMANT): the device broke a rule; also when it stopped answering in a test (that test fails,
+  naming the last frames sent, the rest are not run) or its start-up replies broke CiA 301;
+- COULD NOT TEST: nothing about the device was shown: it never answered, the bus, adapter or bench failed, or
+  the operator stopped the run;
+- INTERNAL ERROR: our code raised what is no finding about the device (``outcomes``); exit 3 only when nothing
+  else failed, and never counted in a verdict.
 """
 
 from __future__ import annotations
@@ -16,7 +22,24 @@ import pytest
 from ..dut.custody import Custody, RestoreRecord
 from ..exit_codes import DESCRIPTIONS, RunExit
 from .interrupt import InterruptGuard
+from .outcomes import is_internal_error
 from .reporting import report_dir, runs_suites
+
+
+@dataclass(frozen=True)
+class StopVerdict:
+    """Why the run stopped on a finding about the device: the check, its area, the clause, what was seen."""
+
+    check: str  # a test id, or "start-up check"
+    area: str
+    source: str  # the clause or manual section (document, version, section)
+    message: str
+    recorded: bool = False  # the check is a test whose own report already holds the failure
+
+    def line(self) -> str:
+        """One line: the check, the first thing seen, the clause."""
+        seen = " ".join(line.strip() for line in self.message.splitlines()[:2])
+        return f"{self.check} failed: {seen} ({self.source})"
 
 
 @dataclass
@@ -27,8 +50,12 @@ class RunState:
     custody: Custody | None = None
     stopped: str | None = None  # could not test: why
     rejected: str | None = None  # the start-up check found another product (acceptance: an identity failure)
+    failed: StopVerdict | None = None  # the device failed so that the run could not go on (a FAIL, not 69)
+    lost_in: str | None = None  # the test during which the device stopped answering
     collected: int = 0
     reported: set[str] = field(default_factory=set)  # test ids with a call-phase report
+    failed_tests: set[str] = field(default_factory=set)  # test ids with a failure about the device (any phase)
+    internal_errors: set[str] = field(default_factory=set)  # test ids with an internal error of the tool
 
     @property
     def record(self) -> RestoreRecord | None:
@@ -120,11 +147,40 @@ def trace(config: pytest.Config, phase: str) -> None:
 
 
 def device_gone(config: pytest.Config) -> str | None:
-    """Why the run cannot go on (bus lost, device silent, wrong device), or None."""
+    """Why the run cannot go on (bus lost, bench failed, device silent), or None."""
     state = state_of(config)
     if state is None or state.custody is None:
         return None
     return state.custody.dut.lost
+
+
+LOST_PROPERTY = "device_lost"
+LOST_CLAUSE = ("CiA 301 v4.2.0 §7.2.4.3 (SDO: every request is answered) and §7.2.8.3.2.2 (the heartbeat is sent "
+               "every producer heartbeat time)")
+
+
+def lost_text(config: pytest.Config) -> str:
+    """The device stopped answering: why, and the last frames the tester sent before it went silent."""
+    custody = custody_of(config)
+    if custody is None or not custody.dut.device_lost:
+        return ""
+    return f"the device stopped answering: {custody.dut.lost}\nthe last frames sent before:\n{custody.dut.lost_frames}"
+
+
+def note_loss(item: pytest.Item, report: pytest.TestReport) -> None:
+    """The device stopped answering in this test: its report says so, naming the last frames sent; a test that
+    did not fail by itself (the loss showed in its clean-up) fails at its teardown."""
+    state = state_of(item.config)
+    text = lost_text(item.config)
+    if state is None or not text or state.lost_in not in (None, item.nodeid):
+        return
+    state.lost_in = item.nodeid
+    if report.when == "teardown" and not report.failed and item.nodeid not in state.failed_tests:
+        report.outcome, report.longrepr = "failed", text
+    if report.failed and (LOST_PROPERTY, text) not in item.user_properties:
+        report.sections.append(("the device stopped answering", text))
+        report.user_properties.append((LOST_PROPERTY, text))  # the run summary's message names the frames
+        item.user_properties.append((LOST_PROPERTY, text))
 
 
 def stop_run(config: pytest.Config, reason: str) -> None:
@@ -149,21 +205,42 @@ def reject_device(config: pytest.Config, reason: str) -> None:
     pytest.exit(f"FAIL identity: {reason}", returncode=RunExit.NON_CONFORMANT)
 
 
+def fail_run(config: pytest.Config, verdict: StopVerdict) -> None:
+    """The device failed so that the run cannot go on (start-up replies that break CiA 301, a device that stopped
+    answering in a test): exit code NON_CONFORMANT, the tests not run counted as not run."""
+    state = state_of(config)
+    if state is not None:
+        state.failed = state.failed or verdict
+    pytest.exit(f"FAIL {verdict.line()}", returncode=RunExit.NON_CONFORMANT)
+
+
 def stop_if_gone(config: pytest.Config) -> None:
-    """Before each test: if the device or the bus is gone, end the run with one reason (could not test)."""
+    """Before and after each test: a device that stopped answering ends the run as a FAIL (the test it stopped in
+    failed); a lost bus or a failed bench ends it with one reason (could not test)."""
     reason = device_gone(config)
-    if reason:
-        stop_run(config, reason)
+    if not reason:
+        return
+    state = state_of(config)
+    custody = custody_of(config)
+    if state is not None and custody is not None and custody.dut.device_lost:
+        fail_run(config, StopVerdict(state.lost_in or "between two tests", "", LOST_CLAUSE,
+                                     f"the device stopped answering: {reason}", recorded=state.lost_in is not None))
+    stop_run(config, reason)
 
 
 def note_report(config: pytest.Config, report: pytest.TestReport) -> None:
     state = state_of(config)
-    if state is not None and (report.when == "call" or report.outcome != "passed"):
+    if state is None:
+        return
+    if report.when == "call" or report.outcome != "passed":
         state.reported.add(report.nodeid)
+    if report.failed:
+        (state.internal_errors if is_internal_error(report) else state.failed_tests).add(report.nodeid)
 
 
 def final_exit_status(session: pytest.Session) -> None:
-    """Interrupted > could not test > device not restored > pytest's own verdict."""
+    """Interrupted > could not test > a FAIL that stopped the run > device not restored > a device failure >
+    an internal error of the tool (3, only where nothing else failed) > pytest's own verdict."""
     state = state_of(session.config)
     if state is None:
         return
@@ -175,10 +252,14 @@ def final_exit_status(session: pytest.Session) -> None:
         session.exitstatus = state.guard.exit_code
     elif state.stopped or session.exitstatus == RunExit.COULD_NOT_TEST:
         session.exitstatus = RunExit.COULD_NOT_TEST
-    elif state.rejected:
+    elif state.rejected or state.failed:
         session.exitstatus = RunExit.NON_CONFORMANT
     elif record is not None and not record.ok:
         session.exitstatus = RunExit.NOT_RESTORED
+    elif state.failed_tests:
+        session.exitstatus = RunExit.NON_CONFORMANT
+    elif state.internal_errors and session.exitstatus == pytest.ExitCode.TESTS_FAILED:
+        session.exitstatus = RunExit.INTERNAL_ERROR
     _write_outcome(session, state)
 
 
@@ -195,7 +276,9 @@ def _write_outcome(session: pytest.Session, state: RunState) -> None:
     outcome = {
         "exit_code": code,
         "meaning": next((text for known, text in DESCRIPTIONS.items() if known == code), "interrupted"),
-        "stopped": state.stopped,
+        "stopped": state.stopped or (state.failed.line() if state.failed else None),
+        "device_failed": state.failed.line() if state.failed else None,
+        "internal_errors": sorted(state.internal_errors),
         "interrupted": state.guard.reason if state.guard.signum is not None else None,
         "tests_collected": state.collected,
         "tests_reported": len(state.reported),
@@ -211,7 +294,7 @@ def ended_early(config: pytest.Config) -> bool:
     """Interrupted or stopped: 'every test skipped' means nothing then."""
     state = state_of(config)
     return state is not None and (state.guard.signum is not None or state.stopped is not None
-                                  or state.rejected is not None)
+                                  or state.rejected is not None or state.failed is not None)
 
 
 def note_collected(session: pytest.Session) -> None:
@@ -233,6 +316,11 @@ def summary_lines(config: pytest.Config) -> list[tuple[str, bool]]:
         lines.append((f"could not test: {state.stopped}; {not_run} test(s) not run", True))
     elif state.rejected:
         lines.append((f"FAIL identity: {state.rejected}; {not_run} test(s) not run", True))
+    elif state.failed:
+        lines.append((f"FAIL {state.failed.line()}; {not_run} test(s) not run", True))
+    if state.internal_errors:
+        lines.append((f"{len(state.internal_errors)} internal error(s) of the tool: please report them (not counted "
+                      "in any verdict): " + ", ".join(sorted(state.internal_errors)[:5]), True))
     record = state.record
     if record is None:
         return lines

@@ -12,6 +12,7 @@ from ..run_summary import RunSummary, TestResult, area_of
 from . import acceptance, lifecycle
 from .evidence import EVIDENCE
 from .options import bench_settings, settings_of
+from .outcomes import is_internal_error
 from .reporting import IDENTITY, report_dir, skip_reason
 
 SUMMARY = pytest.StashKey[RunSummary]()
@@ -51,6 +52,11 @@ def start(config: pytest.Config) -> None:
         report_dir=str(folder))
 
 
+def _stop_verdict(verdict: lifecycle.StopVerdict) -> TestResult:
+    """The finding that stopped the run (the start-up check's) as a failed check of its area."""
+    return TestResult(verdict.check, verdict.area or "other", "failed", "cia", verdict.source, verdict.message)
+
+
 def _identity_rejected(config: pytest.Config, reason: str) -> TestResult:
     """The start-up check's verdict on another product (acceptance): a failure of the identity area."""
     identity = settings_of(config).loaded.profile.identity
@@ -68,13 +74,16 @@ def _message(report: pytest.TestReport) -> str:
 
 
 def _outcome(report: pytest.TestReport) -> str | None:
-    """The test's outcome from this phase's report, or None where the phase says nothing new."""
+    """The test's outcome from this phase's report, or None where the phase says nothing new: "error" only for an
+    internal error of the tool (plugin/outcomes.py), a finding about the device in any phase is "failed"."""
+    if is_internal_error(report):
+        return "error"
     if report.when == "call":
         if report.passed:
             return "warning" if ("verdict", "warning") in report.user_properties else "passed"
         return "failed" if report.failed else "skipped"
     if report.failed:
-        return "error"
+        return "failed"
     if report.skipped and report.when == "setup":
         return "skipped"
     return None
@@ -92,14 +101,20 @@ def note_report(item: pytest.Item, report: pytest.TestReport) -> None:
     message = _message(report) if outcome in ("failed", "error", "skipped") else ""
     if outcome == "warning":
         message = "; ".join(v for k, v in report.user_properties if k == "inferred_problem")
+    lost = next((v for k, v in report.user_properties if k == lifecycle.LOST_PROPERTY), None)
+    if lost and lost not in message:
+        message = f"{message[:MESSAGE_LIMIT // 2]}\n{lost}".strip()
     folder = report_dir(item.config)
     trace = None
     if evidence is not None and evidence.trace_path is not None and folder is not None:
         trace = evidence.trace_path.relative_to(folder).as_posix()
     existing = item.stash.get(_RESULT, None)
-    if existing is not None:  # a teardown error after the call's verdict
-        if outcome == "error":
-            existing.outcome, existing.message = "error", message
+    if existing is not None:  # a failure in the teardown after the call's verdict
+        device_failure = outcome == "failed" and existing.outcome != "failed"
+        if device_failure or (outcome == "error" and existing.outcome in ("passed", "warning")):
+            existing.outcome, existing.message = outcome, message  # type: ignore[assignment]
+        elif lost and lost not in existing.message:  # the device went silent: the frames sent last
+            existing.message = f"{existing.message[:MESSAGE_LIMIT // 2]}\n{lost}"
         return
     result = TestResult(item.nodeid, area_of(item.nodeid), outcome, basis,  # type: ignore[arg-type]
                         source or (evidence.spec if evidence else None), message, round(report.duration, 3), trace)
@@ -127,6 +142,11 @@ def completed(session: pytest.Session) -> RunSummary | None:
         # an interrupted run has no verdict either: no PASS (nor a certificate) for what was not run
         interrupted = state.guard.reason if state.guard.signum is not None else None
         summary.could_not_test = state.stopped or interrupted
+        summary.device_failed = state.failed.line() if state.failed else None
+        summary.not_run = max(0, state.collected - len(state.reported))
+        if state.failed and not state.failed.recorded and not any(r.nodeid == state.failed.check
+                                                                   for r in summary.results):
+            summary.results.insert(0, _stop_verdict(state.failed))
         already = any(r.nodeid == acceptance.IDENTITY_CHECK for r in summary.results)
         if state.rejected and not already:  # completed() runs twice: for the HTML summary, then for the file
             summary.results.insert(0, _identity_rejected(config, state.rejected))

@@ -3,7 +3,11 @@
 A verdict rests on a CiA clause (``cia``), the device's manual (``manual``) or our own reading of
 what neither says (``inferred``). Only the first two fail a device by default: a test whose only
 problems break inferred rules passes with a warning (JUnit property ``verdict=warning``, listed in
-the summaries) unless the run asks for ``--strict-inferred``. The summaries count verdicts per basis.
+the summaries) unless the run asks for ``--strict-inferred``. That holds for a test that records its
+problems (``evidence.inferred_problem``) and for one whose verdict rests on ``inferred``
+(``evidence.rests_on("inferred", ...)``) and fails an assertion: a finding about the device, judged by
+a rule we inferred. An internal error of the tool (``outcomes``) is no verdict: it is counted in no
+basis. The summaries count verdicts per basis.
 """
 
 from __future__ import annotations
@@ -13,7 +17,9 @@ from dataclasses import dataclass, field
 
 import pytest
 
+from ..errors import DutLostError
 from .evidence import BASES, EVIDENCE
+from .outcomes import is_internal_error
 
 STRICT_OPTION = "--strict-inferred"
 
@@ -60,10 +66,11 @@ def add_property(item: pytest.Item, report: pytest.TestReport, name: str, value:
     item.user_properties.append((name, value))
 
 
-def judge(item: pytest.Item, report: pytest.TestReport) -> None:
-    """Set the call report's outcome from what the test's verdict rests on, and count it."""
+def judge(item: pytest.Item, report: pytest.TestReport, exc: BaseException | None = None) -> None:
+    """Set the call report's outcome from what the test's verdict rests on, and count it (``exc``: what the
+    call raised; a device that stopped answering is no broken inferred rule)."""
     evidence = item.stash.get(EVIDENCE, None)
-    if evidence is None or report.when != "call" or report.skipped:
+    if evidence is None or report.when != "call" or report.skipped or is_internal_error(report):
         return
     hard_failure = report.failed
     basis = evidence.verdict_basis(hard_failure)
@@ -71,6 +78,10 @@ def judge(item: pytest.Item, report: pytest.TestReport) -> None:
     if evidence.basis_source:
         add_property(item, report, "verdict_source", evidence.basis_source)
     outcome = report.outcome
+    if hard_failure and basis == "inferred" and not strict(item.config) and not isinstance(exc, DutLostError):
+        # the test's verdict rests on a rule we inferred and its check failed: a warning, as a recorded problem is
+        evidence.inferred_problem(failure_text(report), evidence.basis_source or "our reading (no source given)")
+        report.outcome, report.longrepr, hard_failure = "passed", None, False
     if evidence.inferred and not hard_failure:
         problems = [p.describe() for p in evidence.inferred]
         for problem in problems:
@@ -84,6 +95,14 @@ def judge(item: pytest.Item, report: pytest.TestReport) -> None:
             tally_of(item.config).warnings.append((item.nodeid, problems))
             outcome = "warning"
     tally_of(item.config).counts[(basis, outcome)] += 1
+
+
+def failure_text(report: pytest.TestReport) -> str:
+    """A failed report's message without the exception's name (``AssertionError: ``)."""
+    crash = getattr(report.longrepr, "reprcrash", None)
+    text = str(crash.message) if crash is not None else str(report.longrepr or "")
+    text = text.removeprefix("AssertionError: ").split("\nassert ")[0]  # pytest's own explanation: not needed
+    return text.strip() or "the check failed"
 
 
 def terminal_lines(config: pytest.Config) -> tuple[list[str], list[str]]:

@@ -358,6 +358,10 @@ class Capabilities(StrictModel):
     node_guarding: bool = False
     emcy: bool = True
     sync_consumer: bool = True
+    sync_producer: bool | Literal["may"] = Field(
+        default=False, description="whether the device generates SYNC (1005h bit 30, period 1006h; CiA 301 v4.2.0 "
+        "§7.5.2.5): no (false: bit 30 is refused with 06090030h, as a device that cannot generate SYNC must), yes "
+        "(true: bit 30 is accepted), or 'may' (a generic class profile: either reading passes)")
     segmented_sdo: bool = True
     block_sdo: bool = False
     store_subindices: list[int] = Field(default_factory=list, description="1010h subs that store")
@@ -421,6 +425,12 @@ class Timing(StrictModel):
     lss_response_ms: float = Field(
         default=50, gt=0, description="LSS request to the slave's answer; CiA 305 gives no bound, so the default "
         "is this suite's inference (each LSS request nobody should answer waits this long)")
+    sdo_transfer_timeout_ms: float = Field(
+        default=1000, gt=0, description="the longest the device waits for the client's next frame of an open SDO "
+        "transfer (a segment request, the rest of a block download's sub-block) before it ends the transfer by "
+        "itself (abort 05040000h) or acknowledges the segments received in order; CiA 301 gives no value, so the "
+        "default is this suite's inference (1000 ms: CANopenNode's default SDO server time-out); a test that needs "
+        "the device's time-out to pass waits this plus the answer window")
     heartbeat_test_period_ms: int = Field(default=50, ge=1, description="1017h value used by the tests")
     heartbeat_state_period_ms: int = Field(
         default=10, ge=1, description="1017h value where a test watches the heartbeat's state byte, not its timing "

@@ -1,7 +1,78 @@
-"""Open readings of the errors area (see the package docstring)."""
+"""Open readings of the errors area: EMCY, SYNC and NMT error control (CiA 301 §7.2.5, §7.2.7, §7.2.8).
+
+Quoted sentences marked "(spec recall, verify)" are quoted from memory of CiA 301 v4.2.0, not from a copy at
+hand; the object, the section and the codes are the text's.
+"""
 
 from __future__ import annotations
 
 from .model import OpenReading
 
-READINGS: list[OpenReading] = []
+ERROR_BEHAVIOUR = ('CiA 301 v4.2.0 §7.2.8.3.1 (error behaviour): a serious device failure in operational, such as a '
+                   'communication error, sends the device to pre-operational by default; object 1029h (§7.5.2.32) '
+                   'may make it stay or stop instead (spec recall, verify)')
+
+READINGS: list[OpenReading] = [
+    OpenReading(
+        point="sync-producer",
+        question="May a device generate SYNC (1005h bit 30 accepted, SYNC every 1006h µs), or must it refuse bit 30?",
+        source='CiA 301 v4.2.0 §7.5.2.5 (object 1005h): bit 30 "gen": 0 = the device does not generate SYNC, 1 = it '
+               'generates SYNC; "if a CANopen device is not able to generate SYNC messages, an attempt to set bit 30 '
+               '(gen) to 1b is responded with the SDO abort transfer service (abort code: 0609 0030h)" (spec recall, '
+               'verify); §7.5.2.6 (object 1006h): 0 disables the SYNC transmission. A profile declares which '
+               '(capabilities.sync_producer: no, yes, may)',
+        readings=("bit 30 refused (06090030h), 1005h unchanged: the device cannot generate SYNC",
+                  "bit 30 accepted: with 1006h > 0 the device sends SYNC on the 1005h CAN-ID every 1006h µs, none "
+                  "with 1006h = 0 (CANopenNode's demo device)"),
+        variant="sync_producer",
+        variant_text="1005h bit 30 (generate SYNC) is accepted; with 1006h > 0 the twin sends SYNC every 1006h µs",
+        modules=("test_sync_objects",),
+        requires=("sync_producer",),
+    ),
+    OpenReading(
+        point="sync-consumer-timeout",
+        question="Does a SYNC consumer watch 1006h: no SYNC for more than the communication cycle period an error "
+                 "that keeps the device out of operational until a reset?",
+        source='CiA 301 v4.2.0 §7.5.2.6 (object 1006h): "the communication cycle period" in µs, the SYNC interval; '
+               'a consumer may use it to watch the SYNC (spec recall, verify); §7.2.7.1 table 21: 8100h '
+               '(communication, generic); ' + ERROR_BEHAVIOUR,
+        readings=("1006h only paces a producer: no error without SYNC",
+                  "no SYNC within 1.5 periods records 8100h (1001h bit 4) with its EMCY; the error holds the device "
+                  "in pre-operational until NMT reset communication (CANopenNode): a test that writes 1006h puts it "
+                  "back and clears the error"),
+        variant="sync_timeout_error",
+        variant_text="with 1006h > 0, no SYNC for 1.5 periods raises 8100h (communication); while it is active the "
+                     "node falls back from operational to pre-operational; a reset clears it",
+        modules=("test_pdo_comm", "test_pdo", "test_sync_objects"),
+        requires=("sync_consumer",),
+    ),
+    OpenReading(
+        point="communication-error-leaves-operational",
+        question="A communication error (heartbeat consumer time-out 8130h, SYNC length 8240h) is active: does the "
+                 "device stay operational, or leave it for pre-operational until the error is gone?",
+        source=ERROR_BEHAVIOUR + '; the WDGA manual: a CAN-bus fault in operational changes the device to '
+               'pre-operational by default (M §7.9, object 1029h)',
+        readings=("the NMT state stays as it is",
+                  "the device enters pre-operational and NMT start does not hold while the error is active: an EMCY "
+                  "test clears what it raised (or resets), a test that needs operational checks it got there"),
+        variant="comm_error_enters_preoperational",
+        variant_text="while 1001h bit 4 (communication error) is set the node falls back from operational to "
+                     "pre-operational (also right after NMT start); a reset clears the error",
+        modules=("test_emcy", "test_heartbeat", "test_pdo_timing"),
+        requires=("emcy",),
+    ),
+    OpenReading(
+        point="sync-processing-cycle",
+        question="Two SYNCs come closer together than the device takes to process one: must it count both?",
+        source="CiA 301 v4.2.0 §7.2.5 (SYNC protocol) gives no shortest SYNC interval a consumer must resolve; "
+               "§7.5.2.6: 1006h sets the SYNC period in µs. The profile's timing.pdo_response_max_ms bounds SYNC to "
+               "TPDO, so the tester spaces SYNCs by that (or by the TPDO a SYNC brings)",
+        readings=("every SYNC is counted however close to the previous one",
+                  "SYNCs within one processing cycle count once (CANopenNode's demo on Linux: a 1 ms cycle)"),
+        variant="sync_processing_cycle",
+        variant_text="a SYNC less than 1 ms after the last SYNC the TPDO engine took is merged with it",
+        modules=("test_pdo", "test_pdo_comm", "test_pdo_timing", "test_sync_objects", "test_nmt",
+                 "test_nmt_state_machine"),
+        requires=("tpdos",),
+    ),
+]

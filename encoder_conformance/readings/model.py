@@ -19,8 +19,10 @@ class OpenReading:
     modules: tuple[str, ...]  #: suite modules (stems under suites/) whose verdicts rest on this point
     requires: tuple[str, ...] = ()  #: profile capabilities the point needs (all of them) to apply
     excluded_by_effects: tuple[str, ...] = ()  #: quirk effects whose documented behaviour the variant would break
+    requires_effects: tuple[str, ...] = ()  #: quirk effects (all of them) whose manual sentence opens the point
 
     def applies_to(self, capabilities: Iterable[str], effects: Iterable[str]) -> bool:
         """Whether a profile with these (truthy) capabilities and quirk effects can play this reading."""
         present, quirks = set(capabilities), set(effects)
-        return set(self.requires) <= present and not (set(self.excluded_by_effects) & quirks)
+        return (set(self.requires) <= present and set(self.requires_effects) <= quirks
+                and not (set(self.excluded_by_effects) & quirks))

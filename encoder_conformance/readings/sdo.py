@@ -1,7 +1,99 @@
-"""Open readings of the sdo area (see the package docstring)."""
+"""Open readings of the SDO area: object access, segmented and block transfer (CiA 301 §7.2.4, §7.5.2).
+
+Quoted sentences marked "(spec recall, verify)" are quoted from memory of CiA 301 v4.2.0, not from a copy
+at hand; the section and the abort codes of table 22 are the text's.
+"""
 
 from __future__ import annotations
 
 from .model import OpenReading
 
-READINGS: list[OpenReading] = []
+SDO_PROTOCOL = ("test_sdo_protocol", "test_sdo_fuzz")
+ABORT_ANY_TIME = ('CiA 301 v4.2.0 §7.2.4.2 (SDO services), abort SDO transfer: "the service may be executed at any '
+                  'time by both the client and the server of an SDO" (spec recall, verify); §7.2.4.3.17: an abort '
+                  'carries the multiplexer of the transfer it ends. The protocols of §7.2.4.3 give no rule for an '
+                  'initiate request that arrives while a segmented transfer of the same SDO is open')
+
+READINGS: list[OpenReading] = [
+    OpenReading(
+        point="error-history-empty-entry",
+        question="May a read of an error history entry (1003h sub n) above the number of errors recorded (sub 0) "
+                 "be refused with 08000024h, rather than answered with a value?",
+        source='CiA 301 v4.2.0 §7.5.2.4 (object 1003h): sub-index 00h gives "the number of errors that are '
+               'recorded" (spec recall, verify), so the entries above it hold no error; §7.2.4.3.17 table 22: '
+               '"0800 0024h No data available". The CiA conformance test tool accepts 08000024h in its case '
+               'Emergency 03 (read of 1003h sub 1)',
+        readings=("the empty entry is read (a value, e.g. 0)",
+                  "the read is refused with 08000024h (no data available); a write is refused as to any read-only "
+                  "entry (06010002h), as CANopenNode does"),
+        variant="empty_history_no_data",
+        variant_text="a read of a 1003h entry above sub 0's count aborts 08000024h (no data available)",
+        modules=("test_object_dictionary",),
+        requires=("emcy",),
+    ),
+    OpenReading(
+        point="sdo-request-while-transfer-open",
+        question="An initiate request arrives while a segmented transfer of the same SDO is open: may the server "
+                 "abort the open transfer before it serves the new request?",
+        source=ABORT_ANY_TIME,
+        readings=("the new request is served, the open transfer dropped without a frame",
+                  "the open transfer is aborted (an abort naming its multiplexer, any code), then the new request is "
+                  "served",
+                  "the new request is refused with an abort echoing its multiplexer (our inference expects it "
+                  "served: a warning)"),
+        variant="interrupt_aborts_open_transfer",
+        variant_text="an initiate request during an open segmented transfer draws an abort 08000000h naming the "
+                     "open transfer, then its own answer",
+        modules=SDO_PROTOCOL,
+        requires=("segmented_sdo",),
+    ),
+    OpenReading(
+        point="sdo-request-taken-by-open-transfer",
+        question="An initiate request arrives while a segmented transfer is open: may the server take it as a "
+                 "wrong frame of the open transfer (abort 05040001h naming that transfer) and leave the request "
+                 "itself unanswered, serving the client's next one?",
+        source=ABORT_ANY_TIME + '; table 22: "0504 0001h Client/server command specifier not valid or unknown": '
+                                'during a segmented upload only a segment request (or an abort) is valid',
+        readings=("the new request is served (with or without an abort of the open transfer first)",
+                  "an abort 05040001h (or another code) naming the open transfer only; the new request is not "
+                  "answered, and sent again it is served (CANopenNode)"),
+        variant="interrupt_consumed_by_open_transfer",
+        variant_text="an initiate request during an open segmented transfer is taken as a wrong segment: abort "
+                     "05040001h naming the open transfer, no answer to the request itself",
+        modules=SDO_PROTOCOL,
+        requires=("segmented_sdo",),
+    ),
+    OpenReading(
+        point="sdo-transfer-left-open",
+        question="A client leaves a segmented transfer half-finished: may the server end it by itself after a "
+                 "time-out, and when?",
+        source='CiA 301 v4.2.0 §7.2.4.3.17 table 22: "0504 0000h SDO protocol timed out"; CiA 301 gives no '
+               'time-out value (the profile\'s timing.sdo_transfer_timeout_ms bounds it)',
+        readings=("the transfer stays open until the client's next request",
+                  "the server aborts it with 05040000h naming its multiplexer, within the device's time-out"),
+        variant="left_open_transfer_times_out",
+        variant_text="a segmented transfer without a request for 25 ms (a short time-out) is aborted 05040000h "
+                     "naming its entry",
+        modules=("test_sdo_protocol",),
+        requires=("segmented_sdo",),
+    ),
+    OpenReading(
+        point="sdo-block-subblock-timeout",
+        question="A block download segment comes out of sequence: when does the server acknowledge (or abort), "
+                 "and how long may it wait for the rest of the sub-block?",
+        source='CiA 301 v4.2.0 §7.2.4.3.11 (download SDO block segment) and §7.2.4.3.13: ackseq is "the sequence '
+               'number of the last segment the server received successfully" (spec recall, verify), the client '
+               'repeats the rest; no time is given for a sub-block that stays incomplete; table 22: 05040003h '
+               '(invalid sequence number), 05040000h (SDO protocol timed out). CTT SDO 27 accepts 05040003h, '
+               '08000000h',
+        readings=("the acknowledgement (ackseq 0) at once",
+                  "the segment ignored, the acknowledgement after the device's sub-block time-out (within "
+                  "timing.sdo_transfer_timeout_ms), as CANopenNode does",
+                  "an abort 05040003h (or 05040000h after the time-out) naming the entry"),
+        variant="slow_subblock_timeout",
+        variant_text="a block download segment out of sequence is ignored; the sub-block is acknowledged after "
+                     "timing.sdo_transfer_timeout_ms without a further segment",
+        modules=("test_sdo_block",),
+        requires=("block_sdo",),
+    ),
+]

@@ -10,12 +10,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..cia301 import ABORT_FOR_SITUATION, RPDO_MAPPING, TPDO_MAPPING
+from ..cia301 import ABORT_FOR_SITUATION, ERROR_HISTORY, RPDO_MAPPING, TPDO_MAPPING
 from ..cia301 import SdoAbortCode as Abort
 from ..profile import datatypes
 from ..profile import quirk_effects as fx
 from ..profile.model import DeviceProfile
-from ..profile.value_domain import declared_domain
+from ..profile.value_domain import declared_domain, refusal_basis
 from ..profile.value_set import ValueSet
 from .faults import breaks
 from .hooks import NodeHooks, Value
@@ -204,13 +204,27 @@ class ValueDomainIgnored(ObjectAccess):
 
 @breaks(ObjectAccess, "cia301_transmission_types")
 class Cia301TransmissionTypes(ObjectAccess):
-    """A variant, not a fault: every transmission type CiA 301 defines is accepted (0..240, 252..255)."""
+    """A variant, not a fault: every transmission type CiA 301 defines is accepted (0..240, 252..255), where only
+    our inference refuses it (a type the manual itself excludes, e.g. a documented range, stays refused)."""
 
     def check_domain(self, key: Key, value: int) -> None:
         index, sub = key
-        if 0x1800 <= index <= 0x19FF and sub == 2 and (value <= 240 or value >= 252):
+        if (0x1800 <= index <= 0x19FF and sub == 2 and (value <= 240 or value >= 252)
+                and refusal_basis(self._profile, index, sub, value)[0] == "inferred"):
             return
         super().check_domain(key, value)
+
+
+@breaks(ObjectAccess, "empty_history_no_data")
+class EmptyHistoryNoData(ObjectAccess):
+    """A variant, not a fault: an entry of the error history 1003h above its count (sub 0) is empty, and a read
+    of it answers 08000024h (no data available), as CANopenNode does."""
+
+    def sdo_read(self, index: int, sub: int) -> bytes:
+        recorded = index == ERROR_HISTORY and self._store.has((index, sub)) and self._store.has((index, 0))
+        if recorded and sub > int(self._store.get((ERROR_HISTORY, 0))):
+            raise SdoAbort(Abort.NO_DATA)
+        return super().sdo_read(index, sub)
 
 
 @breaks(ObjectAccess, "write_rw_ignored")

@@ -168,3 +168,12 @@ class NodeIdActiveImmediately(LssBehaviour):
         if what == "node_id" and pending is not None and 1 <= pending <= MAX_NODE_ID \
                 and not self._nmt.waiting_for_node_id:
             self.config.active_node_id = self._nmt.node_id = pending
+
+
+@breaks(LssBehaviour, "lss_unconfigured_waits_for_reset")
+class UnconfiguredWaitsForReset(LssBehaviour):
+    """A variant, not a fault: an unconfigured node given a node-ID does not start when it leaves the configuration
+    state; it boots with the stored node-ID at the next power-on ('a new boot-up', WDGA M §8.2.4)."""
+
+    def left_configuration(self) -> None:
+        log.info("node %d: LSS waiting state (configuration left); a new boot-up is needed", self._nmt.node_id)

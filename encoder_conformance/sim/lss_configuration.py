@@ -135,3 +135,12 @@ class AutoStoreIgnored(LssConfiguration):
 
     def configure_node_id(self, node_id: int) -> None:
         self.pending_node_id = node_id
+
+
+@breaks(LssConfiguration, "lss_node_id_at_reset_comm")
+class NodeIdAtResetCommunication(LssConfiguration):
+    """A variant, not a fault: a configured node-ID becomes active at NMT reset communication (CiA 305 v3), also
+    where the profile's manual applies it at power-on (a 'new boot-up', WDGA M §8.2.4)."""
+
+    def applies_on_reset(self) -> bool:
+        return True

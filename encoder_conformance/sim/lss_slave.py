@@ -348,3 +348,29 @@ class ActivateIgnored(LssSlave):
 
     def _activate_bit_timing(self, data: bytes) -> None:
         pass
+
+
+@breaks(LssSlave, "lss_activate_only_in_configuration")
+class ActivateOnlyInConfiguration(LssSlave):
+    """A variant, not a fault: activate bit timing is obeyed only in the configuration state (CANopenNode)."""
+
+    def _activate_bit_timing(self, data: bytes) -> None:
+        if self.in_configuration():
+            super()._activate_bit_timing(data)
+
+
+@breaks(LssSlave, "lss_node_id_ffh_refused")
+class NodeIdFfhRefused(LssSlave):
+    """A variant, not a fault: configure node-ID takes 1..127 only; FFh (unconfigured) is refused with error 1."""
+
+    def node_id_valid(self, node_id: int) -> bool:
+        return 1 <= node_id <= MAX_NODE_ID
+
+
+@breaks(LssSlave, "lss_bit_timing_auto_and_100k")
+class BitTimingAutoAnd100k(LssSlave):
+    """A variant, not a fault: table-0 index 9 (automatic detection) and 5 (100 kbit/s, DSP 305 v1.x) are accepted
+    whatever the profile lists."""
+
+    def bit_timing_valid(self, table: int, index: int) -> bool:
+        return super().bit_timing_valid(table, index) or (table == 0 and index in (5, 9))

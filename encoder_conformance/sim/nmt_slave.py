@@ -56,6 +56,9 @@ class NmtSlave:
         self.state: NmtState | None = None  # None = powered off
         self.awaiting_traffic = False
         self._boot_job: JobHandle | None = None
+        #: behaviours that may hold a state change back (the error behaviour: pre-operational instead of
+        #: operational while a communication error is active); each returns the state the node enters
+        self.admit: list[Callable[[NmtState], NmtState]] = []
 
     # -- power ---------------------------------------------------------------------------
     def power_on(self, at_once: bool = False) -> None:
@@ -131,6 +134,8 @@ class NmtSlave:
         self._schedule_boot(power_on=False)
 
     def enter(self, state: NmtState) -> None:
+        for admit in self.admit:
+            state = admit(state)
         previous, self.state = self.state, state
         if state is not previous:
             self._hooks.emit_state(state)

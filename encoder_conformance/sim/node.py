@@ -12,6 +12,7 @@ go through the ``send`` function the host gives.
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Protocol, TypeVar
@@ -24,7 +25,7 @@ from ..profile import quirk_effects as fx
 from ..profile.datatypes import as_signed
 from ..profile.model import DeviceProfile
 from ..profile.od_builder import initial_value
-from . import sdo_fuzz_faults  # noqa: F401  (registers the SDO fuzzing faults)
+from . import sdo_fuzz_faults, tpdo_sync_cycle  # noqa: F401  (register the SDO fuzzing faults, a TPDO variant)
 from .access import ObjectAccess, situation_codes
 from .autostart import Autostart
 from .cam_gate import CamLowLimitGate
@@ -39,6 +40,7 @@ from .hooks import NodeHooks, ReloadEvent
 from .lss_behaviour import LssBehaviour
 from .lss_configuration import usable_node_id
 from .nmt import NmtState
+from .nmt_error_behaviour import CommErrorBehaviour
 from .nmt_slave import NmtSlave
 from .nvm import Key, NonVolatileMemory
 from .object_store import ObjectStore
@@ -55,6 +57,8 @@ from .sim_log import EventLog
 from .store_commands import EncoderMemory, StoreCommands
 from .sync_counter import SyncCounterRules
 from .sync_objects import SyncCobIdRules, SyncConsumer, SyncLengthCheck
+from .sync_producer import SyncProducer
+from .sync_timeout import SyncTimeoutMonitor
 from .tpdo import TpdoEngine
 from .values import ObjectValues
 from .write_gates import preop_only, scaling_bit_needed
@@ -104,7 +108,8 @@ class SimulatedNode:
         codes = situation_codes(profile)
         self.access = assemble(ObjectAccess, faults)(profile, self.store, hooks, self.values.encode, codes)
         block = assemble(BlockEngine, faults) if profile.capabilities.block_sdo else None
-        self.sdo = assemble(SdoServer, faults)(self.access, block)
+        self.sdo = assemble(SdoServer, faults)(self.access, block, later=self._sdo_later,
+                                               timeout_s=profile.timing.sdo_transfer_timeout_ms / 1000)
         self.sdo_channel = assemble(SdoChannel, faults)(self.sdo, self._send, lambda: self.state, lambda: self.node_id)
         self.heartbeat = assemble(HeartbeatProducer, faults)(
             scheduler, self._send, self.read_int, lambda: self.state, lambda: self.node_id,
@@ -129,6 +134,7 @@ class SimulatedNode:
             repeat=self._built(fx.PdoSendRepeatCounters, SendRepeatCounters.from_params),
             response_max_s=profile.timing.pdo_response_max_ms / 1000,
         )
+        self.error_behaviour = assemble(CommErrorBehaviour, faults)(scheduler, self.read_int, self.nmt, self.lock)
         events = EventLog(lambda: self.node_id)
         self.nvm.listeners.append(events.nvm_changed)
         for behaviour in (events, *self._behaviours(codes)):
@@ -148,9 +154,13 @@ class SimulatedNode:
               for _, p in self.profile.quirks_of(fx.WritesPreopOnly)),
             self._built(fx.WritesNeedScalingBit, lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
             self._built(fx.CamLowBelowHigh, self._cam_low_limit_gate),
-            assemble(PdoCobIdRules, faults)(self.read_int),
+            assemble(PdoCobIdRules, faults)(self.read_int, lambda: self.state),
             assemble(SyncCounterRules, faults)(self.read_int, wrong_state),
-            assemble(SyncCobIdRules, faults)(self.profile.params_of(fx.SyncCobIdAnyCanId)),
+            assemble(SyncCobIdRules, faults)(self.profile.params_of(fx.SyncCobIdAnyCanId),
+                                             can_produce=self.profile.capabilities.sync_producer is True),
+            assemble(SyncProducer, faults)(self.scheduler, self.read_int, self.send, lambda: self.state, self.lock),
+            assemble(SyncTimeoutMonitor, faults)(self.scheduler, self.read_int, self.nmt, self._raise_error, self.lock),
+            self.error_behaviour,
             assemble(MappingRules, faults)(self.profile, self.read_int, codes),
             store_commands,
             self.emcy,
@@ -193,6 +203,7 @@ class SimulatedNode:
     def _raise_error(self, code: int, register_bits: int) -> None:
         with self.lock:  # also from the scheduler's thread
             self.emcy.raise_error(code, register_bits)
+            self.error_behaviour.after_error(register_bits)
 
     def _cam_low_limit_gate(self, params: fx.CamLowBelowHigh) -> CamLowLimitGate:
         cam = self.profile.capabilities.cam
@@ -284,6 +295,15 @@ class SimulatedNode:
     def reboot(self, delay_s: float) -> None:
         """The device restarts by itself: silent while it initialises, boot-up after ``delay_s``."""
         self.nmt.reboot(delay_s)
+
+    def _sdo_later(self, delay_s: float, produce: Callable[[], list[bytes]]) -> None:
+        """The SDO server's own time-outs: after ``delay_s`` the frames ``produce`` returns go out (none where the
+        transfer has moved on)."""
+        def run() -> None:
+            with self.lock:
+                self.sdo_channel.send_frames(produce())
+
+        self.scheduler.call_at(time.monotonic() + delay_s, run)
 
     # -- frame dispatch ------------------------------------------------------------------
     def on_frame(self, msg: can.Message) -> None:

@@ -3,6 +3,10 @@ changes bits 0-29 while the PDO is valid is refused, and so is a valid COB-ID wi
 
 A behaviour: a write gate on the PDO communication objects' sub 1. Both refusals answer 06090030h (value
 range of parameter exceeded): CiA 301 names no code, CANopenNode and the CTT (restricted IDs) use it.
+Its variant ``pdo_config_refused_in_operational`` refuses every write to a PDO's communication or mapping
+parameters in operational with 08000022h (present device state), as the WDGA manual's device does (M §8.5.1);
+``pdo_params_fixed_while_valid`` refuses a change of a TPDO's inhibit time (sub 3) or SYNC start value (sub 6)
+while the TPDO is valid (06090030h, as CANopenNode does).
 """
 
 from __future__ import annotations
@@ -14,12 +18,15 @@ from ..cia301 import (
     COB_ID_FRAME_29_BIT,
     COB_ID_INVALID,
     RPDO_COMMUNICATION,
+    RPDO_MAPPING,
     TPDO_COMMUNICATION,
+    TPDO_MAPPING,
     SdoAbortCode,
     is_restricted_can_id,
 )
 from .faults import breaks
 from .hooks import NodeHooks, Value
+from .nmt import NmtState
 from .nvm import Key
 from .sdo_server import SdoAbort
 
@@ -27,14 +34,20 @@ from .sdo_server import SdoAbort
 class PdoCobIdRules:
     """Refuses the COB-ID writes CiA 301 forbids; ``read`` gives the entry's current value."""
 
-    def __init__(self, read: Callable[[int, int], int | None]) -> None:
+    def __init__(self, read: Callable[[int, int], int | None],
+                 state: Callable[[], NmtState | None] = lambda: None) -> None:
         self._read = read
+        self._state = state
 
     def register(self, hooks: NodeHooks) -> None:
         hooks.gates.append(self.gate)
 
     def gate(self, key: Key, value: Value) -> None:
         index, sub = key
+        if self.refused_in_state(index):
+            raise SdoAbort(SdoAbortCode.WRONG_STATE)
+        if index in TPDO_COMMUNICATION and sub in (3, 6) and self.fixed_while_pdo_valid(index):
+            raise SdoAbort(SdoAbortCode.VALUE_INVALID)
         if sub != 1 or not isinstance(value, int) or not (index in TPDO_COMMUNICATION or index in RPDO_COMMUNICATION):
             return
         current = self._read(index, 1)
@@ -42,6 +55,14 @@ class PdoCobIdRules:
             raise SdoAbort(SdoAbortCode.VALUE_INVALID)
         if self.restricted(value):
             raise SdoAbort(SdoAbortCode.VALUE_INVALID)
+
+    def fixed_while_pdo_valid(self, index: int) -> bool:
+        """Sub 3 (inhibit time) or sub 6 (SYNC start value) of a valid TPDO may not change (default twin: they may)."""
+        return False
+
+    def refused_in_state(self, index: int) -> bool:
+        """A write to a PDO parameter refused in the present NMT state (the default twin: never)."""
+        return False
 
     def fixed_while_valid(self, current: int, new: int) -> bool:
         """Bits 0-29 change while the PDO exists (bit 31 = 0)."""
@@ -62,3 +83,21 @@ class CobIdChangeWhileValid(PdoCobIdRules):
 class RestrictedCobIdAccepted(PdoCobIdRules):
     def restricted(self, new: int) -> bool:
         return False
+
+
+@breaks(PdoCobIdRules, "pdo_config_refused_in_operational")
+class PdoConfigRefusedInOperational(PdoCobIdRules):
+    """A variant, not a fault: PDO communication and mapping parameters are written in pre-operational only."""
+
+    def refused_in_state(self, index: int) -> bool:
+        pdo = any(index in area for area in (TPDO_COMMUNICATION, TPDO_MAPPING, RPDO_COMMUNICATION, RPDO_MAPPING))
+        return pdo and self._state() is NmtState.OPERATIONAL
+
+
+@breaks(PdoCobIdRules, "pdo_params_fixed_while_valid")
+class PdoParamsFixedWhileValid(PdoCobIdRules):
+    """A variant, not a fault: a TPDO's inhibit time and SYNC start value change only while the TPDO is not valid."""
+
+    def fixed_while_pdo_valid(self, index: int) -> bool:
+        cob_id = self._read(index, 1)
+        return cob_id is not None and not cob_id & COB_ID_INVALID

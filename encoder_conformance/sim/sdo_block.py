@@ -15,7 +15,7 @@ from enum import Enum, auto
 
 from ..cia301 import SdoAbortCode, block_crc
 from .faults import breaks
-from .sdo_server import ObjectAccess, SdoAbort, abort_frame
+from .sdo_server import Later, ObjectAccess, SdoAbort, abort_frame
 
 #: the block size this server asks the client for in a block download (CiA 301: 1..127 segments)
 DOWNLOAD_BLKSIZE = 127
@@ -48,9 +48,11 @@ class _Block:
 class BlockEngine:
     """One server's block transfers: ``handle(request) -> frames to send``."""
 
-    def __init__(self, access: ObjectAccess) -> None:
+    def __init__(self, access: ObjectAccess, later: Later | None = None, timeout_s: float = 1.0) -> None:
         self._access = access
         self._block: _Block | None = None
+        self._later = later  # the node runs a time-out's frames (variants only)
+        self.timeout_s = timeout_s  #: the profile's timing.sdo_transfer_timeout_ms
 
     @property
     def in_progress(self) -> bool:
@@ -251,3 +253,29 @@ class BlockEndSizeIgnored(BlockEngine):
 
     def data_of_last(self, unused: int) -> int:
         return 0
+
+
+# -- conformant variants (encoder_conformance/readings/sdo.py) ----------------------------------------------------
+@breaks(BlockEngine, "slow_subblock_timeout")
+class SlowSubblockTimeout(BlockEngine):
+    """A download segment out of sequence is ignored; a sub-block left incomplete is acknowledged (ackseq: the
+    segments received in order) after the profile's sdo_transfer_timeout_ms without a further segment
+    (CANopenNode's reading; its sub-block time-out is 0.7 x its SDO time-out)."""
+
+    _segments = 0  # segments received so far: a time-out armed before the last one is stale
+
+    def _segment(self, block: _Block, request: bytes) -> list[bytes]:
+        self._segments += 1
+        if not self.seqno_ok(block, request[0] & 0x7F):
+            frames: list[bytes] = []  # ignored: the acknowledgement waits for the time-out
+        else:
+            frames = super()._segment(block, request)
+        if not frames and self._later is not None:
+            armed = self._segments
+            self._later(self.timeout_s, lambda: self._sub_block_timed_out(block, armed))
+        return frames
+
+    def _sub_block_timed_out(self, block: _Block, armed: int) -> list[bytes]:
+        if self._block is not block or self._segments != armed or block.phase is not _Phase.DOWNLOAD_SEGMENTS:
+            return []
+        return [self._block_ack(block)]

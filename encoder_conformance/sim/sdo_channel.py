@@ -42,7 +42,11 @@ class SdoChannel:
     def on_request(self, request: bytes) -> None:
         if not self.serves(request):
             return
-        for frame in self._server.respond(request):  # one response, none, or a block's segments
+        self.send_frames(self._server.respond(request))  # one response, none, or a block's segments
+
+    def send_frames(self, frames: list[bytes]) -> None:
+        """Send the server's frames: the answers to a request, or what a time-out of the server's own produced."""
+        for frame in frames:
             response = self.answer(frame)
             if response is not None:
                 self._send(0x580 + self._node_id(), response)

@@ -1,8 +1,9 @@
 """Faults of the SDO channel that only odd request sequences show (made for suites/test_sdo_fuzz.py).
 
 Each is a small subclass of ``SdoChannel`` (see ``sim/faults.py``): a device that dies on a short
-frame, answers twice, answers what it must ignore, crashes on a second initiate, or reports a
-refused request as an error (EMCY).
+frame, answers twice, answers what it must ignore, crashes on a second initiate, reports a
+refused request as an error (EMCY), goes silent altogether after a reserved command specifier, or
+echoes a wrong multiplexer in every reply (which the run's start-up check already shows).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import struct
 
 from ..cia301 import SdoAbortCode
 from .faults import breaks
+from .heartbeat import HeartbeatProducer
 from .hooks import NodeHooks
 from .sdo_channel import SdoChannel
 
@@ -18,6 +20,7 @@ ABORT = 0x80
 #: EMCY error code 8100h (communication, generic: CiA 301 §7.2.7.3.2 table 21), error register bit 4
 EMCY_COMMUNICATION = struct.pack("<HB5x", 0x8100, 0x11)
 EMCY_BASE = 0x80
+RESERVED_CCS = 7  # client command specifier 7: reserved (CiA 301 §7.2.4.3.17 05040001h)
 
 
 @breaks(SdoChannel, "dead_after_short_frame")
@@ -112,4 +115,42 @@ class EmcyOnUnknownCommand(SdoChannel):
     def answer(self, response: bytes) -> bytes | None:
         if response[0] == ABORT and struct.unpack_from("<I", response, 4)[0] == SdoAbortCode.COMMAND_SPECIFIER:
             self._send(EMCY_BASE + self._node_id(), EMCY_COMMUNICATION)
+        return super().answer(response)
+
+
+@breaks(SdoChannel, "silent_after_reserved_command")
+class SilentAfterReservedCommand(SdoChannel):
+    """After a request with the reserved command specifier 7 the device hangs: no SDO answer and no heartbeat
+    from then on (its NMT handler still runs: reset node or a power cycle brings it back)."""
+
+    _silent = False
+
+    def register(self, hooks: NodeHooks) -> None:
+        super().register(hooks)
+        self._hooks = hooks
+        hooks.halted.append(self._revive)
+
+    def _revive(self) -> None:
+        self._silent = False  # the heartbeat restarts at the boot-up (HeartbeatProducer registers for it)
+
+    def serves(self, request: bytes) -> bool:
+        if self._silent or not super().serves(request):
+            return False
+        if len(request) == 8 and request[0] >> 5 == RESERVED_CCS:
+            self._silent = True
+            for restart in self._hooks.booted:  # the heartbeat producer: the one behaviour that sends by itself
+                producer = getattr(restart, "__self__", None)
+                if isinstance(producer, HeartbeatProducer):
+                    producer.stop()
+            return False
+        return True
+
+
+@breaks(SdoChannel, "sdo_reply_wrong_mux")
+class ReplyWrongMultiplexer(SdoChannel):
+    """Every reply that carries a multiplexer (initiate responses, aborts) names the next sub-index."""
+
+    def answer(self, response: bytes) -> bytes | None:
+        if response[0] >> 5 in (2, 3, 4):  # upload / download initiate response, abort
+            response = response[:3] + bytes([(response[3] + 1) & 0xFF]) + response[4:]
         return super().answer(response)

@@ -38,6 +38,11 @@ class ObjectAccess(Protocol):
     def sdo_write(self, index: int, sub: int, data: bytes) -> None: ...
 
 
+#: ``later(delay_s, produce)``: after ``delay_s`` the node calls ``produce()`` and sends the frames it returns (the
+#: server's own time-outs: a transfer left open, a sub-block left incomplete)
+Later = Callable[[float, Callable[[], list[bytes]]], None]
+
+
 class BlockTransfers(Protocol):
     """Block transfers (sim/sdo_block.py), where the profile declares them."""
 
@@ -66,11 +71,15 @@ def abort_frame(index: int, sub: int, code: int) -> bytes:
 class SdoServer:
     """One SDO server channel. ``handle(request) -> response or None``."""
 
-    def __init__(self, access: ObjectAccess, block: Callable[[ObjectAccess], BlockTransfers] | None = None) -> None:
+    def __init__(self, access: ObjectAccess, block: Callable[..., BlockTransfers] | None = None,
+                 later: Later | None = None, timeout_s: float = 1.0) -> None:
         self._access = access
         self._transfer: _Transfer | None = None
         self._last_multiplexer: tuple[int, int] | None = None  # for aborts during segments
-        self._block = block(access) if block is not None else None  # where the profile declares block transfer
+        self._later = later
+        self.timeout_s = timeout_s  #: the profile's timing.sdo_transfer_timeout_ms (what the variants wait)
+        # where the profile declares block transfer
+        self._block = block(access, later=later, timeout_s=timeout_s) if block is not None else None
 
     def reset(self) -> None:
         """Drop a transfer in progress (NMT reset, power cycle)."""
@@ -214,6 +223,62 @@ class SdoServer:
         if last:
             self._transfer = None
         return bytes([command]) + chunk.ljust(7, b"\x00")
+
+
+# -- conformant variants (encoder_conformance/readings/sdo.py) ----------------------------------------------------
+def _interrupts(server: SdoServer, request: bytes) -> bool:
+    """An initiate request (expedited or segmented up/download) while a segmented transfer is open."""
+    return len(request) == 8 and request[0] >> 5 in (1, 2) and server._transfer is not None
+
+
+@breaks(SdoServer, "interrupt_aborts_open_transfer")
+class InterruptAbortsOpenTransfer(SdoServer):
+    """A new initiate request during a segmented transfer: an abort (08000000h) naming the open transfer, then the
+    new request's answer."""
+
+    def respond(self, request: bytes) -> list[bytes]:
+        transfer = self._transfer
+        if transfer is None or not _interrupts(self, request):
+            return super().respond(request)
+        self._transfer = None
+        return [abort_frame(transfer.index, transfer.sub, GENERAL_ERROR), *super().respond(request)]
+
+
+@breaks(SdoServer, "interrupt_consumed_by_open_transfer")
+class InterruptConsumedByOpenTransfer(SdoServer):
+    """A new initiate request during a segmented transfer is taken as a wrong frame of that transfer: abort 05040001h
+    naming it, and no answer to the request itself (CANopenNode)."""
+
+    def respond(self, request: bytes) -> list[bytes]:
+        transfer = self._transfer
+        if transfer is None or not _interrupts(self, request):
+            return super().respond(request)
+        self._transfer = None
+        return [abort_frame(transfer.index, transfer.sub, COMMAND_INVALID)]
+
+
+@breaks(SdoServer, "left_open_transfer_times_out")
+class LeftOpenTransferTimesOut(SdoServer):
+    """A segmented transfer without a request for 25 ms (a short time-out, within any profile's
+    sdo_transfer_timeout_ms: CiA 301 gives none) is aborted 05040000h naming its entry. Short, so that the abort
+    comes while a test still watches the transfer it left open."""
+
+    short_timeout_s = 0.025
+    _requests = 0  # requests served so far: a time-out armed before the last one is stale
+
+    def respond(self, request: bytes) -> list[bytes]:
+        self._requests += 1
+        frames = super().respond(request)
+        transfer, armed = self._transfer, self._requests
+        if transfer is not None and self._later is not None:
+            self._later(min(self.short_timeout_s, self.timeout_s), lambda: self._timed_out(transfer, armed))
+        return frames
+
+    def _timed_out(self, transfer: _Transfer, armed: int) -> list[bytes]:
+        if self._transfer is not transfer or self._requests != armed:
+            return []
+        self._transfer = None
+        return [abort_frame(transfer.index, transfer.sub, SdoAbortCode.TIMEOUT)]
 
 
 # -- faults: each breaks one decision above (fault_catalogue group test_sdo_protocol) ---------------

@@ -2,9 +2,10 @@
 
 Behaviours:
 - ``SyncCobIdRules``, a write gate on 1005h: bit 30 (the device generates SYNC) is refused with 06090030h by a
-  device that cannot produce SYNC (no profile declares one that can); a restricted CAN-ID (CiA 301 §7.3.5) is
-  refused with 06090030h, unless the profile's quirk lets 1005h take any CAN-ID of a range. Bit 31 is "do not
-  care" for 1005h: accepted.
+  device that cannot produce SYNC (capabilities.sync_producer not true; its variant ``sync_producer`` accepts it
+  where the profile says "may", and ``sync_producer.SyncProducer`` then sends SYNC every 1006h µs); a
+  restricted CAN-ID (CiA 301 §7.3.5) is refused with 06090030h, unless the profile's quirk lets 1005h take any
+  CAN-ID of a range. Bit 31 is "do not care" for 1005h: accepted.
 - ``SyncConsumer``: which frame is a SYNC: the CAN-ID in 1005h bits 0-10 (bits 0-28 with bit 29), whatever bit 31.
 - ``SyncLengthCheck``, where the profile has 1019h: a SYNC whose length does not match 1019h (DLC 1 with a
   counter, 0 without) records the error 8240h "unexpected SYNC data length" and sends its EMCY (CiA 301 table 21
@@ -106,6 +107,14 @@ class SyncLengthCheck:
 
 @breaks(SyncCobIdRules, "sync_generate_bit_accepted")
 class SyncGenerateBitAccepted(SyncCobIdRules):
+    def generate_accepted(self) -> bool:
+        return True
+
+
+@breaks(SyncCobIdRules, "sync_producer")
+class SyncProducerVariant(SyncCobIdRules):
+    """A variant, not a fault: the device can generate SYNC (1005h bit 30 accepted), as CANopenNode's demo can."""
+
     def generate_accepted(self) -> bool:
         return True
 

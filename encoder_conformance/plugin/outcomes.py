@@ -1,0 +1,60 @@
+"""What an exception in a test says: a finding about the device, or an internal error of the tool (the one rule).
+
+A **finding about the device** (the test fails; it counts in its area and its basis):
+
+- ``AssertionError``: a check's verdict. The dut layer raises these for what the device did wrong: an SDO
+  request left unanswered or answered with the wrong frame (``DeviceUnderTest._timeout``, ``expect_abort``,
+  ``reset_node_and_wait``), a boot-up that did not come;
+- ``pytest.fail()`` (pytest's ``Failed``): a fixture's or test's explicit verdict;
+- ``DutLostError``: the device stopped answering (not ``BusLostError``: below);
+- canopen's ``SdoError`` family: ``SdoAbortedError`` (the device refused a request the test expected it to
+  serve; the dut layer raises it as ``SdoAborted``) and ``SdoCommunicationError`` (canopen's client got no or a
+  wrong answer);
+- an exception group (hypothesis's several failures, its ``FlakyFailure``) whose every member is one of these.
+
+**Not run** (skipped, never a verdict): ``BusLostError``, the tester lost its bus.
+
+Everything else is an **internal error of the tool**: ``AttributeError``, ``TypeError``, ``KeyError``,
+``NameError``, ``ValueError``, an error raised inside a library, hypothesis's health checks and usage errors.
+Its outcome is "error", shown as "internal error of the tool: please report it"; it is never counted against
+the device, an area or a basis, and the run exits 3 (``RunExit.INTERNAL_ERROR``) when nothing else failed.
+"""
+
+from __future__ import annotations
+
+import pytest
+from canopen.sdo.exceptions import SdoError
+
+from ..errors import BusLostError, DutLostError
+
+#: the exception types that are findings about the device (see the module's docstring)
+DEVICE_FINDINGS: tuple[type[BaseException], ...] = (AssertionError, pytest.fail.Exception, DutLostError,
+                                                         SdoError)
+INTERNAL_ERROR_TEXT = "internal error of the tool: please report it"
+#: user property (name, value) on a report whose exception is an internal error
+INTERNAL = ("verdict", "internal error")
+
+
+def is_device_finding(exc: BaseException) -> bool:
+    """True where ``exc`` is a finding about the device (a group: every member is one)."""
+    if isinstance(exc, BusLostError):
+        return False
+    if isinstance(exc, BaseExceptionGroup):
+        return all(is_device_finding(member) for member in exc.exceptions)
+    return isinstance(exc, DEVICE_FINDINGS)
+
+
+def is_internal_error(report: pytest.TestReport) -> bool:
+    """The report's failure is an internal error of the tool (marked by ``classify``)."""
+    return INTERNAL in report.user_properties
+
+
+def classify(item: pytest.Item, call: pytest.CallInfo[None], report: pytest.TestReport) -> None:
+    """Mark a failure whose exception is no finding about the device as an internal error (any phase)."""
+    if not report.failed or call.excinfo is None or is_device_finding(call.excinfo.value):
+        return
+    report.user_properties.append(INTERNAL)
+    item.user_properties.append(INTERNAL)  # JUnit writes the item's properties
+    exc = call.excinfo.value
+    report.longrepr = (f"{INTERNAL_ERROR_TEXT} ({report.when}: {type(exc).__name__}: {exc})\n"
+                       f"not a finding about the device: not counted in any verdict\n\n{report.longrepr}")

@@ -1,0 +1,75 @@
+"""What a communication error does to the NMT state (CiA 301 v4.2.0 §7.2.8.3.1 error behaviour; object 1029h).
+
+A behaviour that the default twin keeps idle: an error with the communication bit of 1001h (bit 4: a heartbeat
+consumer time-out 8130h, a SYNC of the wrong length 8240h, a SYNC time-out 8100h) leaves the NMT state as it is.
+Its variants play the other reading CiA 301 allows (its default error behaviour: from operational to
+pre-operational), as CANopenNode does: while the error is active the node leaves operational within a millisecond,
+also at an NMT start (the node stays in pre-operational: the heartbeat never shows operational); a reset
+(communication or node) clears 1001h and with it the error.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Protocol
+
+from ..cia301 import ERROR_REGISTER
+from .faults import breaks
+from .hooks import NodeHooks
+from .nmt import NmtState
+from .scheduler import DeadlineScheduler
+from .sync_objects import COMMUNICATION_ERROR_BIT, Read
+
+
+class Nmt(Protocol):
+    """What the behaviour needs of the NMT slave."""
+
+    state: NmtState | None
+    admit: list
+
+    def enter(self, state: NmtState) -> None: ...
+
+
+class CommErrorBehaviour:
+    """Sends the node to pre-operational while a communication error is active, where a variant says so."""
+
+    def __init__(self, scheduler: DeadlineScheduler, read: Read, nmt: Nmt, lock: threading.RLock) -> None:
+        self._scheduler = scheduler
+        self._read = read
+        self._nmt = nmt
+        self._lock = lock
+
+    def register(self, hooks: NodeHooks) -> None:
+        self._nmt.admit.append(self.admit)
+
+    def leaves_operational(self) -> bool:
+        """CiA 301's default error behaviour for a communication error (the default twin: keep the state)."""
+        return False
+
+    def admit(self, state: NmtState) -> NmtState:
+        """The state an NMT command leads to: pre-operational instead of operational while the error is active."""
+        if state is NmtState.OPERATIONAL and self.leaves_operational() and self._active():
+            return NmtState.PRE_OPERATIONAL
+        return state
+
+    def after_error(self, register_bits: int) -> None:
+        """An error was recorded (``register_bits`` of 1001h)."""
+        if register_bits & COMMUNICATION_ERROR_BIT:
+            self.check()
+
+    def check(self) -> None:
+        """Called with the node's lock held (the error was just recorded): leave operational at once."""
+        if self.leaves_operational() and self._active() and self._nmt.state is NmtState.OPERATIONAL:
+            self._nmt.enter(NmtState.PRE_OPERATIONAL)
+
+    def _active(self) -> bool:
+        return bool((self._read(ERROR_REGISTER, 0) or 0) & COMMUNICATION_ERROR_BIT)
+
+
+@breaks(CommErrorBehaviour, "comm_error_enters_preoperational")
+class CommErrorEntersPreoperational(CommErrorBehaviour):
+    """A variant, not a fault: a communication error sends the node from operational to pre-operational."""
+
+    def leaves_operational(self) -> bool:
+        return True
+
