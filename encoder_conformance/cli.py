@@ -174,7 +174,7 @@ def _cmd_fault_matrix(args: argparse.Namespace, extra: list[str]) -> int:
         baseline, results = run_matrix(args.profile, faults, Path(workdir), args.select, workers=args.workers,
                                        targeted=args.targeted)
     print(format_matrix(baseline, results))
-    broken = {n for n, o in baseline.outcomes.items() if o in ("failed", "error")}
+    broken = {n for n, o in baseline.outcomes.items() if o in ("failed", "error", "internal")}
     uncaught = [t for t in baseline.keys_with("passed")
                 if not any(t in r.keys_with("failed") | r.keys_with("error") for r in results)]
     if broken:

@@ -43,8 +43,9 @@ class VariantRun:
 
     @property
     def bad(self) -> list[str]:
-        """Tests that failed or errored (the start-up check included)."""
-        return sorted(name for name, outcome in self.result.outcomes.items() if outcome in ("failed", "error"))
+        """Tests that failed, errored or broke our own code (the start-up check included)."""
+        return sorted(name for name, outcome in self.result.outcomes.items()
+                      if outcome in ("failed", "error", "internal"))
 
     @property
     def judged(self) -> int:

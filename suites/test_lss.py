@@ -16,19 +16,10 @@ from contextlib import nullcontext
 
 import pytest
 
+from encoder_conformance import cia305
 from encoder_conformance.checks import documented_quirk
 from encoder_conformance.cia305 import (
     AUTO_BIT_RATE_INDEX,
-    CIA305,
-    CLAUSE_ACTIVATE_BIT_TIMING,
-    CLAUSE_CONFIGURE_BIT_TIMING,
-    CLAUSE_CONFIGURE_NODE_ID,
-    CLAUSE_FASTSCAN,
-    CLAUSE_FSA,
-    CLAUSE_IDENTIFY,
-    CLAUSE_INQUIRE,
-    CLAUSE_STORE,
-    CLAUSE_SWITCH_SELECTIVE,
     FASTSCAN_RESET_BIT,
     MAX_NODE_ID,
     UNCONFIGURED_NODE_ID,
@@ -49,7 +40,7 @@ from fixtures.lss import (
     stored_node_id_survives_power_cycle,
 )
 
-pytestmark = pytest.mark.spec(CIA305)
+pytestmark = pytest.mark.spec(cia305.CIA305)
 #: the WDGA manual's "new boot-up" after LSS changes (M §8.2.4): open readings lss-node-id-activation and
 #: lss-unconfigured-start (readings/lss.py)
 NEW_BOOT_UP = "Wachendorff WDGA manual M §8.2.4 (a new boot-up after LSS configuration) and M §4.2"
@@ -59,7 +50,7 @@ NMT_STATES = {"pre-operational": ("pre-operational", 0x7F), "operational": ("sta
 
 
 # -- LSS states and addressing ---------------------------------------------------------------------------
-@pytest.mark.spec(CLAUSE_FSA)
+@pytest.mark.spec(cia305.CLAUSE_FSA)
 def test_switch_global_enters_and_leaves_configuration(lss: LssDevice):
     """Switch state global 1 -> inquire node-ID is answered with the active node-ID; 0 -> not answered (inquire
     belongs to the configuration state)."""
@@ -71,7 +62,7 @@ def test_switch_global_enters_and_leaves_configuration(lss: LssDevice):
         assert lss.master.inquire_node_id() is None, "inquire node-ID answered in the waiting state"
 
 
-@pytest.mark.spec(CLAUSE_SWITCH_SELECTIVE)
+@pytest.mark.spec(cia305.CLAUSE_SWITCH_SELECTIVE)
 def test_switch_selective_only_own_address(lss: LssDevice):
     """Switch state selective: the device answers 44h to its own LSS address (1018h sub 1..4), not to one
     that differs in the serial number."""
@@ -82,7 +73,7 @@ def test_switch_selective_only_own_address(lss: LssDevice):
     assert lss.master.switch_selective(lss.address), f"no 44h to its own address {lss.address.describe()}"
 
 
-@pytest.mark.spec(CLAUSE_INQUIRE)
+@pytest.mark.spec(cia305.CLAUSE_INQUIRE)
 def test_inquire_identity_equals_1018h(lss: LssDevice):
     """Inquire vendor-ID, product code, revision and serial number (5Ah-5Dh) answer 1018h sub 1..4."""
     require_service(lss, "inquire_identity")
@@ -92,7 +83,7 @@ def test_inquire_identity_equals_1018h(lss: LssDevice):
                                  f"{lss.address.describe()}"
 
 
-@pytest.mark.spec(CLAUSE_FSA)
+@pytest.mark.spec(cia305.CLAUSE_FSA)
 @pytest.mark.parametrize("service", ["configure_node_id", "inquire_identity", "inquire_node_id"])
 def test_configuration_services_not_answered_in_waiting_state(lss: LssDevice, service: str):
     """Configure and inquire services belong to the configuration state: unanswered in the waiting state."""
@@ -105,7 +96,7 @@ def test_configuration_services_not_answered_in_waiting_state(lss: LssDevice, se
     assert answer is None, f"{service} answered in the LSS waiting state: {answer}"
 
 
-@pytest.mark.spec(CLAUSE_FSA)
+@pytest.mark.spec(cia305.CLAUSE_FSA)
 @pytest.mark.parametrize("state", list(NMT_STATES))
 def test_lss_in_nmt_state(lss: LssDevice, state: str, evidence, request: pytest.FixtureRequest):
     """LSS works in every NMT state (the LSS FSA is independent of the NMT state); a device whose manual allows it
@@ -139,7 +130,7 @@ def test_lss_in_nmt_state(lss: LssDevice, state: str, evidence, request: pytest.
 NODE_ID_CASES = [(1, 0), (MAX_NODE_ID, 0), (UNCONFIGURED_NODE_ID, 0), (0, 1), (128, 1), (254, 1)]
 
 
-@pytest.mark.spec(CLAUSE_CONFIGURE_NODE_ID)
+@pytest.mark.spec(cia305.CLAUSE_CONFIGURE_NODE_ID)
 @pytest.mark.parametrize(("node_id", "error"), NODE_ID_CASES, ids=[f"{n}->{e}" for n, e in NODE_ID_CASES])
 def test_configure_node_id_range(lss: LssDevice, node_id: int, error: int, pytestconfig):
     """Configure node-ID: 1..127 and 255 (unconfigured) accepted (error 0), 0 and 128..254 refused (error 1).
@@ -160,7 +151,7 @@ def test_configure_node_id_range(lss: LssDevice, node_id: int, error: int, pytes
     assert answer.error == error, f"configure node-ID {node_id}: error {answer.error}, expected {error}"
 
 
-@pytest.mark.spec(CLAUSE_CONFIGURE_BIT_TIMING)
+@pytest.mark.spec(cia305.CLAUSE_CONFIGURE_BIT_TIMING)
 @pytest.mark.parametrize("index", [*range(0, 11)], ids=[f"index {i}" for i in range(11)])
 def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence, pytestconfig):
     """Configure bit timing, table 0: the indices of the bit rates the profile lists (and 9, automatic
@@ -190,7 +181,7 @@ def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence, pyte
     raise AssertionError(observed)
 
 
-@pytest.mark.spec(CLAUSE_ACTIVATE_BIT_TIMING)
+@pytest.mark.spec(cia305.CLAUSE_ACTIVATE_BIT_TIMING)
 def test_activate_bit_timing_silent_for_the_switch_delay(lss: LssDevice, heartbeat: int):
     """Activate bit timing (the rate in use again): the device sends nothing for the switch delay before
     and after the switch, then its heartbeat comes again. One frame per COB-ID that crossed the request (sent
@@ -206,7 +197,7 @@ def test_activate_bit_timing_silent_for_the_switch_delay(lss: LssDevice, heartbe
     assert beat is not None, "no heartbeat after the switch"
 
 
-@pytest.mark.spec(CLAUSE_ACTIVATE_BIT_TIMING)
+@pytest.mark.spec(cia305.CLAUSE_ACTIVATE_BIT_TIMING)
 def test_activated_bit_rate_leaves_the_old_rate(lss: LssDevice, heartbeat: int, power_cycle, pytestconfig):
     """Activate another bit rate: the device is no longer heard at the old one. The tester's interface cannot
     follow a bit-rate change during a run, so the test stops there; a power cycle brings back the stored rate
@@ -224,7 +215,7 @@ def test_activated_bit_rate_leaves_the_old_rate(lss: LssDevice, heartbeat: int, 
 
 
 # -- the node-ID life cycle ----------------------------------------------------------------------------------
-@pytest.mark.spec(CLAUSE_CONFIGURE_NODE_ID)
+@pytest.mark.spec(cia305.CLAUSE_CONFIGURE_NODE_ID)
 def test_configured_node_id_pending_until_reset(lss: LssDevice, evidence, pytestconfig):
     """A configured node-ID is pending: the device keeps answering at its node-ID (and inquire node-ID says so)
     until NMT reset communication, after which it boots with the new one. A device whose manual asks for a new
@@ -265,7 +256,7 @@ def test_configured_node_id_pending_until_reset(lss: LssDevice, evidence, pytest
     assert lss.answers_at(new_id), f"boot-up at {new_id}, but no SDO answer there"
 
 
-@pytest.mark.spec(CLAUSE_IDENTIFY)
+@pytest.mark.spec(cia305.CLAUSE_IDENTIFY)
 def test_identify_remote_slave_by_ranges(lss: LssDevice):
     """Identify remote slave: answered (4Fh) when the device's revision and serial lie in the ranges, not
     when the serial range excludes it."""
@@ -281,7 +272,7 @@ def test_identify_remote_slave_by_ranges(lss: LssDevice):
             assert lss.master.identify_remote(above, top) == 0, "4Fh although the serial range excludes the device"
 
 
-@pytest.mark.spec(CLAUSE_IDENTIFY)
+@pytest.mark.spec(cia305.CLAUSE_IDENTIFY)
 def test_configured_device_not_identified_as_non_configured(lss: LssDevice):
     """Identify non-configured remote slave (4Ch) is answered only by a device with node-ID FFh."""
     require_service(lss, "identify_non_configured")
@@ -289,7 +280,7 @@ def test_configured_device_not_identified_as_non_configured(lss: LssDevice):
         assert lss.master.identify_non_configured() == 0, f"a configured device (node-ID {lss.node_id}) answered 50h"
 
 
-@pytest.mark.spec(CLAUSE_CONFIGURE_NODE_ID)
+@pytest.mark.spec(cia305.CLAUSE_CONFIGURE_NODE_ID)
 def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
     """Node-ID 255: no boot-up and no SDO until LSS gives a node-ID; then the device boots with it when it leaves
     the configuration state. A device whose manual asks for a new boot-up (quirk lss_only_in_states, WDGA M
@@ -335,10 +326,11 @@ def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
         f"{format_frames(lss.dut.frames.since(mark)) or '  no frames'}")
     if lss.dut.profile.params_of(fx.UnconfiguredNodeId) is not None:
         documented_quirk(lss.dut, fx.UnconfiguredNodeId, evidence, "")
-        assert not cob_ids_not_reset(lss), "; ".join(cob_ids_not_reset(lss))
+        problems = cob_ids_not_reset(lss)
+        assert not problems, "; ".join(problems)
 
 
-@pytest.mark.spec(CLAUSE_FASTSCAN)
+@pytest.mark.spec(cia305.CLAUSE_FASTSCAN)
 def test_fastscan_finds_exact_identity(scannable: LssDevice, evidence):
     """Fastscan (no part known) finds the unconfigured device's exact LSS address, which is then in the
     configuration state (inquire node-ID answers FFh). Each step waits the window learned from the device's
@@ -357,7 +349,7 @@ def test_fastscan_finds_exact_identity(scannable: LssDevice, evidence):
         assert lss.master.inquire_node_id() == UNCONFIGURED_NODE_ID
 
 
-@pytest.mark.spec(CLAUSE_FASTSCAN)
+@pytest.mark.spec(cia305.CLAUSE_FASTSCAN)
 def test_fastscan_reset_restarts_a_partial_scan(scannable: LssDevice):
     """BitChecked 80h restarts the scan: after the vendor-ID was confirmed, a reset and a full fastscan
     still find the device."""
@@ -369,7 +361,7 @@ def test_fastscan_reset_restarts_a_partial_scan(scannable: LssDevice):
     assert found == lss.address, "after a reset (BitChecked 80h) the fastscan did not find it"
 
 
-@pytest.mark.spec(CLAUSE_FASTSCAN)
+@pytest.mark.spec(cia305.CLAUSE_FASTSCAN)
 def test_fastscan_no_configuration_before_serial(scannable: LssDevice):
     """The device enters the configuration state only after the serial number was confirmed: a master that
     confirms vendor-ID and product code and then sends LSSNext back to the vendor-ID does not select it
@@ -384,7 +376,7 @@ def test_fastscan_no_configuration_before_serial(scannable: LssDevice):
         assert lss.master.inquire_node_id() is None, "in the configuration state before its serial number was checked"
 
 
-@pytest.mark.spec(CLAUSE_STORE)
+@pytest.mark.spec(cia305.CLAUSE_STORE)
 @pytest.mark.destructive
 def test_store_configuration_survives_power_cycle(lss: LssDevice, power_cycle):
     """Store configuration (17h) keeps a configured node-ID over a power cycle."""
@@ -392,7 +384,7 @@ def test_store_configuration_survives_power_cycle(lss: LssDevice, power_cycle):
     stored_node_id_survives_power_cycle(lss, store=True)
 
 
-@pytest.mark.spec(CLAUSE_CONFIGURE_NODE_ID)
+@pytest.mark.spec(cia305.CLAUSE_CONFIGURE_NODE_ID)
 @pytest.mark.destructive
 def test_self_stored_node_id_survives_power_cycle(lss: LssDevice, power_cycle, evidence):
     """A device that stores a configured node-ID by itself (quirk lss_config_auto_stored) boots with it

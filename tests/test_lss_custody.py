@@ -11,8 +11,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-import pytest
-
 from encoder_conformance.bus_config import BusConfig
 from encoder_conformance.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand, LssState
 from encoder_conformance.dut.custody import Custody
@@ -74,7 +72,8 @@ def test_found_at_the_node_id_the_test_gave_it(rig):
     stored_before = _stored(node)
     _moved_by_reset(lss)
     assert lss.put_back() is None
-    assert lss.answers_at(lss.node_id) and not lss.answers_at(MOVED_TO, lss.dut.sdo_silence_s)
+    assert lss.answers_at(lss.node_id)
+    assert not lss.answers_at(MOVED_TO, lss.dut.sdo_silence_s)
     assert _stores_sent(lss) == 0, "the put-back stored although the test stored nothing"
     assert _stored(node) == stored_before
 
@@ -128,7 +127,8 @@ def test_a_device_left_moved_is_described_in_one_line(rig):
     lss.restore_hint = "encoder-conformance restore --from X"
     problem = lss.put_back()
     assert problem is not None
-    assert "selected by its LSS address: unconfigured" in problem and "restore --from X" in problem, problem
+    assert "selected by its LSS address: unconfigured" in problem, problem
+    assert "restore --from X" in problem, problem
     assert "becomes active at the next power-on" in problem, problem
     assert _stored(node) == lss.node_id, "node-ID as found not stored for the next power-on"
 
@@ -143,7 +143,7 @@ def test_restore_from_finds_the_device_where_the_snapshot_says(rig, tmp_path: Pa
     rig.log.add_listener(watch)
     custody = Custody(dut, tmp_path / "device-snapshot.json", watch)
     custody.take("sha")
-    _, lss = _lss_view(rig, dut, custody)
+    lss = _lss_view(rig, dut, custody)
     _moved_by_reset(lss)
     assert Snapshot.load(tmp_path / "device-snapshot.json").lss_node_ids == [MOVED_TO]
     request = RestoreRequest(tmp_path / "device-snapshot.json",
@@ -154,18 +154,18 @@ def test_restore_from_finds_the_device_where_the_snapshot_says(rig, tmp_path: Pa
     assert Snapshot.load(tmp_path / "device-snapshot.json").lss_node_ids == []
 
 
-def _lss_view(rig: Rig, dut: DeviceUnderTest, custody: Custody) -> tuple[None, LssDevice]:
+def _lss_view(rig: Rig, dut: DeviceUnderTest, custody: Custody) -> LssDevice:
+    """The LSS view of ``dut`` that tells ``custody`` each node-ID before it is given (as the lss fixture does)."""
     master = LssMaster(lambda cob_id, data: rig.network.send_message(cob_id, data), rig.log,
                        dut.profile.timing.lss_response_ms / 1000)
     address = LssAddress(*(dut.read_uint(0x1018, sub) for sub in range(1, 5)))
-    return None, LssDevice(dut, master, address, None, None, on_move=custody.note_lss_node_id)
+    return LssDevice(dut, master, address, None, None, on_move=custody.note_lss_node_id)
 
 
-@pytest.mark.parametrize("state", [LssState.WAITING])
-def test_nothing_configured_costs_one_frame(rig, state):
+def test_nothing_configured_costs_one_frame(rig):
     """A test that configured nothing: the put-back sends one switch state global and looks nowhere."""
     _, lss = _lss(rig, C3)
     mark = lss.dut.frames.mark()
     assert lss.put_back() is None
     sent = lss.dut.frames.since(mark, lambda m: not m.is_rx)
-    assert [bytes(m.data)[:2] for m in sent] == [bytes([LssCommand.SWITCH_STATE_GLOBAL, state])]
+    assert [bytes(m.data)[:2] for m in sent] == [bytes([LssCommand.SWITCH_STATE_GLOBAL, LssState.WAITING])]

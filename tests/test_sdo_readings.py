@@ -149,3 +149,28 @@ def test_oracle_pulls_back_across_a_client_abort():
     no_transfer = abort_frame_for(0)
     assert _judge(OPENED, (write_again, [ABORT_OPEN]), (segment(0x00), [refused]),
                   (struct.pack("<BHBI", 0x80, 0, 0, SdoAbortCode.TIMEOUT), [no_transfer])) == []
+
+
+def test_oracle_gives_the_answer_to_the_repeated_request():
+    """An initiate taken by the open transfer (its abort only), then sent again and answered: the answer is the
+    repeated request's, not the first one's."""
+    assert _judge(OPENED, (UPLOAD_1000, []), (UPLOAD_1000, [])) != []
+    opened = (OPENED[0], [*OPENED[1], ABORT_OPEN])  # the abort fits the opening initiate: attributed there
+    assert _judge(opened, (UPLOAD_1000, [ANSWER_1000]), (UPLOAD_1000, [])) == []
+
+
+def test_oracle_same_entry_taken_by_the_open_transfer_then_asked_again():
+    """The open transfer's entry asked again, taken by the open transfer (its abort only), asked a third time and
+    answered: nothing is moved, each request has its own reply."""
+    again = struct.pack("<BHBI", 0x41, 0x1008, 0, len(TEXT))
+    assert _judge(OPENED, (UPLOAD_TEXT, [abort_frame_for(0x1008)]), (UPLOAD_TEXT, [again]), (UPLOAD_1000, [])) != []
+    assert _judge(OPENED, (UPLOAD_TEXT, [abort_frame_for(0x1008)]), (UPLOAD_TEXT, [again])) == []
+
+
+def test_oracle_moves_the_replies_on_after_a_request_taken_by_the_open_transfer():
+    """The abort of the open transfer went to its own initiate (same entry); the request after it drew nothing and
+    each later reply went one request too early: they move on by one."""
+    opened = (OPENED[0], [*OPENED[1], ABORT_OPEN])
+    no_transfer = abort_frame_for(0)
+    first, second = frame(0x20, 0, 0), segment(0x60)
+    assert _judge(opened, (first, [no_transfer]), (second, [abort_frame_for(0x2000)]), (segment(0x70), [])) == []

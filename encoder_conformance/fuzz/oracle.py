@@ -70,6 +70,28 @@ def _hex(data: bytes) -> str:
     return data.hex(" ").upper() or "(no data)"
 
 
+def _spare_reply_at(exchanges: list[Exchange]) -> int | None:
+    """The first exchange holding a reply too many (two, or one its request does not owe), where every one before
+    it holds exactly the one it owes; else None."""
+    for n, exchange in enumerate(exchanges):
+        if len(exchange.replies) >= 2 or (exchange.replies and not reply_required(exchange.request.frame)):
+            return n
+        if len(exchange.replies) != 1:
+            return None
+    return None
+
+
+def _hole_at(exchanges: list[Exchange]) -> int | None:
+    """The first exchange without the reply its request owes, where every one before it holds exactly one; else
+    None."""
+    for n, exchange in enumerate(exchanges):
+        if not exchange.replies and reply_required(exchange.request.frame):
+            return n
+        if len(exchange.replies) != 1:
+            return None
+    return None
+
+
 class Judge:
     """Judges the exchanges of one example after another, carrying the device's transfer state."""
 
@@ -83,24 +105,26 @@ class Judge:
             rest = exchanges[n + 1 :]
             if len(exchange.replies) == 1 and rest:
                 self._pull_back_late_answer(exchange, rest)
-            problems += [f"request {_hex(exchange.request.frame)}: {p}" for p in self._one(exchange, rest[:1] or None)]
+            problems += [f"request {_hex(exchange.request.frame)}: {p}" for p in self._one(exchange, rest)]
         return problems
 
     def _pull_back_late_answer(self, exchange: Exchange, rest: list[Exchange]) -> None:
         """An initiate about the open transfer's own entry drew an abort naming it, and its answer came after the
-        next request was sent (so it went to that one): the answer is pulled back, and each later request's first
-        reply with it where that one has two or owes none (the device answers in order)."""
+        next request was sent (so it went to that one): where a later request holds a reply too many (two, or one
+        it does not owe), each reply on the way moves back by one request (the device answers in order). Without
+        such a spare reply every request has its own answer: the initiate was taken by the open transfer."""
         frame, first = exchange.request.frame, exchange.replies[0]
-        if not rest[0].replies or not self._ends_open_transfer(frame, first, answered=True):
+        same_entry = isinstance(self.transfer, Transfer) and frame[1:4] == self.transfer.mux
+        if not same_entry or not rest[0].replies or not self._ends_open_transfer(frame, first, answered=True):
             return
         late = rest[0].replies[0]
         if late == first or not fits(frame, late):
             return  # the same frame twice is a second reply, not an answer
+        spare = _spare_reply_at(rest)
+        if spare is None:
+            return
         exchange.replies.append(rest[0].replies.pop(0))
-        for earlier, later in pairwise(rest):
-            spare = len(later.replies) >= 2 or (later.replies and not reply_required(later.request.frame))
-            if earlier.replies or not reply_required(earlier.request.frame) or not spare:
-                break
+        for earlier, later in pairwise(rest[: spare + 1]):
             earlier.replies.append(later.replies.pop(0))
 
     def _ends_open_transfer(self, frame: bytes, reply: bytes, answered: bool = False) -> bool:
@@ -111,7 +135,7 @@ class Judge:
                 and (frame[1:4] != transfer.mux or answered) and len(reply) == 8 and reply[0] == ABORT
                 and reply[1:4] == transfer.mux)
 
-    def _one(self, exchange: Exchange, following: list[Exchange] | None = None) -> list[str]:
+    def _one(self, exchange: Exchange, rest: list[Exchange] | None = None) -> list[str]:
         frame, replies = exchange.request.frame, exchange.replies
         if replies and self._ends_open_transfer(frame, replies[0], answered=len(replies) > 1):
             self.transfer = None
@@ -127,7 +151,7 @@ class Judge:
         if not replies:
             return ["no reply (CiA 301: every SDO request but an abort is confirmed)"]
         judged = self._reply(exchange.request, replies[0])
-        following = following[0] if following else None
+        following = rest[0] if rest else None
         if len(replies) > 1 and following is not None and all(
                 self._ends_open_transfer(following.request.frame, extra, bool(following.replies))
                 for extra in replies[1:]):
@@ -135,6 +159,13 @@ class Judge:
             following.replies[:0] = moved
             del exchange.replies[-len(moved):]
             replies = replies[:1]
+            hole = _hole_at(rest[1:]) if len(following.replies) == 2 else None
+            if hole is not None:  # that initiate was taken by the open transfer: the replies after it move on by one
+                carry = following.replies.pop()
+                for later in rest[1 : hole + 2]:
+                    later.replies.insert(0, carry)
+                    if len(later.replies) > 1:
+                        carry = later.replies.pop()
         problems = [f"{len(replies)} replies to one request: {', '.join(map(_hex, replies))}"][: len(replies) - 1]
         return problems + judged
 

@@ -1,7 +1,8 @@
 """Open readings of the LSS area (CiA 305 layer setting services; see the package docstring).
 
-CiA 305 sentences marked "(spec recall, verify)" are quoted from memory of CiA 305 v3.0.0, not from a copy at
-hand; the section numbers and the manuals' sentences are the texts'. The WDGA manual (Wachendorff WDGA CANopen
+CiA 305 rules marked "(spec recall, verify)" are recalled from CiA 305 v3.0.0, not quoted from a copy at hand;
+they are cited by the heading of the service or table (the document's section numbers were not at hand). The
+manuals' sentences and sections are the texts'. The WDGA manual (Wachendorff WDGA CANopen
 technical manual, "M") is German; its sentences are quoted with a translation.
 """
 
@@ -22,7 +23,7 @@ READINGS: list[OpenReading] = [
                  "reset communication, as CiA 305 v3 has it?",
         source=NEW_BOOT_UP + '; M §4.2 (node-ID by SDO): "wird erst nach dem manuellen Reset des Drehgebers '
                '(Spannungs-Reset oder NMT-Reset) wirksam" (takes effect only after a manual reset: power reset or '
-               'NMT reset); CiA 305 v3.0.0 §5.3 (configure node-ID): the pending node-ID becomes the active one '
+               'NMT reset); CiA 305 v3.0.0, configure node-ID service: the pending node-ID becomes the active one '
                'on NMT reset communication (spec recall, verify)',
         readings=("the configured node-ID becomes active only at the next power-on, from what was stored; NMT reset "
                   "communication boots the device at the node-ID it had",
@@ -40,7 +41,7 @@ READINGS: list[OpenReading] = [
         question="An unconfigured device (node-ID FFh) is given a valid node-ID: does it start (boot-up) when it "
                  "leaves the LSS configuration state, or only at a new boot-up the master triggers (power-on, "
                  "with the node-ID stored)?",
-        source=NEW_BOOT_UP + "; CiA 305 v3.0.0 §5.3 (configure node-ID) and the LSS state machine: an LSS slave "
+        source=NEW_BOOT_UP + "; CiA 305 v3.0.0, configure node-ID service and the LSS FSA: an LSS slave "
                "whose active node-ID is FFh continues its NMT initialisation with the pending node-ID when switched "
                "to the LSS waiting state (spec recall, verify; CANopenNode 305/CO_LSSslave.c does a reset "
                "communication then)",
@@ -59,10 +60,10 @@ READINGS: list[OpenReading] = [
         point="lss-activate-bit-timing-state",
         question="Does an LSS slave obey activate bit timing (15h) in the LSS waiting state too, or only in the "
                  "configuration state?",
-        source='CiA 305 v3.0.0 §5.4 (LSS slave state machine, services per state): the configuration services '
-               '(configure node-ID, configure bit timing, activate bit timing, store configuration) belong to the '
-               'LSS configuration state (spec recall, verify); CANopenNode 305/CO_LSSslave.c handles 15h only in '
-               'the configuration state. No text requires a slave to obey it in the waiting state',
+        source='CiA 305 v3.0.0, LSS FSA, services per LSS state, as TR-Electronic reproduces it (CM-36 user '
+               'manual TR-ECE-BA-DGB-0128 §3.7.1, "State behavior of the supported services"): "Activate bit timing '
+               'parameters: LSS waiting No, LSS configuration Yes"; CANopenNode 305/CO_LSSslave.c handles 15h only '
+               'in the configuration state. No text requires a slave to obey it in the waiting state',
         readings=("obeyed in every LSS state (the twin's default)",
                   "obeyed only in the configuration state (CANopenNode); the suite sends it in the configuration "
                   "state, where both readings obey it"),
@@ -76,7 +77,7 @@ READINGS: list[OpenReading] = [
         question="A manual gives the configure node-ID range without FFh: may the device refuse node-ID FFh "
                  "(unconfigured), so that LSS cannot make it unconfigured?",
         source='Wachendorff WDGA manual M §8.2.6: "Der Wertebereich für die Node-ID des Drehgebers liegt zwischen '
-               '00h und 7Fh" (the node-ID range is 00h to 7Fh); CiA 305 v3.0.0 §5.3 (configure node-ID): 1..127 '
+               '00h und 7Fh" (the node-ID range is 00h to 7Fh); CiA 305 v3.0.0, configure node-ID service: 1..127 '
                'and FFh are valid, FFh makes the slave unconfigured (spec recall, verify)',
         readings=("FFh accepted (error 0): the unconfigured start-up and fastscan are judged",
                   "FFh refused (error 1, as the manual's range says): not judged (configure FFh, and every test "
@@ -92,10 +93,10 @@ READINGS: list[OpenReading] = [
         point="lss-bit-timing-beyond-profile",
         question="May a device accept configure bit timing table-0 indices its profile does not list: 9 "
                  "(automatic bit-rate detection) and 5 (100 kbit/s in DSP 305 v1.x, reserved in CiA 305 v3)?",
-        source="CiA 305 v3.0.0 §5.3, table 0 (bit timing): index 9 is automatic bit-rate detection, optional; index "
-               "5 is reserved (spec recall, verify); DSP 305 v1.1 table 0 gave index 5 to 100 kbit/s (the WDGA "
-               "manual still does, M T 8.9). Which a device supports is its manual's to say; a generic profile "
-               "lists no auto-detection and no 100 kbit/s",
+        source="CiA 305 v3.0.0, configure bit timing parameters, table 0 (bit timing): index 9 is automatic "
+               "bit-rate detection, optional; index 5 is reserved (spec recall, verify); DSP 305 v1.1 table 0 gave "
+               "index 5 to 100 kbit/s, as the WDGA manual still does (M §8.2.5, T 8.9). Which a device supports is "
+               "its manual's to say; a generic profile lists no auto-detection and no 100 kbit/s",
         readings=("refused (error 1 or FFh) where the profile does not list the rate",
                   "accepted: a warning (the refusal rests on the profile's list, our inference), never a failure"),
         variant="lss_bit_timing_auto_and_100k",
