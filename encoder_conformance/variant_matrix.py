@@ -31,6 +31,8 @@ REPRESENTATIVE_PROFILES: tuple[str, ...] = (
     "tests/data/profiles/cia406-full-pdo.yaml",
     "tests/data/profiles/cia406-block-sdo.yaml",
 )
+#: the class C3 encoder with block transfer: for any other reading it repeats cia406-c3-st, which it is made from
+ONLY_WHERE_NEEDED: frozenset[str] = frozenset({"tests/data/profiles/cia406-block-sdo.yaml"})
 
 
 @dataclass(frozen=True)
@@ -65,13 +67,21 @@ def applicable(profile: str, readings: list[OpenReading] | None = None) -> list[
     """The readings a profile can play: its capabilities cover what each needs, no quirk excludes it."""
     loaded = load_profile(_profile_ref(profile)).profile
     capabilities = {name for name, value in loaded.capabilities if value}
+    capabilities |= {f"lss:{service}" for service in loaded.capabilities.lss}
     return [r for r in (readings or all_readings()) if r.applies_to(capabilities, loaded.effects)]
 
 
 def plan(profiles: tuple[str, ...] = REPRESENTATIVE_PROFILES,
          readings: list[OpenReading] | None = None) -> list[tuple[OpenReading, str]]:
-    """(reading, profile) for every profile where each reading applies."""
-    return [(reading, profile) for profile in profiles for reading in applicable(profile, readings)]
+    """(reading, profile) for every profile where each reading applies; a profile in ONLY_WHERE_NEEDED only for
+    the readings no other profile of the list can play."""
+    others = [p for p in profiles if p not in ONLY_WHERE_NEEDED]
+    played = {reading.point for profile in others for reading in applicable(profile, readings)}
+    pairs = []
+    for profile in profiles:
+        pairs += [(reading, profile) for reading in applicable(profile, readings)
+                  if profile not in ONLY_WHERE_NEEDED or reading.point not in played]
+    return pairs
 
 
 def run_variants(pairs: list[tuple[OpenReading, str]], workdir: Path, workers: int = 2) -> list[VariantRun]:

@@ -149,14 +149,39 @@ class ExternalTwin:
 
 
 def start_twin(folder: Path, customer: dict[tuple[int, int], int] | None = None,
-               profile: str = PROFILE) -> ExternalTwin:
-    """A twin in its own process; ``customer`` values written and stored the customer's way (1010h)."""
+               profile: str = PROFILE, variants: list[str] | None = None) -> ExternalTwin:
+    """A twin in its own process (playing ``variants``: conformant readings the default twin does not play);
+    ``customer`` values written and stored the customer's way (1010h)."""
     folder.mkdir(parents=True, exist_ok=True)
-    sim = start_simulator(profile, nvm_path=folder / "nvm.json", log_path=folder / "twin.log")
+    sim = start_simulator(profile, faults=variants, nvm_path=folder / "nvm.json", log_path=folder / "twin.log")
     twin = ExternalTwin(sim, folder / "nvm.json", profile)
     if customer:
         twin.configure(customer)
     return twin
+
+
+def _stored_value(twin: ExternalTwin, stored: dict, key: str) -> object:
+    """What the memory holds for ``key`` ('0xIIII.S'): the file's value, else the factory default the twin's
+    memory starts from (a real EEPROM always holds a value: 'never written' and 'written with the default'
+    are the same device)."""
+    if key in stored:
+        return stored[key]
+    index, sub = key.removeprefix("0x").split(".")
+    entry = load_profile(twin.profile).profile.entry(int(index, 16), int(sub))
+    return None if entry is None else entry.default
+
+
+def as_found_problems(twin: ExternalTwin, before: dict[str, str], stored_before: dict) -> list[str]:
+    """Every difference to the device as found: values, the memory, values after a power cycle."""
+    problems = [f"{k}: {before[k]} -> {v}" for k, v in twin.read_everything().items() if before.get(k) != v]
+    stored = twin.stored()
+    problems += [f"stored {k}: {_stored_value(twin, stored_before, k)} -> {_stored_value(twin, stored, k)}"
+                 for k in set(stored) | set(stored_before)
+                 if _stored_value(twin, stored, k) != _stored_value(twin, stored_before, k)]
+    twin.power_cycle()
+    problems += [f"after power cycle {k}: {before[k]} -> {v}"
+                 for k, v in twin.read_everything().items() if before.get(k) != v]
+    return problems
 
 
 def wait_for_line(process: subprocess.Popen[str], text: str, timeout: float, seen: list[str]) -> bool:

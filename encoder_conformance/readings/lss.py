@@ -70,7 +70,7 @@ READINGS: list[OpenReading] = [
         variant="lss_activate_only_in_configuration",
         variant_text="activate bit timing is obeyed only in the LSS configuration state (ignored while waiting)",
         modules=LSS,
-        requires=("lss",),
+        requires=("lss:activate_bit_timing",),
     ),
     OpenReading(
         point="lss-configure-node-id-ffh",
@@ -103,6 +103,6 @@ READINGS: list[OpenReading] = [
         variant_text="configure bit timing also accepts table-0 index 9 (automatic detection) and 5 (100 kbit/s, "
                      "DSP 305 v1.x), whatever the profile lists",
         modules=LSS,
-        requires=("lss",),
+        requires=("lss:configure_bit_timing",),
     ),
 ]

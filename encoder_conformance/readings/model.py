@@ -17,7 +17,7 @@ class OpenReading:
     variant: str  #: the simulator variant (``--sim-fault NAME``) that plays a reading the default twin does not
     variant_text: str  #: what the variant does, one line (``encoder-conformance faults`` lists it)
     modules: tuple[str, ...]  #: suite modules (stems under suites/) whose verdicts rest on this point
-    requires: tuple[str, ...] = ()  #: profile capabilities the point needs (all of them) to apply
+    requires: tuple[str, ...] = ()  #: profile capabilities the point needs (all of them); "lss:SERVICE" an LSS service
     excluded_by_effects: tuple[str, ...] = ()  #: quirk effects whose documented behaviour the variant would break
     requires_effects: tuple[str, ...] = ()  #: quirk effects (all of them) whose manual sentence opens the point
 

@@ -121,11 +121,23 @@ class SimulatorHost:
                     self.bus.send(msg)
                 except can.CanError as exc:
                     log.warning("send failed: %s", exc)
-            for other in self.nodes:  # the other nodes on this bus hear it too
-                if other is not origin:
-                    other.on_frame(msg)
+            others = [other for other in self.nodes if other is not origin]
+            if others:  # the other nodes on this bus hear it too, on the scheduler's thread (see _deliver)
+                self.scheduler.call_at(time.monotonic(), lambda: self._deliver(msg, others))
 
         return send
+
+    @staticmethod
+    def _deliver(msg: can.Message, nodes: list[SimulatedNode]) -> None:
+        """A frame one node sent, to the other nodes of this host. Not in the sender's thread: the sender holds
+        its own node's lock (a scheduled boot-up, an answer), and handing the frame over there took the other
+        node's lock too, while the receive thread, answering that other node, waited for the sender's: two
+        nodes on one bus (WayCon MH) deadlocked after a broadcast reset, once in a CI run."""
+        for node in nodes:
+            try:
+                node.on_frame(msg)
+            except Exception:
+                log.exception("node %s failed on frame %s", node.node_id, msg)
 
     def _dispatch(self, msg: can.Message) -> None:
         # the virtual bus stamps a frame when it is put on the bus: a frame handled much later (the twin's
