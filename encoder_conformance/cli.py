@@ -190,8 +190,10 @@ def _cmd_repeat(args: argparse.Namespace, extra: list[str]) -> int:
     from .repeat_runs import repeat_runs
 
     usage.check_profile("--profile", args.profile)
+    usage.check_faults("--variant", [args.variant] if args.variant else [])
     with tempfile.TemporaryDirectory(prefix="repeat-") as workdir:
-        result = repeat_runs(args.profile, args.runs, Path(workdir), args.select, args.parallel, args.busy)
+        result = repeat_runs(args.profile, args.runs, Path(workdir), args.select, args.parallel, args.busy,
+                             args.variant)
     print(result.format())
     return 1 if result.failing() else 0
 
@@ -301,6 +303,7 @@ def build_parser() -> argparse.ArgumentParser:
     repeat.add_argument("--parallel", type=positive_int, default=2, help="runs at a time (default 2)")
     repeat.add_argument("--busy", action="store_true", help="beside a process that keeps one core busy")
     repeat.add_argument("-k", dest="select", help="pytest -k expression selecting the tests")
+    repeat.add_argument("--variant", help="the twin plays this conformant variant ('readings' lists them)")
     repeat.set_defaults(func=_cmd_repeat)
 
     faults = sub.add_parser("faults", help="list the simulator's named faults")

@@ -104,14 +104,14 @@ def _failure_messages(junit: Path) -> dict[str, str]:
 
 
 def repeat_runs(profile: str, runs: int, workdir: Path, select: str | None = None, parallel: int = 2,
-                busy: bool = False) -> RepeatedRuns:
-    """``runs`` runs of the suites against the ``profile`` twin, ``parallel`` at a time (``busy``: beside a
-    process keeping one core busy)."""
+                busy: bool = False, variant: str | None = None) -> RepeatedRuns:
+    """``runs`` runs of the suites against the ``profile`` twin (playing ``variant``, a conformant reading),
+    ``parallel`` at a time (``busy``: beside a process keeping one core busy)."""
 
     def one(number: int) -> tuple[RunResult, dict[tuple[str, str], float | str], dict[str, str]]:
         folder = workdir / f"run-{number:02d}"
-        result = run_suite(profile, None, folder, select)
-        junit = folder / "no-fault" / "junit.xml"
+        result = run_suite(profile, variant, folder, select)
+        junit = folder / (variant or "no-fault") / "junit.xml"
         return result, _measurements(junit), _failure_messages(junit)
 
     collected = RepeatedRuns([])
