@@ -9,6 +9,7 @@ is stopping (Ctrl-C), calls raise RunInterrupted except inside ``custody()``, th
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -19,6 +20,7 @@ import canopen
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from ..cia301 import NMT_COMMAND_NAMES, SDO_REQUEST_BASE, SYNC_COB_ID
+from ..encoder_model.freeze import FreezeRule
 from ..errors import BusLostError, DutLostError, RunInterrupted
 from ..profile.model import DeviceProfile
 from ..profile.quirk_effects import SilentUntilBusTraffic
@@ -93,6 +95,8 @@ class DeviceUnderTest:
         self.tester_notes: list[str] = []  # what the tester saw that is not a verdict (drained into evidence)
         self.abort_codes: AbortCodeMode = "exact"  # how SDO abort codes are judged (--abort-codes)
         self._custody = threading.local()
+        self._freeze = FreezeRule.of(profile)
+        self._executing_until = 0.0  # the device executes a write until then (its position is frozen)
 
     # -- liveness ------------------------------------------------------------------------
     @property
@@ -188,12 +192,23 @@ class DeviceUnderTest:
         mark = self.frames.mark()
         try:
             self.node.sdo.download(index, sub, data)
+            if self._freeze is not None:
+                until = time.monotonic() + self._freeze.duration_s(index, int.from_bytes(data, "little"))
+                self._executing_until = max(self._executing_until, until)
             return
         except SdoCommunicationError as exc:
             raise self._timeout(f"SDO download {index:04X}h.{sub:02X}", exc, mark) from None
         except SdoAbortedError as exc:
             code = exc.code
         raise SdoAborted(code)  # outside canopen's except block: see SdoAborted
+
+    def wait_until_executed(self) -> None:
+        """Wait out the execution time the manual gives for the writes made so far (quirk
+        ``position_frozen_during_execution``): the device, not one test's helper, keeps it, so a test does not
+        inherit a position frozen by the put-back of the test before."""
+        remaining = self._executing_until - time.monotonic()
+        if remaining > 0:
+            time.sleep(remaining)  # nothing on the bus shows the end of the execution
 
     def read_uint(self, index: int, sub: int = 0) -> int:
         return int.from_bytes(self.read(index, sub), "little")

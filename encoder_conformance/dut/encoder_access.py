@@ -26,7 +26,6 @@ class EncoderAccess:
         self.description = EncoderDescription.of(dut.profile)
         self.objects = self.description.objects
         self.freeze = FreezeRule.of(dut.profile)
-        self._busy_until = 0.0  # the device executes a write until then (its position is frozen)
 
     # -- typed entries ---------------------------------------------------------------------------
     def _type(self, index: int, sub: int) -> str | None:
@@ -51,18 +50,11 @@ class EncoderAccess:
 
     def write_int(self, index: int, sub: int, value: int) -> None:
         self.dut.write(index, sub, self.encode(index, sub, value))
-        self.written(index, value)
-
-    def written(self, index: int, value: int) -> None:
-        """A write reached the device: where its manual says it executes it afterwards, note until when."""
-        if self.freeze is not None:
-            self._busy_until = max(self._busy_until, time.monotonic() + self.freeze.duration_s(index, value))
 
     def wait_until_executed(self) -> None:
-        """Wait out the execution time the manual gives for the last write (its position is frozen meanwhile)."""
-        remaining = self._busy_until - time.monotonic()
-        if remaining > 0:
-            time.sleep(remaining)
+        """Wait out the execution time the manual gives for the writes made so far (its position is frozen
+        meanwhile)."""
+        self.dut.wait_until_executed()
 
     # -- the encoder function -----------------------------------------------------------------------
     def settings(self, offset: int | None = None, functions: bool = True) -> EncoderSettings:
