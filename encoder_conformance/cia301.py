@@ -27,9 +27,9 @@ COMMUNICATION_AREA = range(0x1000, 0x2000)
 SYNC_COB_ID = 0x080  # the pre-defined connection set's SYNC (CiA 301 §7.3.5, 1005h default)
 SDO_REQUEST_BASE = 0x600  # + node-id: client -> server (CiA 301 §7.3.5)
 COB_ID_INVALID = 0x80000000  # bit 31 of a PDO/SYNC/EMCY COB-ID: the object does not exist / is not valid
-COB_ID_NO_RTR = 0x40000000  # bit 30 of a TPDO COB-ID: no RTR allowed on this PDO (CiA 301 §7.5.2.35)
+COB_ID_NO_RTR = 0x40000000  # bit 30 of a TPDO COB-ID: no RTR allowed on this PDO (CiA 301 §7.5.2.37)
 COB_ID_FRAME_29_BIT = 0x20000000  # bit 29 of a PDO COB-ID: 29-bit (extended) CAN-ID
-#: bits 0-29 of a PDO COB-ID: "shall not be changed while the PDO exists (bit 31 = 0)" (CiA 301 §7.5.2.35)
+#: bits 0-29 of a PDO COB-ID: "shall not be changed while the PDO exists (bit 31 = 0)" (CiA 301 §7.5.2.35, §7.5.2.37)
 COB_ID_FIXED_WHILE_VALID = 0x3FFFFFFF
 #: CAN-IDs no configurable communication object may use (CiA 301 §7.3.5, restricted CAN-IDs table)
 RESTRICTED_CAN_IDS: tuple[range, ...] = (
@@ -114,7 +114,7 @@ def cob_id_valid(cob_id: int) -> int:
     return cob_id & ~COB_ID_INVALID & 0xFFFFFFFF
 
 
-#: TPDO transmission types (CiA 301 §7.5.2.35 table 71)
+#: TPDO transmission types (CiA 301 §7.5.2.37 table 72)
 SYNC_ACYCLIC = 0
 SYNC_CYCLIC = range(1, 241)
 RTR_SYNCHRONOUS = 252
@@ -178,7 +178,7 @@ ABORT_FOR_SITUATION: dict[str, int] = {
 }
 
 
-#: a PDO carries at most 64 bits of mapped data (CiA 301 §7.5.2.36: more aborts 06040042h)
+#: a PDO carries at most 64 bits of mapped data (CiA 301 §7.5.2.36, §7.5.2.38: more aborts 06040042h)
 PDO_MAX_BITS = 64
 #: the data-type indices a mapping entry may name as a dummy (CiA 301 §7.4.7.1, EDS [DummyUsage] Dummy0001..0007)
 DUMMY_INDICES = range(0x0001, 0x0008)
@@ -187,7 +187,7 @@ DUMMY_BITS = {0x0001: 1, 0x0002: 8, 0x0003: 16, 0x0004: 32, 0x0005: 8, 0x0006: 1
 
 
 def mapping_word(index: int, sub: int, bits: int) -> int:
-    """A PDO mapping entry (CiA 301 §7.5.2.36): index (16 bit) | sub-index (8 bit) | length in bits (8 bit)."""
+    """A PDO mapping entry (CiA 301 §7.5.2.36, §7.5.2.38): index (16 bit), sub-index (8 bit), length in bits (8)."""
     return (index & 0xFFFF) << 16 | (sub & 0xFF) << 8 | bits & 0xFF
 
 

@@ -282,7 +282,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
                                       "right position)",
         },
     ),
-    (  # PDO mapping (CiA 301 §7.5.2.36)
+    (  # PDO mapping (CiA 301 §7.5.2.38)
         ("test_pdo_mapping",),
         {
             "mapping_accepted_while_valid": "TPDO mapping writes are accepted while the PDO is valid (COB-ID bit 31 "
@@ -372,7 +372,7 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #: - cam_edge_off_by_one: that the high limit belongs to the window is inferred (WDGA example CAM1 0..2048,
 #:   CAM2 2049..4095); the fault shows only at the high limit itself.
 #: - change_of_state_ignored: that a 254/255 TPDO with timer 0 is sent on a change of its mapped position is
-#:   our reading of "event-driven" (CiA 301 §7.5.2.35 leaves the event to the manufacturer or profile).
+#:   our reading of "event-driven" (CiA 301 §7.5.2.37 leaves the event to the manufacturer or profile).
 #: - sync_tpdo_late: CiA 301 bounds no SYNC-to-TPDO latency; the limit is the profile's pdo_response_max_ms,
 #:   our inference unless a manual gives it.
 #: - unsized_download_takes_four_bytes: that a server takes an entry's own size for an expedited download without

@@ -44,6 +44,10 @@ pytestmark = pytest.mark.spec(cia305.CIA305)
 #: the WDGA manual's "new boot-up" after LSS changes (M §8.2.4): open readings lss-node-id-activation and
 #: lss-unconfigured-start (readings/lss.py)
 NEW_BOOT_UP = "Wachendorff WDGA manual M §8.2.4 (a new boot-up after LSS configuration) and M §4.2"
+#: CiA 305 leaves open when an unconfigured slave given a node-ID starts (open reading lss-unconfigured-start)
+UNCONFIGURED_START_READINGS = ("CiA 305 v3.0.0, configure node-ID and the LSS slave states: an unconfigured slave "
+                               "given a node-ID starts when switched to the waiting state (CANopenNode) or at the "
+                               "next NMT reset (lely-core); both accepted")
 
 NMT_STATES = {"pre-operational": ("pre-operational", 0x7F), "operational": ("start", 0x05),
               "stopped": ("stop", 0x04)}
@@ -157,7 +161,7 @@ def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence, pyte
     """Configure bit timing, table 0: the indices of the bit rates the profile lists (and 9, automatic
     detection, where the device has it) are accepted; indices past 9, which table 0 does not have, are refused
     (error 1 or FFh). A table-0 rate the profile does not list, automatic detection (9, optional) and the
-    reserved index 5 (100 kbit/s in DSP 305 v1.x) are taken as not supported: our inference from the profile
+    reserved index 5 (100 kbit/s in older LSS tables) are taken as not supported: our inference from the profile
     (open reading lss-bit-timing-beyond-profile), a warning. The bit rate in use is configured again afterwards."""
     require_service(lss, "configure_bit_timing")
     bus = lss.dut.profile.bus
@@ -176,7 +180,7 @@ def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence, pyte
     if not expected_ok and (index in bus.lss_table() or index in (5, AUTO_BIT_RATE_INDEX)):
         evidence.inferred_problem(observed, "a table-0 index the profile does not list is taken as not supported "
                                             "(CiA 305 v3.0.0 table 0 leaves auto-detection optional and reserves "
-                                            "index 5; DSP 305 v1.x gave it 100 kbit/s)")
+                                            "index 5; older LSS tables give it 100 kbit/s)")
         return
     raise AssertionError(observed)
 
@@ -250,8 +254,8 @@ def test_configured_node_id_pending_until_reset(lss: LssDevice, evidence, pytest
         evidence.inferred_problem(
             f"no boot-up at the new node-ID {new_id} after NMT reset communication\n"
             f"{format_frames(lss.dut.frames.since(mark)) or '  no frames'}",
-            "CiA 305 v3.0.0, configure node-ID: the pending node-ID becomes active on NMT reset communication "
-            "(spec recall, verify)")
+            "CiA 305 v3.0.0, configure node-ID: the configured node-ID is pending and becomes active at NMT reset "
+            "communication (as CANopenNode and lely-core implement it; TR-Electronic CM-36 manual §3.7.6)")
         return
     assert lss.answers_at(new_id), f"boot-up at {new_id}, but no SDO answer there"
 
@@ -283,9 +287,10 @@ def test_configured_device_not_identified_as_non_configured(lss: LssDevice):
 @pytest.mark.spec(cia305.CLAUSE_CONFIGURE_NODE_ID)
 def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
     """Node-ID 255: no boot-up and no SDO until LSS gives a node-ID; then the device boots with it when it leaves
-    the configuration state. A device whose manual asks for a new boot-up (quirk lss_only_in_states, WDGA M
-    §8.2.4: store, leave, then e.g. a power reset) is given the node-ID that way: stored, and, where leaving does
-    not start it, switched off and on (open reading lss-unconfigured-start)."""
+    the configuration state, or at the NMT reset communication the suite then sends to all nodes (both readings of
+    CiA 305, open reading lss-unconfigured-start-at-nmt-reset). A device whose manual asks for a new boot-up (quirk
+    lss_only_in_states, WDGA M §8.2.4: store, leave, then e.g. a power reset) is given the node-ID that way: stored,
+    and, where leaving does not start it, switched off and on (open reading lss-unconfigured-start)."""
     lss = unconfigured
     quiet = lss.unconfigured_since or lss.dut.frames.mark()
     # node-ID 255 stored by the device itself: its delivery state, checked after power-on below (a legacy
@@ -320,6 +325,12 @@ def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
                       "power cycle")
         mark = lss.dut.frames.mark()
         lss.power_cycle()
+        boot = lss.wait_bootup_at(lss.node_id, mark)
+    if boot is None and not new_boot_up:
+        evidence.rests_on("cia", UNCONFIGURED_START_READINGS)
+        evidence.note("no boot-up on leaving the configuration state: NMT reset communication to all nodes (the "
+                      "device has no node-ID to be addressed by yet; open reading lss-unconfigured-start-at-nmt-reset)")
+        mark = lss.reset_communication(0)
         boot = lss.wait_bootup_at(lss.node_id, mark)
     assert boot is not None, (
         f"no boot-up at {lss.node_id} after the unconfigured device got its node-ID\n"

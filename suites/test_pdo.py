@@ -1,4 +1,4 @@
-"""TPDO transmission: every n-th SYNC, the event timer in and out of operational (CiA 301 §7.2.2.2, §7.5.2.35);
+"""TPDO transmission: every n-th SYNC, the event timer in and out of operational (CiA 301 §7.2.2.2, §7.5.2.37);
 the timing itself (event-timer period, SYNC latency, inhibit time) is in test_pdo_timing.
 
 Each test configures one TPDO through its communication parameter (put back afterwards), starts the device and
@@ -18,7 +18,7 @@ from encoder_conformance.profile import quirk_effects as fx
 from fixtures.nmt_state import start_operational
 from fixtures.tpdo import configurable_tpdo as _configurable_tpdo
 
-pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos"),
+pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]
 
 

@@ -1,4 +1,4 @@
-"""TPDO communication parameters (CiA 301 §7.5.2.35): COB-ID valid and RTR bits, COB-ID changes, restricted
+"""TPDO communication parameters (CiA 301 §7.5.2.37): COB-ID valid and RTR bits, COB-ID changes, restricted
 CAN-IDs, transmission types 0, 252/253 and 254/255, the SYNC start value with the SYNC counter (1019h), writes
 in pre-operational only (quirk), and that no trigger sends a TPDO after the device left operational.
 
@@ -38,7 +38,7 @@ from fixtures.dut import return_to_preoperational
 from fixtures.nmt_state import start_operational
 from fixtures.tpdo import configurable_tpdo, maps_position
 
-pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.35 (TPDO communication parameter)"), pytest.mark.requires("tpdos"),
+pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.37 (TPDO communication parameter)"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]
 
 SYNC_TYPES = [1, *range(2, 241)]
@@ -157,7 +157,7 @@ def _writable_cob_id(dut, comm: int | None = None) -> int:
 @pytest.mark.parametrize("trigger", ["SYNC", "event timer"])
 def test_invalid_tpdo_sends_nothing(dut, settings_journal, back_to_preoperational, evidence, trigger):
     """With 18xxh sub 1 bit 31 set the TPDO is not sent on its trigger; with the bit cleared it is sent again."""
-    evidence.rests_on("cia", "CiA 301 §7.5.2.35 (COB-ID bit 31: PDO does not exist / is not valid)")
+    evidence.rests_on("cia", "CiA 301 §7.5.2.37 (COB-ID bit 31: PDO does not exist / is not valid)")
     if trigger == "SYNC":
         comm, _ = _sync_tpdo(dut, evidence, settings_journal, [1])
     else:
@@ -199,7 +199,7 @@ def _other_can_id(can_id: int) -> int:
 def test_cob_id_change_refused_while_valid(dut, settings_journal, evidence):
     """A write that changes the CAN-ID of a valid TPDO is refused and changes nothing; with bit 31 set first,
     the same change is accepted (then put back)."""
-    evidence.rests_on("cia", "CiA 301 §7.5.2.35 (bits 0-29 shall not be changed while the PDO exists)")
+    evidence.rests_on("cia", "CiA 301 §7.5.2.37 (bits 0-29 shall not be changed while the PDO exists)")
     comm = _writable_cob_id(dut)
     found = dut.read_uint(comm, 1)
     settings_journal.remember(comm, 1, _u32(found))
@@ -278,7 +278,7 @@ def _rtr_tpdo(dut, evidence, settings_journal) -> tuple[int, str]:
     if not dut.profile.entry(comm, 2).writable:
         pytest.skip(f"not applicable: {comm:04X}h.02 is fixed")
     settings_journal.write(comm, 2, bytes([253]))
-    evidence.rests_on("cia", "CiA 301 §7.5.2.35 (transmission type 253: sent on RTR only)")
+    evidence.rests_on("cia", "CiA 301 §7.5.2.37 (transmission type 253: sent on RTR only)")
     if dut.read_uint(comm, 1) & COB_ID_NO_RTR:
         pytest.skip(f"not applicable: {comm:04X}h.01 bit 30 is set (no RTR allowed) although type 253 is accepted")
     return comm, "type 253"
@@ -311,7 +311,7 @@ def test_rtr_answered(dut, settings_journal, back_to_preoperational, evidence):
 
 def test_rtr_not_answered_without_rtr_bit(dut, settings_journal, back_to_preoperational, evidence):
     """A valid SYNC-driven TPDO whose COB-ID has bit 30 set (no RTR allowed) does not answer a remote frame."""
-    evidence.rests_on("cia", "CiA 301 §7.5.2.35 (COB-ID bit 30 = 1: no RTR allowed on this PDO)")
+    evidence.rests_on("cia", "CiA 301 §7.5.2.37 (COB-ID bit 30 = 1: no RTR allowed on this PDO)")
     comm, _ = _sync_tpdo(dut, evidence, settings_journal)
     cob = dut.read_uint(comm, 1)
     if not cob & COB_ID_NO_RTR:
@@ -327,7 +327,7 @@ def test_rtr_not_answered_without_rtr_bit(dut, settings_journal, back_to_preoper
 # -- transmission types 0 and 254/255 ---------------------------------------------------------------------
 def test_type_0_sends_on_sync_only_after_change(dut, settings_journal, back_to_preoperational, shaft, evidence):
     """Type 0: no TPDO on SYNCs while the position stands, none when it changes, exactly one on the next SYNC."""
-    evidence.rests_on("cia", "CiA 301 §7.5.2.35 (type 0: synchronous, acyclic: after an event, on the next SYNC)")
+    evidence.rests_on("cia", "CiA 301 §7.5.2.37 (type 0: synchronous, acyclic: after an event, on the next SYNC)")
     _need_shaft(shaft, "type 0 (a change of the mapped value)")
     comm, _ = _sync_tpdo(dut, evidence, settings_journal, [0])
     if not maps_position(dut, comm):
@@ -352,7 +352,7 @@ def test_type_0_sends_on_sync_only_after_change(dut, settings_journal, back_to_p
 
 def test_change_of_state_sends_event_tpdo(dut, settings_journal, back_to_preoperational, shaft, evidence):
     """Type 254/255 with event timer 0: the TPDO comes when the position changes and not while it stands."""
-    evidence.rests_on("inferred", "CiA 301 §7.5.2.35: 254/255 are event-driven; the event of an encoder's TPDO "
+    evidence.rests_on("inferred", "CiA 301 §7.5.2.37: 254/255 are event-driven; the event of an encoder's TPDO "
                       "is a change of its position (e.g. WDGA T 8.46); CiA 406 leaves it to the manufacturer")
     comm, kind = _event_tpdo(dut, evidence, settings_journal, shaft)
     cob_id = dut.read_uint(comm, 1) & 0x7FF

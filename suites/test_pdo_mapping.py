@@ -1,4 +1,4 @@
-"""TPDO mapping (CiA 301 §7.5.2.36; CTT PDO 21-33): the default mapping, the mapping procedure, its errors,
+"""TPDO mapping (CiA 301 §7.5.2.38; CTT PDO 21-33): the default mapping, the mapping procedure, its errors,
 dummy entries and fixed mappings.
 
 A variable mapping changes only in the CiA 301 procedure: COB-ID bit 31 set, sub 0 = 0, the entries,
@@ -43,10 +43,10 @@ from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from fixtures.dut import return_to_preoperational
 
-pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.36 (TPDO mapping)"), pytest.mark.requires("tpdos")]
+pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.38 (TPDO mapping)"), pytest.mark.requires("tpdos")]
 
-PROCEDURE = "CiA 301 §7.5.2.36 (mapping changed only with the PDO invalid and sub 0 = 0; CTT PDO 22-24)"
-ENTRY_RULE = "CiA 301 §7.5.2.36 (a mapped object must exist and be mappable; CTT PDO 25-32)"
+PROCEDURE = "CiA 301 §7.5.2.38 (mapping changed only with the PDO invalid and sub 0 = 0; CTT PDO 22-24)"
+ENTRY_RULE = "CiA 301 §7.5.2.38 (a mapped object must exist and be mappable; CTT PDO 25-32)"
 POSITION = 0x6004
 
 
@@ -140,7 +140,7 @@ def _unchanged(dut: DeviceUnderTest, tpdo: VariableMapping, before: list[Entry],
 
 def test_default_mapping_names_mappable_objects(dut: DeviceUnderTest, evidence: Evidence) -> None:
     """Each TPDO's mapping as found names existing, PDO-mappable objects with their own length, 64 bits at most
-    in all (CiA 301 §7.5.2.36; CTT PDO 21)."""
+    in all (CiA 301 §7.5.2.38; CTT PDO 21)."""
     objects = _mapping_objects(dut)
     if not objects:
         found = dut.profile.quirk_of(fx.FixedTpdoMapping)
@@ -171,7 +171,7 @@ def test_default_mapping_names_mappable_objects(dut: DeviceUnderTest, evidence: 
         total = sum(bits for _, _, bits in entries)
         if total > PDO_MAX_BITS:
             problems.append(f"{mapping:04X}h maps {total} bits (at most {PDO_MAX_BITS})")
-    evidence.rests_on("cia", "CiA 301 §7.5.2.36 (mapping entries: index, sub-index, the object's length; 64 bits)")
+    evidence.rests_on("cia", "CiA 301 §7.5.2.38 (mapping entries: index, sub-index, the object's length; 64 bits)")
     assert not problems, "default TPDO mapping:\n" + "\n".join(problems)
 
 
@@ -180,7 +180,7 @@ def test_default_mapping_names_mappable_objects(dut: DeviceUnderTest, evidence: 
 def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_journal, shaft,
                                                evidence: Evidence) -> None:
     """A new mapping written by the CiA 301 procedure is accepted and the TPDO carries the mapped objects in
-    that order, each equal to its SDO value read before and after (shaft at rest) (CiA 301 §7.5.2.36, §7.2.2;
+    that order, each equal to its SDO value read before and after (shaft at rest) (CiA 301 §7.5.2.38, §7.2.2;
     CTT PDO 22)."""
     try:
         choice = choose_tpdo(dut, 1, [1])
@@ -195,7 +195,7 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
         pytest.skip("not applicable: the profile names no readable PDO-mappable object of at most 32 bits")
     if shaft is not None:
         shaft.turn_by(0.37)  # a position other than 0, which a shifted entry's zeros would match
-    evidence.rests_on("cia", "CiA 301 §7.5.2.36 (procedure), §7.2.2 (a PDO carries the mapped objects in order)")
+    evidence.rests_on("cia", "CiA 301 §7.5.2.38 (procedure), §7.2.2 (a PDO carries the mapped objects in order)")
     with MappingCustody(dut, tpdo.comm):
         if dut.profile.entry(tpdo.comm, 2).writable:
             settings_journal.write(tpdo.comm, 2, bytes([choice.transmission_type]))
@@ -250,7 +250,7 @@ def _raw_entries(dut: DeviceUnderTest, tpdo: VariableMapping) -> list[int]:
 
 def test_mapping_of_missing_object_refused(dut: DeviceUnderTest, variable_tpdo, evidence: Evidence) -> None:
     """An entry naming an object the device does not have is refused with 06020000h, the entry unchanged
-    (CiA 301 §7.5.2.36; CTT PDO 25/26)."""
+    (CiA 301 §7.5.2.38; CTT PDO 25/26)."""
     tpdo, _ = variable_tpdo
     index = next(i for i in range(0x6FFF, 0x6000, -1) if i not in dut.profile.objects)
     _opened(dut, tpdo)
@@ -264,7 +264,7 @@ def test_mapping_of_missing_object_refused(dut: DeviceUnderTest, variable_tpdo, 
 
 def test_mapping_of_unmappable_object_refused(dut: DeviceUnderTest, variable_tpdo, evidence: Evidence) -> None:
     """An entry naming an existing object that is not PDO-mappable is refused with 06040041h, the entry
-    unchanged (CiA 301 §7.5.2.36; CTT PDO 27-32)."""
+    unchanged (CiA 301 §7.5.2.38; CTT PDO 27-32)."""
     tpdo, _ = variable_tpdo
     target = next(((i, s, b) for i, s, _, e in dut.profile.iter_entries() if not e.pdo_mappable and e.readable
                    and i >= 0x1000 and (b := _object_bits(dut, i, s)) and b <= 32), None)
@@ -280,13 +280,13 @@ def test_mapping_of_unmappable_object_refused(dut: DeviceUnderTest, variable_tpd
 
 def test_mapping_longer_than_64_bits_refused(dut: DeviceUnderTest, evidence: Evidence) -> None:
     """Entries of more than 64 bits in all are refused with 06040042h, at the entry or at sub 0 = n, and
-    the mapping stays disabled (CiA 301 §7.5.2.36; CTT PDO 25/26)."""
+    the mapping stays disabled (CiA 301 §7.5.2.38; CTT PDO 25/26)."""
     tpdo = _first_variable(dut, slots=2)
     widest = max(_mappable(dut), key=lambda c: c[2], default=None)
     if widest is None or widest[2] * tpdo.slots <= PDO_MAX_BITS:
         pytest.skip(f"not applicable: {tpdo.slots} entries of mappable objects cannot exceed {PDO_MAX_BITS} bits")
     count = PDO_MAX_BITS // widest[2] + 1
-    evidence.rests_on("cia", "CiA 301 §7.5.2.36 (06040042h: the mapped objects exceed the PDO length)")
+    evidence.rests_on("cia", "CiA 301 §7.5.2.38 (06040042h: the mapped objects exceed the PDO length)")
     with MappingCustody(dut, tpdo.comm):
         _opened(dut, tpdo)
         response = None
@@ -306,7 +306,7 @@ def test_mapping_longer_than_64_bits_refused(dut: DeviceUnderTest, evidence: Evi
 
 def test_mapping_entry_refused_while_sub0_not_zero(dut: DeviceUnderTest, variable_tpdo, evidence: Evidence) -> None:
     """With the PDO invalid but sub 0 = n (mapping enabled), an entry write is refused and the mapping stays
-    (CiA 301 §7.5.2.36 step 2; CTT PDO 23/24). CiA 301 names no code: the code is recorded, not judged."""
+    (CiA 301 §7.5.2.38 step 2; CTT PDO 23/24). CiA 301 names no code: the code is recorded, not judged."""
     tpdo, _ = variable_tpdo
     before = read_mapping(dut, tpdo.comm)
     if not before:
@@ -323,7 +323,7 @@ def test_mapping_entry_refused_while_sub0_not_zero(dut: DeviceUnderTest, variabl
 
 
 def test_mapping_refused_while_pdo_valid(dut: DeviceUnderTest, variable_tpdo, evidence: Evidence) -> None:
-    """With the PDO valid (COB-ID bit 31 clear), sub 0 = 0 is refused and the mapping stays (CiA 301 §7.5.2.36
+    """With the PDO valid (COB-ID bit 31 clear), sub 0 = 0 is refused and the mapping stays (CiA 301 §7.5.2.38
     step 1; CTT PDO 23/24). CiA 301 names no code: the code is recorded, not judged."""
     found = dut.profile.quirk_with_effect(fx.MappingChangeWhileValid.effect)
     if found is not None:
@@ -378,7 +378,7 @@ def test_documented_procedure_with_pdo_valid(dut: DeviceUnderTest, variable_tpdo
 def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: Evidence) -> None:
     """Where the profile declares dummy mapping (capabilities.pdo_dummy_mapping, EDS [DummyUsage]), a dummy entry
     is accepted and takes its data type's bytes in the TPDO: the next object follows it (CiA 301 §7.4.7.1,
-    §7.5.2.36; CTT PDO 33). The dummy's own bytes are not judged."""
+    §7.5.2.38; CTT PDO 33). The dummy's own bytes are not judged."""
     dummies = dut.profile.capabilities.pdo_dummy_mapping
     if not dummies:
         pytest.skip("not applicable: the profile declares no dummy mapping (capabilities.pdo_dummy_mapping)")
@@ -395,7 +395,7 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
     plan = [(dummy, 0, DUMMY_BITS[dummy]), target]
     if shaft is not None:
         shaft.turn_by(0.37)  # a position other than 0, which a dummy's zeros would match
-    evidence.rests_on("cia", "CiA 301 §7.4.7.1 (dummy mapping), §7.5.2.36")
+    evidence.rests_on("cia", "CiA 301 §7.4.7.1 (dummy mapping), §7.5.2.38")
     with MappingCustody(dut, tpdo.comm):
         if dut.profile.entry(tpdo.comm, 2).writable:
             settings_journal.write(tpdo.comm, 2, bytes([choice.transmission_type]))
@@ -424,7 +424,7 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
 
 def test_fixed_mapping_refuses_changes(dut: DeviceUnderTest, evidence: Evidence) -> None:
     """A fixed mapping refuses changes as documented: read-only mapping entries abort 06010002h, a device without
-    mapping objects 06020000h; the mapping stays (CiA 301 §7.2.4.3.17, §7.5.2.36; the manual's object table)."""
+    mapping objects 06020000h; the mapping stays (CiA 301 §7.2.4.3.17, §7.5.2.38; the manual's object table)."""
     objects = _mapping_objects(dut)
     if not objects:
         found = dut.profile.quirk_of(fx.FixedTpdoMapping)

@@ -1,5 +1,5 @@
 """TPDO timing measured: the event timer's period, SYNC-to-TPDO latency and the inhibit time (CiA 301 §7.2.2.2,
-§7.5.2.35).
+§7.5.2.37).
 
 Each test takes >= 50 samples from the frame log and records them as a timing measurement (statistics and
 a plot in the report, the figures in JUnit), saying which clock stamped the frames. The tester's host is
@@ -23,10 +23,10 @@ from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
 from fixtures.tpdo import configurable_tpdo, mapped_bytes_of, maps_position
 
-pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.35"), pytest.mark.requires("tpdos"),
+pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]
 
-INHIBIT_CLAUSE = "CiA 301 §7.5.2.35 (inhibit time: types 254/255 only; a transmission inside it is delayed, not lost)"
+INHIBIT_CLAUSE = "CiA 301 §7.5.2.37 (inhibit time: types 254/255 only; a transmission inside it is delayed, not lost)"
 SYNCS = 50
 SYNC_SPACING_S = 0.01  # a usual bus cycle; how late the tester sends a SYNC does not matter (both ends are logged)
 INHIBIT_MS = 20  # 18xxh sub 3 = 200 x 100 us: 50 intervals in about 1 s

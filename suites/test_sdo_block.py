@@ -150,8 +150,10 @@ def test_block_upload_invalid_block_size_refused(dut, sdo, blksize, evidence):
 def test_block_download_wrong_sequence_number(dut, sdo, settings_journal, closing, evidence):
     """A first segment numbered 2 is not taken: the acknowledgement says no segment arrived in order (ackseq 0, at
     once or after the device's sub-block time-out; the client repeats) or the transfer aborts 05040003h (CTT SDO 27,
-    or 05040000h after the time-out); repeated in order, the value is written."""
-    evidence.rests_on("cia", "CiA 301 §7.2.4.3.11 (ackseq: the last segment received in order), §7.2.4.3.17")
+    or 05040000h after the time-out; the CTT also accepts 05040001h and 08000000h there); repeated in order, the
+    value is written."""
+    evidence.rests_on("cia", "CiA 301 v4.2.0 §7.2.4.3 (SDO block download: ackseq names the last segment received in "
+                              "order), §7.2.4.3.17 (abort)")
     key = _target(dut)
     current = dut.read(*key)
     value = _other_value(current)
@@ -168,7 +170,8 @@ def test_block_download_wrong_sequence_number(dut, sdo, settings_journal, closin
                          "ms", high=timeout_ms + dut.sdo_timeout * 1000)
     if ack is not None and ack.is_abort:
         closing.ended(key)
-        judge_refusal(dut, ack, {SdoAbortCode.SEQUENCE_NUMBER, SdoAbortCode.TIMEOUT}, {SdoAbortCode.GENERAL_ERROR},
+        judge_refusal(dut, ack, {SdoAbortCode.SEQUENCE_NUMBER, SdoAbortCode.TIMEOUT},
+                      {SdoAbortCode.COMMAND_SPECIFIER, SdoAbortCode.GENERAL_ERROR},
                       "block segment with sequence number 2 first", evidence)
         assert dut.read(*key) == current, "the aborted block download changed the value"
         return

@@ -54,7 +54,7 @@ def siko():
 
 
 def test_pdo_mapping_is_written_the_cia301_way(wdga):
-    """Mapping changes: COB-ID invalid first, count 0, entries, count, then the COB-ID (CiA 301 §7.5.2.36)."""
+    """Mapping changes: COB-ID invalid first, count 0, entries, count, then the COB-ID (CiA 301 §7.5.2.38)."""
     current = {(0x1A00, 0): u8(1), (0x1A00, 1): u32(0x60040020), (0x1800, 1): u32(0x40000185)}
     targets = {(0x1A00, 0): u8(2), (0x1A00, 1): u32(0x60040020), (0x1A00, 2): u32(0x60300110)}
     steps = [(s.key, s.value, s.temporary) for s in plan_writes(wdga, targets, current)]

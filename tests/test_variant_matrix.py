@@ -18,7 +18,7 @@ from encoder_conformance.readings import all_readings
 from encoder_conformance.variant_matrix import REPRESENTATIVE_PROFILES, format_runs, plan, run_variants
 
 #: a source a vendor can look up: a CiA document with its version and a section or table, or a manual's section
-_CITABLE = re.compile(r"(CiA 30[1-9]|CiA 4\d\d)( v\d[\d.]*)? (§|table )\d|manual|M §|§\d")
+_CITABLE = re.compile(r"(CiA 30[1-9]|CiA 4\d\d)( v\d[\d.]*)? (§|table |figure )\d|manual|M §|§\d")
 
 
 def test_every_reading_is_complete_and_citable():

@@ -1,6 +1,6 @@
 """A PDO's mapping on the device: read it, change it by the CiA 301 procedure, and give it back in that order.
 
-CiA 301 §7.5.2.36 (TPDO; §7.5.2.34 RPDO): a mapping changes only with the PDO invalid (COB-ID bit 31 set),
+CiA 301 §7.5.2.38 (TPDO; §7.5.2.36 RPDO): a mapping changes only with the PDO invalid (COB-ID bit 31 set),
 sub 0 = 0, then the entries, then sub 0 = n, then the COB-ID valid again. A journal that writes the old
 values back one by one would write sub 0 before the entries and the COB-ID first: a device that follows
 CiA 301 refuses that. ``MappingCustody`` remembers a PDO's COB-ID and mapping and puts them back through

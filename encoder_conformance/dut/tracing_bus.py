@@ -65,10 +65,16 @@ class TracingBus:
             self._idle.wait(timeout if timeout is not None else 0.1)
             return None
         try:
-            return self._bus.recv(timeout)
+            msg = self._bus.recv(timeout)
         except Exception as exc:  # any interface error ends the bus for this run
             self._log.close(f"the CAN bus failed on receive: {type(exc).__name__}: {exc}")
             return None
+        if msg is not None:
+            # a received frame is another node's: the tester's own are logged by send(). A vcan (the kernel's
+            # or a user-space one) marks frames of other programs on the host (a firmware simulator) as
+            # locally sent, which python-can's socketcan reports as is_rx False
+            msg.is_rx = True
+        return msg
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._bus, name)

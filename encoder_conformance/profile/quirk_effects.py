@@ -532,7 +532,7 @@ class MappingLengthDiffers(EffectParams):
 
 class MappingChangeWhileValid(EffectParams):
     """The mapping is changed with the PDO valid: sub 0 = 0 alone unlocks the entries (the manual's procedure
-    never sets COB-ID bit 31, CiA 301 §7.5.2.36 step 1), so mapping writes are accepted while the PDO is valid."""
+    never sets COB-ID bit 31, CiA 301 §7.5.2.38 step 1), so mapping writes are accepted while the PDO is valid."""
 
     effect = "mapping_change_while_valid"
     procedure: Documentation = _doc("the manual's procedure, in its own words")

@@ -1,25 +1,30 @@
 """Open readings of the errors area: EMCY, SYNC and NMT error control (CiA 301 §7.2.5, §7.2.7, §7.2.8).
 
-Quoted sentences marked "(spec recall, verify)" are quoted from memory of CiA 301 v4.2.0, not from a copy at
-hand; the object, the section and the codes are the text's.
+No copy of CiA 301 v4.2.0 was at hand. The rules below were checked against public texts that implement or
+reproduce it (CANopenNode, lely-core, device manuals that reprint its objects): what they confirm is given as a
+paraphrase with the source named; what they do not is marked "(not checked against the text of CiA 301)". The
+object section numbers (§7.5.2.n) agree with other public citations of CiA 301 v4.2.0 but were not seen in the
+text itself.
 """
 
 from __future__ import annotations
 
 from .model import OpenReading
 
-ERROR_BEHAVIOUR = ('CiA 301 v4.2.0 §7.2.8.3.1 (error behaviour): a serious device failure in operational, such as a '
-                   'communication error, sends the device to pre-operational by default; object 1029h (§7.5.2.32) '
-                   'may make it stay or stop instead (spec recall, verify)')
+ERROR_BEHAVIOUR = ('CiA 301 v4.2.0, object 1029h (error behaviour, §7.5.2.32): a serious device failure in '
+                   'operational, such as a communication error, sends the device to pre-operational by default; '
+                   '1029h may make it keep its NMT state (01h) or enter stopped (02h) instead (so the FAULHABER MC '
+                   'communication manual §3.8 and the WDGA manual M §7.9 describe it, and the 1029h tables of other '
+                   'CANopen manuals, e.g. DIS Sensors QG65D §8.1.10, table 23)')
 
 READINGS: list[OpenReading] = [
     OpenReading(
         point="sync-producer",
         question="May a device generate SYNC (1005h bit 30 accepted, SYNC every 1006h µs), or must it refuse bit 30?",
-        source='CiA 301 v4.2.0 §7.5.2.5 (object 1005h): bit 30 "gen": 0 = the device does not generate SYNC, 1 = it '
-               'generates SYNC; "if a CANopen device is not able to generate SYNC messages, an attempt to set bit 30 '
-               '(gen) to 1b is responded with the SDO abort transfer service (abort code: 0609 0030h)" (spec recall, '
-               'verify); §7.5.2.6 (object 1006h): 0 disables the SYNC transmission. A profile declares which '
+        source='CiA 301 v4.2.0 §7.5.2.5 (object 1005h): bit 30 (gen): 0 = the device does not generate SYNC, 1 = it '
+               'generates SYNC; a device that cannot generate SYNC answers an attempt to set bit 30 with an SDO abort '
+               '0609 0030h (so the Applied Motion ST10-C-CE CANopen manual, table 9, reprints the 1005h entry); '
+               '§7.5.2.6 (object 1006h): 0 disables the SYNC transmission. A profile declares which '
                '(capabilities.sync_producer: no, yes, may)',
         readings=("bit 30 refused (06090030h), 1005h unchanged: the device cannot generate SYNC",
                   "bit 30 accepted: with 1006h > 0 the device sends SYNC on the 1005h CAN-ID every 1006h µs, none "
@@ -33,13 +38,15 @@ READINGS: list[OpenReading] = [
         point="sync-consumer-timeout",
         question="Does a SYNC consumer watch 1006h: no SYNC for more than the communication cycle period an error "
                  "that keeps the device out of operational until a reset?",
-        source='CiA 301 v4.2.0 §7.5.2.6 (object 1006h): "the communication cycle period" in µs, the SYNC interval; '
-               'a consumer may use it to watch the SYNC (spec recall, verify); §7.2.7.1 table 21: 8100h '
-               '(communication, generic); ' + ERROR_BEHAVIOUR,
+        source='CiA 301 v4.2.0 §7.5.2.6 (object 1006h, communication cycle period): the SYNC interval in µs; a SYNC '
+               'consumer may use it to watch the SYNC (not checked against the text of CiA 301: CANopenNode raises '
+               '8100h after 1.5 periods without SYNC, and the CiA conformance test tool sets 1006h to 0 with the '
+               'SYNC consumer enabled in its case Synchronization 04; the description of 1006h in §7.5.2.6 would '
+               'settle it); §7.2.7.1 table 21: 8100h (communication, generic); ' + ERROR_BEHAVIOUR,
         readings=("1006h only paces a producer: no error without SYNC",
                   "no SYNC within 1.5 periods records 8100h (1001h bit 4) with its EMCY; the error holds the device "
-                  "in pre-operational until NMT reset communication (CANopenNode): a test that writes 1006h puts it "
-                  "back and clears the error"),
+                  "in pre-operational (CANopenNode clears the error at the next SYNC; the NMT state stays until a "
+                  "command or reset): a test that writes 1006h puts it back and clears the error"),
         variant="sync_timeout_error",
         variant_text="with 1006h > 0, no SYNC for 1.5 periods raises 8100h (communication); while it is active the "
                      "node falls back from operational to pre-operational; a reset clears it",
@@ -52,7 +59,9 @@ READINGS: list[OpenReading] = [
                  "device stay operational, or leave it for pre-operational until the error is gone?",
         source=ERROR_BEHAVIOUR + '; the WDGA manual: a CAN-bus fault in operational changes the device to '
                'pre-operational by default (M §7.9, object 1029h)',
-        readings=("the NMT state stays as it is",
+        readings=("the NMT state stays as it is (1029h sub 1 = 01h; CiA 301's default for a serious failure is "
+                  "pre-operational, so a device that stays with 1029h absent or 00h is not conformant there: the "
+                  "suite does not judge which errors a device classes as serious)",
                   "the device enters pre-operational and NMT start does not hold while the error is active: an EMCY "
                   "test clears what it raised (or resets), a test that needs operational checks it got there"),
         variant="comm_error_enters_preoperational",

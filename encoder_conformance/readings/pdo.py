@@ -9,7 +9,7 @@ READINGS: list[OpenReading] = [
         point="tpdo-transmission-types-not-listed",
         question="A manual lists the transmission types its device supports and is silent about the others: "
                  "may the device accept a type CiA 301 defines that the manual does not list?",
-        source="CiA 301 v4.2.0 §7.5.2.35, table 71 (transmission types 0, 1-240, 252-255 are defined; which a "
+        source="CiA 301 v4.2.0 §7.5.2.37, table 72 (transmission types 0, 1-240, 252-255 are defined; which a "
                "device supports is the manufacturer's choice); the manual's PDO chapter lists only some",
         readings=("types the manual does not list are refused (06090030h)",
                   "every type CiA 301 defines is accepted (the refusal is only inferred: a warning)"),
@@ -40,9 +40,11 @@ READINGS: list[OpenReading] = [
         point="tpdo-inhibit-and-sync-start-fixed-while-valid",
         question="May a TPDO refuse a change of its inhibit time (18xxh sub 3) or SYNC start value (sub 6) while "
                  "it is valid (sub 1 bit 31 = 0)?",
-        source='CiA 301 v4.2.0 §7.5.2.37 (TPDO communication parameter): of the inhibit time and of the SYNC start '
-               'value, "the value shall not be changed while the PDO exists (bit 31 of sub-index 01h is set to 0b)" '
-               '(spec recall, verify); CANopenNode refuses both with 06090030h while the PDO is valid',
+        source='CiA 301 v4.2.0 §7.5.2.37 (TPDO communication parameter): the inhibit time (sub-index 03h) and the '
+               'SYNC start value (sub-index 06h) are not to be changed while the PDO exists (bit 31 of sub-index 01h '
+               'is 0b); TR-Electronic\'s CM-36 and LA-46 manuals say it of the inhibit time ("The value must not be '
+               'changed while the PDO exists"), lely-core, which follows CiA 301 v4.2.0, and CANopenNode refuse both '
+               'while the PDO is valid (06090030h)',
         readings=("the change is accepted while the TPDO is valid",
                   "the change is refused while the TPDO is valid (any abort, 06090030h as CANopenNode) and accepted "
                   "with sub 1 bit 31 set: the tests write sub 3 and sub 6 with the TPDO not valid, and put them back "

@@ -1,7 +1,9 @@
 """Open readings of the SDO area: object access, segmented and block transfer (CiA 301 §7.2.4, §7.5.2).
 
-Quoted sentences marked "(spec recall, verify)" are quoted from memory of CiA 301 v4.2.0, not from a copy
-at hand; the section and the abort codes of table 22 are the text's.
+No copy of CiA 301 v4.2.0 was at hand. The rules below were checked against public texts that reproduce it (the
+SDO abort-code tables of device manuals, CANopenNode 301/CO_SDOserver.h, whose protocol notes follow CiA 301
+closely): what they confirm is given as a paraphrase, with the source named where it is quoted. Section and table
+numbers agree with other public citations of CiA 301 v4.2.0 but were not seen in the text itself.
 """
 
 from __future__ import annotations
@@ -9,18 +11,20 @@ from __future__ import annotations
 from .model import OpenReading
 
 SDO_PROTOCOL = ("test_sdo_protocol", "test_sdo_fuzz")
-ABORT_ANY_TIME = ('CiA 301 v4.2.0 §7.2.4.2 (SDO services), abort SDO transfer: "the service may be executed at any '
-                  'time by both the client and the server of an SDO" (spec recall, verify); §7.2.4.3.17: an abort '
-                  'carries the multiplexer of the transfer it ends. The protocols of §7.2.4.3 give no rule for an '
-                  'initiate request that arrives while a segmented transfer of the same SDO is open')
+ABORT_ANY_TIME = ('CiA 301 v4.2.0 §7.2.4.2 (SDO services), abort SDO transfer: the client and the server of an SDO '
+                  'may each abort a transfer at any time (so CANopen references describe the service, e.g. the '
+                  'ars-informatica CANopen pages, "Abort SDO Transfer"); §7.2.4.3.17: an abort carries the '
+                  'multiplexer of the transfer it ends. The protocols of §7.2.4.3 give no rule for an initiate '
+                  'request that arrives while a segmented transfer of the same SDO is open')
 
 READINGS: list[OpenReading] = [
     OpenReading(
         point="error-history-empty-entry",
         question="May a read of an error history entry (1003h sub n) above the number of errors recorded (sub 0) "
                  "be refused with 08000024h, rather than answered with a value?",
-        source='CiA 301 v4.2.0 §7.5.2.4 (object 1003h): sub-index 00h gives "the number of errors that are '
-               'recorded" (spec recall, verify), so the entries above it hold no error; §7.2.4.3.17 table 22: '
+        source='CiA 301 v4.2.0 §7.5.2.4 (object 1003h): sub-index 00h gives the number of errors recorded from '
+               'sub-index 01h on (so manuals that reprint 1003h say it, e.g. TR-Electronic LA-46 manual §7.4), so '
+               'the entries above it hold no error; §7.2.4.3.17 table 22: '
                '"0800 0024h No data available". The CiA conformance test tool accepts 08000024h in its case '
                'Emergency 03 (read of 1003h sub 1)',
         readings=("the empty entry is read (a value, e.g. 0)",
@@ -81,11 +85,12 @@ READINGS: list[OpenReading] = [
         point="sdo-block-subblock-timeout",
         question="A block download segment comes out of sequence: when does the server acknowledge (or abort), "
                  "and how long may it wait for the rest of the sub-block?",
-        source='CiA 301 v4.2.0 §7.2.4.3.11 (download SDO block segment) and §7.2.4.3.13: ackseq is "the sequence '
-               'number of the last segment the server received successfully" (spec recall, verify), the client '
-               'repeats the rest; no time is given for a sub-block that stays incomplete; table 22: 05040003h '
-               '(invalid sequence number), 05040000h (SDO protocol timed out). CTT SDO 27 accepts 05040003h, '
-               '08000000h',
+        source='CiA 301 v4.2.0 §7.2.4.3 (SDO block download): the server confirms a sub-block with ackseq, the '
+               'sequence number of the last segment it received successfully, and the client goes on after it '
+               '(CANopenNode 301/CO_SDOserver.h: "sequence number of last segment that was received successfully '
+               'during the last block download"); no time is given for a sub-block that stays incomplete; table 22: '
+               '05040003h (invalid sequence number), 05040000h (SDO protocol timed out). CTT SDO 27 (a block read '
+               'whose client confirms with ackseq 128) accepts 05040001h, 05040003h or 08000000h',
         readings=("the acknowledgement (ackseq 0) at once",
                   "the segment ignored, the acknowledgement after the device's sub-block time-out (within "
                   "timing.sdo_transfer_timeout_ms), as CANopenNode does",

@@ -103,6 +103,10 @@ class LssBehaviour:
     def node_id_after(self, event: ReloadEvent) -> int | None:
         return self.config.node_id_after(event)
 
+    def obeys_nmt_while_unconfigured(self, command: bytes) -> bool:
+        """Whether an NMT command reaches the node while it waits for a node-ID (CiA 305: LSS starts it)."""
+        return False
+
     # -- events from the slave ---------------------------------------------------------------------
     def configured(self, what: str) -> None:
         pending = self.config.pending_node_id if what == "node_id" else self.config.pending_bit_index
@@ -177,3 +181,20 @@ class UnconfiguredWaitsForReset(LssBehaviour):
 
     def left_configuration(self) -> None:
         log.info("node %d: LSS waiting state (configuration left); a new boot-up is needed", self._nmt.node_id)
+
+
+@breaks(LssBehaviour, "lss_unconfigured_boots_at_nmt_reset")
+class UnconfiguredBootsAtNmtReset(LssBehaviour):
+    """A variant, not a fault: an unconfigured node given a node-ID stays in initialisation when it leaves the
+    configuration state and boots with that node-ID at the next NMT reset (to all nodes), as lely-core does."""
+
+    def left_configuration(self) -> None:
+        log.info("node %d: LSS waiting state (configuration left); waits for an NMT reset", self._nmt.node_id)
+
+    def obeys_nmt_while_unconfigured(self, command: bytes) -> bool:
+        return self._nmt.waiting_for_node_id and command[:1] in (b"\x81", b"\x82")
+
+    def node_id_after(self, event: ReloadEvent) -> int | None:
+        if event.name in ("nmt_81h", "nmt_82h") and self._nmt.waiting_for_node_id:
+            return self.config.take_pending_node_id() or super().node_id_after(event)
+        return super().node_id_after(event)

@@ -369,7 +369,7 @@ class NodeIdFfhRefused(LssSlave):
 
 @breaks(LssSlave, "lss_bit_timing_auto_and_100k")
 class BitTimingAutoAnd100k(LssSlave):
-    """A variant, not a fault: table-0 index 9 (automatic detection) and 5 (100 kbit/s, DSP 305 v1.x) are accepted
+    """A variant, not a fault: table-0 index 9 (automatic detection) and 5 (100 kbit/s in older LSS tables) are accepted
     whatever the profile lists."""
 
     def bit_timing_valid(self, table: int, index: int) -> bool:

@@ -318,7 +318,8 @@ class SimulatedNode:
                     for listener in self.hooks.lss:
                         listener(bytes(msg.data))
                 return
-            if self.state is NmtState.INITIALISING:
+            if self.state is NmtState.INITIALISING and not (
+                    can_id == 0 and self.lss is not None and self.lss.obeys_nmt_while_unconfigured(bytes(msg.data))):
                 return
             if can_id == 0 and not msg.is_extended_id:
                 self.nmt.on_command(bytes(msg.data))

@@ -1,4 +1,4 @@
-"""PDO COB-ID rules of a conformant device (CiA 301 §7.5.2.35, §7.3.5): a write to 14xxh/18xxh sub 1 that
+"""PDO COB-ID rules of a conformant device (CiA 301 §7.5.2.35 and §7.5.2.37, §7.3.5): a write to 14xxh/18xxh sub 1 that
 changes bits 0-29 while the PDO is valid is refused, and so is a valid COB-ID with a restricted CAN-ID.
 
 A behaviour: a write gate on the PDO communication objects' sub 1. Both refusals answer 06090030h (value

@@ -1,4 +1,4 @@
-"""PDO mapping rules (CiA 301 §7.5.2.36 TPDO, §7.5.2.34 RPDO): when and what a mapping object accepts.
+"""PDO mapping rules (CiA 301 §7.5.2.38 TPDO, §7.5.2.36 RPDO): when and what a mapping object accepts.
 
 The mapping changes only in the CiA 301 procedure: PDO invalid (COB-ID bit 31) where its COB-ID is
 writable, sub 0 = 0, the entries, sub 0 = n. An entry must name an object that exists (06020000h) and is

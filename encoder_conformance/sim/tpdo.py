@@ -111,11 +111,11 @@ class TpdoEngine:
         return configs
 
     def is_valid(self, cob_id: int) -> bool:
-        """Sub 1 bit 31 clear: the PDO exists (CiA 301 §7.5.2.35)."""
+        """Sub 1 bit 31 clear: the PDO exists (CiA 301 §7.5.2.37)."""
         return not cob_id & COB_ID_INVALID
 
     def sync_start_value(self, comm: int) -> int:
-        """Sub 6, where 1019h > 0 makes the SYNC carry a counter (CiA 301 §7.5.2.35): the counter value of
+        """Sub 6, where 1019h > 0 makes the SYNC carry a counter (CiA 301 §7.5.2.37): the counter value of
         the first SYNC counted; 0 where there is none."""
         if not self._read(SYNC_COUNTER_OVERFLOW, 0):
             return 0
@@ -270,11 +270,11 @@ class TpdoEngine:
         config.last_sent = time.monotonic()  # after the frame is stamped: the next one is an inhibit time later
 
     def inhibit_s(self, config: TpdoConfig) -> float:
-        """The minimum time between two transmissions (CiA 301 §7.5.2.35: sub 3 in 100 us, types 254/255 only)."""
+        """The minimum time between two transmissions (CiA 301 §7.5.2.37: sub 3 in 100 us, types 254/255 only)."""
         return config.inhibit_100us / 10000 if config.transmission_type in (254, 255) else 0.0
 
     def inside_inhibit(self, config: TpdoConfig, wait: float) -> None:
-        """A transmission inside the inhibit time is delayed, never dropped (CiA 301 §7.5.2.35): one send when the
+        """A transmission inside the inhibit time is delayed, never dropped (CiA 301 §7.5.2.37): one send when the
         time is over, carrying the values of that moment."""
         if not config.delayed:
             config.delayed = True

@@ -208,7 +208,7 @@ def _capabilities(result: EdsImport, todos: list[str]) -> dict[str, Any]:
 
 def _mapping_todos(objects: dict[int, dict[str, Any]], todos: list[str]) -> None:
     """A default PDO mapping naming an object the EDS lacks (an inconsistent EDS): the draft keeps no default
-    for that mapping (the twin maps nothing there, as CiA 301 §7.5.2.36 would refuse the entry) and says so."""
+    for that mapping (the twin maps nothing there, as CiA 301 §7.5.2.38 would refuse the entry) and says so."""
     for mapping in sorted(i for i in objects if 0x1600 <= i <= 0x17FF or 0x1A00 <= i <= 0x1BFF):
         subs = objects[mapping].get("subs", {})
         words = [e.get("default") for sub, e in subs.items() if sub > 0]
