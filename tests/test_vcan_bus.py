@@ -263,6 +263,8 @@ def seen(m): return {"id": m.arbitration_id, "ext": m.is_extended_id, "rtr": m.i
                      "is_rx": m.is_rx, "ts": m.timestamp, "channel": m.channel}
 bus = can.Bus(interface="socketcan", channel=sys.argv[1], receive_own_messages=True,
               can_filters=[{"can_id": 0x580, "can_mask": 0x780}])
+import subprocess  # a vfork() child closes the inherited fds in the parent's memory: the bus must stay ours
+subprocess.run(["true"], check=True)
 out(event="ready")
 got = [bus.recv(5) for _ in range(2)]
 out(event="received", frames=[seen(m) for m in got if m is not None])
@@ -276,7 +278,8 @@ bus.shutdown()
 
 @pytest.mark.parametrize(("interface", "others_rx"), [("vcan0", False), ("vcan1", True)])
 def test_python_can_socketcan_under_the_preload(bench, tmp_path, interface, others_rx):
-    """python-can's socketcan bus (recvmsg with SO_TIMESTAMPNS, filters, receive_own_messages) with can-utils.
+    """python-can's socketcan bus (recvmsg with SO_TIMESTAMPNS, filters, receive_own_messages) with can-utils,
+    also after the process started a program (CPython's subprocess: vfork, the child closing every fd).
     vcan0 (vcan mode) flags every frame as sent on this host, so python-can says is_rx=False as on the
     kernel's vcan; vcan1 (wire mode) flags only the bus's own frames, as a real adapter does."""
     dump = bench.start("candump", "-L", interface)

@@ -149,7 +149,22 @@ REAL(int, fcntl64, int, int, ...);
 /* a fork() while another thread holds the pool lock must not leave the child's lock taken */
 static void pool_prepare(void) { pthread_mutex_lock(&pool_lock); }
 static void pool_resume(void) { pthread_mutex_unlock(&pool_lock); }
-__attribute__((constructor)) static void vcan_init(void) { pthread_atfork(pool_prepare, pool_resume, pool_resume); }
+/* The process whose table this is. A vfork() child (CPython's subprocess uses vfork) runs in the parent's memory
+ * until it execs, and closes every inherited fd on the way: its closes must not empty the parent's table (seen:
+ * the tester's CAN socket forgotten after it started a power switch command). fork() children are told apart by
+ * the atfork handler, vfork() children by getpid(). */
+static pid_t owner_pid;
+static void child_resume(void)
+{
+    owner_pid = getpid();
+    pthread_mutex_unlock(&pool_lock);
+}
+static int in_owner(void) { return getpid() == owner_pid; }
+__attribute__((constructor)) static void vcan_init(void)
+{
+    owner_pid = getpid();
+    pthread_atfork(pool_prepare, pool_resume, child_resume);
+}
 
 /* ---- per-socket state ---- */
 static struct vstate *lookup(int fd)
@@ -201,7 +216,7 @@ static void release(struct vstate *st)
 
 static void forget(int fd)
 {
-    if (fd < 0 || fd >= MAX_FDS)
+    if (fd < 0 || fd >= MAX_FDS || !in_owner())
         return;
     struct vstate *st = __atomic_exchange_n(&table[fd], NULL, __ATOMIC_ACQ_REL);
     if (st)
@@ -210,7 +225,7 @@ static void forget(int fd)
 
 static void share(int newfd, struct vstate *st)
 {
-    if (newfd < 0 || newfd >= MAX_FDS)
+    if (newfd < 0 || newfd >= MAX_FDS || !in_owner())
         return;
     pthread_mutex_lock(&pool_lock);
     st->refs++;
