@@ -1,5 +1,5 @@
 """Command line: ``encoder-conformance run | accept | restore | lss | sim | sim-control | profile | faults |
-fault-matrix | readings | variant-matrix``.
+fault-matrix | readings | variant-matrix | vcan``.
 
 Exit codes of ``run``, ``restore`` and ``lss`` follow exit_codes.RunExit; a usage error (bad option,
 unreadable profile) is 4 for every command.
@@ -309,7 +309,19 @@ def build_parser() -> argparse.ArgumentParser:
     faults = sub.add_parser("faults", help="list the simulator's named faults")
     faults.set_defaults(func=_cmd_faults)
     add_readings_parsers(sub)
+
+    vcan = sub.add_parser("vcan", add_help=False, help="a user-space SocketCAN bus for programs that speak "
+                                                       "SocketCAN (a firmware simulator, can-utils): up, run, down")
+    vcan.add_argument("vcan_args", nargs=argparse.REMAINDER, help="up | run | down | env | status | build ...")
+    vcan.set_defaults(func=_cmd_vcan)
     return parser
+
+
+def _cmd_vcan(args: argparse.Namespace, extra: list[str]) -> int:
+    from .vcan.command import main as vcan_main
+
+    given: list[str] = args.argv
+    return vcan_main(given[given.index("vcan") + 1:])  # as typed: its own parser reads them
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -318,7 +330,7 @@ def main(argv: list[str] | None = None) -> int:
     catch_early()  # a Ctrl-C during start-up must end the run, also where the interpreter drops the exception
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)
-    if extra and args.command != "run":
+    if extra and args.command not in ("run", "vcan"):
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     args.argv = list(sys.argv[1:] if argv is None else argv)  # as given: what parallel stations pass on
     try:

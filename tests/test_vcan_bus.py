@@ -18,6 +18,7 @@ from pathlib import Path
 
 import pytest
 
+from encoder_conformance import cli
 from encoder_conformance.vcan import (
     BuildError,
     VirtualCan,
@@ -456,6 +457,8 @@ def test_command_up_status_down(preload_library, capsys):
         assert hub_pid(directory) is not None
         assert {i.name: (i.mtu, i.mode) for i in interfaces(directory).values()} == {"can7": (16, "vcan")}
         assert command.main(["-d", str(directory), "status"]) == 0
+        assert "can7: ifindex 1000, mtu 16" in capsys.readouterr().out
+        assert cli.main(["vcan", "-d", str(directory), "status"]) == 0  # the same through the tool's command
         assert "can7: ifindex 1000, mtu 16" in capsys.readouterr().out
         assert command.main(["down", "-d", str(directory)]) == 0
         assert hub_pid(directory) is None

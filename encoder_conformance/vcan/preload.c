@@ -380,11 +380,10 @@ static int wait_ack(int fd)
     }
 }
 
-static int vcan_bind(int fd, struct vstate *st, const struct sockaddr *addr, socklen_t len)
+/* the interface index a CAN address names (as the kernel checks it); -1 with EINVAL for a wrong address */
+static int address_ifindex(const struct sockaddr *addr, socklen_t len)
 {
     struct sockaddr_can a;
-    int ifindex, mtu = CANFD_MTU, wire = 0;
-    char name[IF_NAMESIZE];
     if (!addr || len < RAW_MIN_NAMELEN) {
         errno = EINVAL;
         return -1;
@@ -395,7 +394,16 @@ static int vcan_bind(int fd, struct vstate *st, const struct sockaddr *addr, soc
         errno = EINVAL;
         return -1;
     }
-    ifindex = a.can_ifindex;
+    return a.can_ifindex;
+}
+
+static int vcan_bind(int fd, struct vstate *st, const struct sockaddr *addr, socklen_t len)
+{
+    int ifindex, mtu = CANFD_MTU, wire = 0;
+    char name[IF_NAMESIZE];
+    ifindex = address_ifindex(addr, len);
+    if (ifindex < 0)
+        return -1;
     if (ifindex != 0 && !if_by_index(ifindex, name, &mtu, &wire)) {
         errno = ENODEV;
         return -1;
@@ -599,18 +607,9 @@ static ssize_t vcan_send(int fd, struct vstate *st, const struct iovec *iov, siz
     for (size_t i = 0; i < iovcnt; i++)
         len += iov[i].iov_len;
     if (addr) {
-        struct sockaddr_can a;
-        if (alen < RAW_MIN_NAMELEN) {
-            errno = EINVAL;
+        target = address_ifindex(addr, alen);
+        if (target < 0)
             return -1;
-        }
-        memset(&a, 0, sizeof a);
-        memcpy(&a, addr, alen < sizeof a ? alen : sizeof a);
-        if (a.can_family != AF_CAN) {
-            errno = EINVAL;
-            return -1;
-        }
-        target = a.can_ifindex;
     } else {
         target = __atomic_load_n(&st->ifindex, __ATOMIC_RELAXED);
     }
