@@ -7,6 +7,7 @@ profile once, selects tests by capability, and sets up the report outputs.
 from __future__ import annotations
 
 import gc
+from pathlib import Path
 
 import pytest
 
@@ -136,6 +137,9 @@ def pytest_keyboard_interrupt(excinfo) -> None:
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int):
     lifecycle.give_back(session.config)  # after Ctrl-C or a stop: first thing, while the bus is still open
     result = yield
+    xmlpath = session.config.option.xmlpath  # written by pytest's junitxml in the hooks just run
+    if xmlpath:
+        outcomes.junit_internal_errors_as_errors(Path(xmlpath))
     bus_trace.write_unsettled(session.config)  # a test stopped before its teardown report keeps its trace
     if not lifecycle.ended_early(session.config):
         reporting.fail_all_skipped(session)

@@ -113,6 +113,8 @@ def test_internal_error_exits_3_outside_every_area_verdict(tmp_path):
     case = next(c for c in ET.parse(tmp_path / "run" / "junit.xml").getroot().iter("testcase")
                 if c.get("name") == INJECTED)
     assert ("verdict", "internal error") in {(p.get("name"), p.get("value")) for p in case.iter("property")}
+    assert case.find("error") is not None, "JUnit: no <error> for the tool's internal error"
+    assert case.find("failure") is None, "JUnit: the tool's internal error shown as a failure of the device"
 
 
 def test_internal_error_beside_a_device_failure_exits_1(tmp_path):
