@@ -16,7 +16,7 @@ import pytest
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.eds import export_eds, objects_from_eds, profile_draft_from_eds, write_profile_draft
 from encoder_conformance.profile.loader import load_profile
-from tests.test_twins import PARALLEL_RUNS, run_suite
+from tests.suite_session import PARALLEL_RUNS, run_suite
 
 EDS_DIR = Path(__file__).parent / "data" / "eds"
 CORPUS = sorted([*EDS_DIR.glob("*.eds"), *(EDS_DIR / "vendors").glob("*.eds")])

@@ -22,7 +22,7 @@ from encoder_conformance.plugin.evidence import EVIDENCE, Evidence
 from encoder_conformance.plugin.glance import Deviation, PageContext, render, skip_reason_key
 from encoder_conformance.plugin.options import TRACE_OPTION
 from encoder_conformance.run_summary import RunSummary, TestResult
-from tests.test_twins import run_suite
+from tests.suite_session import run_suite
 
 IDENTITY = {"vendor-id (1018h.1)": "0x0100021F", "product code (1018h.2)": "0x57444741",
             "revision (1018h.3)": "0x03060208", "serial number (1018h.4)": "12345656 (0x00BC6138)",

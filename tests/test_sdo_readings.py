@@ -16,7 +16,7 @@ from encoder_conformance.readings import sdo as sdo_readings
 from encoder_conformance.sim.faults import FaultSet, assemble
 from encoder_conformance.sim.sdo_block import BlockEngine
 from encoder_conformance.sim.sdo_server import SdoServer
-from tests.test_sdo_server import TEXT, FakeAccess, abort_of, frame, segment
+from tests.sdo_server_rig import TEXT, FakeAccess, abort_of, frame, segment
 
 UPLOAD_TEXT = frame(0x40, 0x1008)
 UPLOAD_1000 = frame(0x40, 0x1000)

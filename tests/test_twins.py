@@ -7,16 +7,14 @@ the notes.
 
 from __future__ import annotations
 
-import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
 
 from encoder_conformance.profile.loader import iter_profile_ids, load_profile
-from encoder_conformance.suite_runner import SessionResult, run_pytest
+from tests.suite_session import PARALLEL_RUNS, REPO, run_suite
 
-REPO = Path(__file__).resolve().parents[1]
 #: every shipped profile, and the self-test variants with the optional PDO features none of them has (inhibit
 #: time, SYNC start value, 1019h, dummy mapping) and with SDO block transfer, so that those checks pass against
 #: a conformant twin too
@@ -27,20 +25,6 @@ PROFILES = [ref.id for ref in iter_profile_ids() if not ref.abstract] + [
 def _expected_cost(profile_id: str) -> float:
     """Boot-up delay dominates a run (every reset waits for it): start the slow twins first."""
     return load_profile(profile_id).profile.simulator.bootup_delay_ms
-
-
-#: two runs at a time on two cores: with three, a twin itself (the device side) is sometimes stalled past its
-#: heartbeat tolerance (seen: a 40 ms late heartbeat and event-timer frame at once, in an EDS-draft twin)
-PARALLEL_RUNS = 2
-
-
-def run_suite(tmp_path: Path, *args: str) -> tuple[SessionResult, float]:
-    """One pytest session of suites/ in its own process (forked from the pre-loaded server, suite_runner)."""
-    command = [str(REPO / "suites"), "-q", "-p", "no:cacheprovider", "--tb=line", "--report-dir",
-               str(tmp_path / "report"), *args]
-    start = time.monotonic()
-    completed = run_pytest(command, REPO, tmp_path / "pytest-output.txt", timeout=600)
-    return completed, time.monotonic() - start
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ import pytest
 
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.value_domain import refusal_basis
-from tests.test_twins import run_suite
+from tests.suite_session import run_suite
 
 WDGA = "wachendorff-wdga-mt"
 VARIANT = ["--device-profile", WDGA, "--sim-fault", "cia301_transmission_types"]
