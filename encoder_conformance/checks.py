@@ -174,4 +174,4 @@ def documented_quirk(dut: DeviceUnderTest, effect: type[P], evidence: Evidence, 
     if missing:
         pytest.skip(f"not applicable: quirk {quirk_id} names no {', '.join(missing)} the suite may use")
     evidence.deviation(quirk_id, quirk.title)
-    return quirk.params  # type: ignore[no-any-return]
+    return quirk.params

@@ -97,7 +97,7 @@ NMT_COMMAND_NAMES = {
 }
 STATE_NAMES = {0x00: "boot-up", 0x04: "stopped", 0x05: "operational", 0x7F: "pre-operational"}
 #: the command that brings a node into a state it reported by heartbeat
-COMMAND_FOR_STATE = {
+COMMAND_FOR_STATE: dict[int, str] = {
     NmtState.OPERATIONAL: "start",
     NmtState.STOPPED: "stop",
     NmtState.PRE_OPERATIONAL: "pre-operational",

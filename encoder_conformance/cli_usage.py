@@ -30,7 +30,7 @@ class UsageError(Exception):
 class OneLineParser(argparse.ArgumentParser):
     """argparse with the suite's usage-error exit code (4) and a one-line message pointing to ``--help``."""
 
-    def error(self, message: str) -> NoReturn:  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         self.exit(RunExit.USAGE_ERROR, f"{self.prog}: error: {message} (usage: {self.prog} --help)\n")
 
 

@@ -27,7 +27,7 @@ def interrupted_by(signum: int) -> int:
     return 128 + signum
 
 
-DESCRIPTIONS = {
+DESCRIPTIONS: dict[int, str] = {  # keyed by RunExit; looked up with any exit status
     RunExit.PASSED: "passed",
     RunExit.NON_CONFORMANT: "device non-conformant",
     RunExit.INTERNAL_ERROR: "internal error of the tool",

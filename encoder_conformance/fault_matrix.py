@@ -150,7 +150,12 @@ def run_until_caught(profile: str, faults: list[str], workdir: Path, select: str
                 break
             finished, running = wait(running, return_when=FIRST_COMPLETED)
             results += [future.result() for future in finished]
-    return baseline, sorted(results, key=lambda r: faults.index(r.fault))  # in the order tried, not finished
+
+    def tried(result: RunResult) -> int:
+        assert result.fault is not None  # every run here was started with a fault
+        return faults.index(result.fault)
+
+    return baseline, sorted(results, key=tried)  # in the order tried, not finished
 
 
 def format_matrix(baseline: RunResult, results: list[RunResult]) -> str:

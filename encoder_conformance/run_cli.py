@@ -89,7 +89,7 @@ selected, 69 could not test, 70 device not restored as found, 130 interrupted (1
 """
 
 
-def add_run_parser(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def add_run_parser(sub: argparse._SubParsersAction[usage.OneLineParser]) -> None:
     # allow_abbrev=False: an abbreviation of ours must not swallow a pytest option (and parallel stations
     # pass the arguments on as given, less --station and --report-dir, which need their full names)
     run = sub.add_parser("run", help="run the conformance suites (extra arguments go to pytest)", epilog=RUN_EPILOG,

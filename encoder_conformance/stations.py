@@ -22,10 +22,11 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
+from typing import Any, TypeAlias
 
 from .cli_usage import UsageError
 from .exit_codes import DESCRIPTIONS, RunExit, interrupted_by
@@ -36,6 +37,8 @@ from .station import load_station
 STOP_BOUND_S = 120.0  # a restore after Ctrl-C takes seconds; a run that needs longer is stuck
 CONSOLE_LOG = "console.log"
 CLEAR = "\r\x1b[K"  # back to the start of the line, erase it
+#: what signal.signal takes and gives back: a function, SIG_DFL/SIG_IGN, or None (a handler not set from Python)
+SignalHandler: TypeAlias = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
 
 #: exit codes from least to most serious: the combined run ends with the most serious one
 SEVERITY: tuple[int, ...] = (RunExit.PASSED, RunExit.NO_TESTS, RunExit.NON_CONFORMANT, RunExit.COULD_NOT_TEST,
@@ -153,9 +156,9 @@ def row_of(run: StationRun) -> Row:
     try:
         summary = RunSummary.read(run.report_dir)
     except (OSError, ValueError, KeyError, TypeError):
-        why = DESCRIPTIONS.get(code, f"exit {code}")  # type: ignore[call-overload]
+        why = DESCRIPTIONS.get(code, f"exit {code}")
         return Row(run.name, "-", "-", f"NO SUMMARY ({why}; see {CONSOLE_LOG})", "-", code, str(run.report_dir))
-    verdict = summary.overall
+    verdict: str = summary.overall
     if code in (RunExit.INTERRUPTED, interrupted_by(signal.SIGTERM)):
         verdict = f"INTERRUPTED ({verdict} so far)"  # not every test ran: no verdict about the device
     return Row(run.name, summary.profile_id, summary.serial or "-", verdict,
@@ -225,8 +228,10 @@ def _wait_all(runs: list[StationRun], ended: queue.Queue[StationRun], forward: _
             continue
         remaining -= 1
         print(CLEAR if live else "", end="")
-        verdict = DESCRIPTIONS.get(run.exit_code, f"exit {run.exit_code}")  # type: ignore[call-overload]
-        print(f"station {run.name}: ended after {run.ended - run.started:.0f} s: {verdict} (exit {run.exit_code})",
+        code = run.exit_code
+        assert code is not None  # set before the run is queued as ended (_start)
+        verdict = DESCRIPTIONS.get(code, f"exit {code}")
+        print(f"station {run.name}: ended after {run.ended - run.started:.0f} s: {verdict} (exit {code})",
               flush=True)
 
 
@@ -235,7 +240,7 @@ class _ForwardSignals:
 
     def __init__(self, runs: list[StationRun]) -> None:
         self._runs = runs
-        self._previous: dict[int, object] = {}
+        self._previous: dict[int, SignalHandler] = {}
         self.deadline: float | None = None
 
     def __enter__(self) -> _ForwardSignals:
@@ -246,15 +251,16 @@ class _ForwardSignals:
 
     def __exit__(self, *exc: object) -> None:
         for sig, handler in self._previous.items():
-            signal.signal(sig, handler)  # type: ignore[arg-type]
+            signal.signal(sig, handler)
 
     def _forward(self, signum: int, frame: FrameType | None) -> None:
-        running = [run for run in self._runs if run.process is not None and run.process.poll() is None]
-        for run in running:
-            run.process.send_signal(signum)  # type: ignore[union-attr]
+        running = [(run.name, run.process) for run in self._runs
+                   if run.process is not None and run.process.poll() is None]
+        for _, process in running:
+            process.send_signal(signum)
         if self.deadline is None:
             self.deadline = time.monotonic() + STOP_BOUND_S
-        names = ", ".join(run.name for run in running) or "none"
+        names = ", ".join(name for name, _ in running) or "none"
         print(f"\n{signal.Signals(signum).name} passed on to the stations still running ({names}); each gives its "
               f"device back first", file=sys.stderr, flush=True)
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
-from typing import Any
+from typing import Any, cast
 
 import can
 import canopen
@@ -56,10 +56,11 @@ def connect(kwargs: dict[str, Any], describe: str, frame_log: FrameLog) -> canop
     """A connected canopen Network on a TracingBus, whose frames (both directions) go to ``frame_log``."""
     # the tester's own frames are logged as it sends them; echoed back they would pass for another node's
     bus = open_bus({**kwargs, "receive_own_messages": False}, describe)
-    network = canopen.Network(TracingBus(bus, frame_log))
+    # cast: a TracingBus stands in for the bus it wraps (send and recv traced, every other attribute forwarded)
+    network = canopen.Network(cast(can.BusABC, TracingBus(bus, frame_log)))
     network.NOTIFIER_CYCLE = NOTIFIER_CYCLE_S
     network.NOTIFIER_SHUTDOWN_TIMEOUT = NOTIFIER_STOP_TIMEOUT_S
-    network.listeners.append(frame_log)
+    network.listeners.append(frame_log)  # type: ignore[arg-type]  # why: canopen takes any can.Listener here
     network.connect()
     return network
 

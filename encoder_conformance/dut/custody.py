@@ -284,7 +284,8 @@ class Custody:
         dut = self.dut
         snapshot = self.snapshot
         assert snapshot is not None
-        stored_keys = [e.key for e in snapshot.entries if e.stored is not None and is_stored(dut.profile.entry(*e.key))]
+        stored = [e for e in snapshot.entries if e.stored is not None and is_stored(dut.profile.entry(*e.key))]
+        stored_keys = [e.key for e in stored]
         shows_stored = self.restarts.shows_stored
         self._reset(deadline)
         loaded = {k: now.get(k) for k in stored_keys} if shows_stored else read_values(dut, stored_keys)
@@ -294,7 +295,7 @@ class Custody:
             snapshot.reference_stored, self.reference.store_may_have_changed(self.watch.counts, history_unknown))
         if not record.stored_changed and not defaults_restored and reference is None:
             return not shows_stored
-        targets = {k: snapshot.entry(k).target_stored() for k in stored_keys}  # type: ignore[union-attr]
+        targets = {e.key: e.target_stored() for e in stored}
         differing = {k: v for k, v in targets.items() if v is not None and loaded.get(k) != v}
         self._write(record, deadline, differing, loaded)
         preset = self._give_back_reference(record, deadline, reference, record.stored_changed)
@@ -303,7 +304,7 @@ class Custody:
             commands = store_commands_for(dut.profile, keys + (self.reference.store_keys() if preset else []))
         except CannotPersist as exc:
             record.fail(f"cannot store the restored values: {exc}")
-            return
+            return True  # as below: it may have reset the device and written, so the values in use are read again
         for command in commands:
             self._check_time(deadline, f"storing with {command.label}")
             command.issue(dut)
@@ -374,10 +375,12 @@ class Custody:
 
     def _back_to_found_state(self, record: RestoreRecord) -> None:
         state = self.snapshot.found_state if self.snapshot else None
-        command = COMMAND_FOR_STATE.get(state) if state is not None else None  # type: ignore[call-overload]
+        if state is None:
+            return
+        command = COMMAND_FOR_STATE.get(state)
         if command is not None and command != "pre-operational":
             self.dut.nmt(command)
-            record.written.append(f"NMT {command} (found {STATE_NAMES.get(state, '?')})")  # type: ignore[arg-type]
+            record.written.append(f"NMT {command} (found {STATE_NAMES.get(state, '?')})")
 
     @staticmethod
     def _check_time(deadline: Deadline, doing: str) -> None:

@@ -68,7 +68,8 @@ class LatencyProbe:
         self._stop.set()
         self._thread.join(1.0)
         if self._twin is not None:
-            self._twin_wakeups = [tuple(entry) for entry in self._twin(self._started)]  # type: ignore[misc]
+            # as tuples (a channel may hand pairs over as lists), to sort with the tester's own
+            self._twin_wakeups = [(when, late) for when, late in self._twin(self._started)]
 
     def _run(self) -> None:
         while True:

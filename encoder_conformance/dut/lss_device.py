@@ -46,7 +46,7 @@ class LssDevice:
     power_cycle: Callable[[], None] | None = None  # a bench power switch, where there is one
     moved_to: set[int] = field(default_factory=set)  # node-IDs a test gave the device
     made_unconfigured: bool = False
-    start: Mark | None = None  # before the test's first LSS frame
+    start: Mark = field(init=False)  # before the test's first LSS frame (set at construction)
     unconfigured_since: Mark | None = None  # before the reset or power-on that made it unconfigured
     on_move: Callable[[int], None] | None = None  # told each node-ID before a test gives it (the run's snapshot)
     on_settled: Callable[[], None] | None = None  # told when the device is back where it was found
@@ -229,9 +229,9 @@ class LssDevice:
 def expect_success(answer: LssAnswer | None, what: str) -> LssAnswer:
     """An LSS answer with error 0, else AssertionError naming ``what`` and the answer."""
     problem = failure(answer, what)
-    if problem:
+    if problem or answer is None:  # (no answer is a problem too)
         raise AssertionError(problem)
-    return answer  # type: ignore[return-value]
+    return answer
 
 
 def _from(msg: can.Message, cob_id: int) -> bool:

@@ -132,7 +132,7 @@ def find_revision(master: LssMaster, vendor: int, product: int, serial: int,
 
 
 #: what error 1 means for each configuration service (CiA 305)
-_ERROR_ONE = {
+_ERROR_ONE: dict[int, str] = {
     LssCommand.CONFIGURE_NODE_ID: "node-ID out of range",
     LssCommand.CONFIGURE_BIT_TIMING: "bit timing not supported",
     LssCommand.STORE_CONFIGURATION: "store configuration not supported",

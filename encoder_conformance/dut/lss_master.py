@@ -172,7 +172,8 @@ class LssMaster:
 
     def inquire_address(self) -> LssAddress | None:
         parts = [self.inquire(part) for part in ADDRESS_PARTS]
-        return None if None in parts else LssAddress(*parts)  # type: ignore[arg-type]
+        answered = [part for part in parts if part is not None]
+        return LssAddress(*answered) if len(answered) == len(parts) else None
 
     def inquire_node_id(self) -> int | None:
         found = self.answer(LssCommand.INQUIRE_NODE_ID, self.request(LssCommand.INQUIRE_NODE_ID))
@@ -226,11 +227,11 @@ class LssMaster:
         if self.answer(LssCommand.IDENTIFY_SLAVE, mark, self.response_s) is None:  # a scan's own late-answer rules
             return None
         self._several = len(self.answers(LssCommand.IDENTIFY_SLAVE, mark, ECHO_S)) > 1
-        address = []
+        address: list[int] = []
         for sub in range(4):
-            value = known[sub]
-            if value is None and guess[sub] is not None and self._fastscan_step(guess[sub], 0, sub, (sub + 1) % 4):
-                address.append(guess[sub])
+            value, guessed = known[sub], guess[sub]
+            if value is None and guessed is not None and self._fastscan_step(guessed, 0, sub, (sub + 1) % 4):
+                address.append(guessed)
                 continue
             if value is None:
                 value = 0

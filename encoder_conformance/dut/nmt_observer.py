@@ -8,6 +8,7 @@ stopped, SDO but no PDO in pre-operational, SYNC-driven PDOs in operational (§7
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Protocol
 
 from ..cia301 import NMT_COMMAND_NAMES, STATE_NAMES
@@ -35,6 +36,7 @@ class _Commands:
     """Sending NMT commands and bringing the device into a state, shared by both observers."""
 
     dut: DeviceUnderTest
+    expect_state: Callable[[Mark, int, str], None]  # each observer's own (NmtObserver.expect_state)
 
     def command(self, name: str, node_id: int | None = None) -> Mark:
         if name not in NMT_COMMAND_NAMES:
@@ -45,7 +47,7 @@ class _Commands:
         """Bring the device into pre-operational, operational or stopped and confirm it."""
         command = ENTER[state_name]
         mark = self.command(command)
-        self.expect_state(mark, COMMAND_TARGET[command], f"entering {state_name}")  # type: ignore[attr-defined]
+        self.expect_state(mark, COMMAND_TARGET[command], f"entering {state_name}")
 
 
 class HeartbeatObserver(_Commands):

@@ -29,6 +29,14 @@ class PowerSwitch(Protocol):
     def on(self) -> None: ...
 
 
+class SupplyControl(Protocol):
+    """What switches the simulated twin's supply (the simulator's control client)."""
+
+    def power_off(self) -> None: ...
+
+    def power_on(self) -> None: ...
+
+
 class ShellPowerSwitch:
     """Runs one shell command to switch off and one to switch on (exit status 0 = done)."""
 
@@ -75,16 +83,16 @@ class ManualPowerSwitch:
 class SimulatorPowerSwitch:
     """The simulated twin's supply, through its control channel."""
 
-    def __init__(self, control: object) -> None:
+    def __init__(self, control: SupplyControl) -> None:
         self._control = control
         self.off_time_s = 0.0
         self.description = "the simulator's control channel"
 
     def off(self) -> None:
-        self._control.power_off()  # type: ignore[attr-defined]
+        self._control.power_off()
 
     def on(self) -> None:
-        self._control.power_on()  # type: ignore[attr-defined]
+        self._control.power_on()
 
 
 class BenchPower:

@@ -127,9 +127,10 @@ class Snapshot:
             raise ValueError(f"{path}: not a device snapshot (expected format {FORMAT!r})")
         try:
             entries = [SnapshotEntry(**e) for e in raw.pop("entries")]
-            references = {key: ReferencePoint.from_dict(raw.pop(key, None))  # absent in snapshots of older runs
-                          for key in ("reference_found", "reference_stored")}
-            return cls(entries=entries, **references, **raw)
+            # the reference points are absent in snapshots of older runs
+            found = ReferencePoint.from_dict(raw.pop("reference_found", None))
+            stored = ReferencePoint.from_dict(raw.pop("reference_stored", None))
+            return cls(entries=entries, reference_found=found, reference_stored=stored, **raw)
         except (TypeError, KeyError) as exc:
             raise ValueError(f"{path}: malformed snapshot: {exc}") from None
 

@@ -40,7 +40,8 @@ def fixed_behaviour_tpdos(dut: DeviceUnderTest) -> tuple[set[int], tuple[str, st
     if found is None:
         return set(), None
     quirk_id, params = found
-    fixed = {spec.tpdo for spec in (*params.cyclic_tpdos, *params.polled_tpdos)}
+    specs: list[fx.CyclicTpdo | fx.PolledTpdo] = [*params.cyclic_tpdos, *params.polled_tpdos]
+    fixed = {spec.tpdo for spec in specs}
     if not fixed:
         return set(), None
     title = dut.profile.quirks[quirk_id].title

@@ -52,10 +52,11 @@ def _pdo_steps(profile: DeviceProfile, comm: int, remaining: dict[Key, bytes], c
     cob_target = remaining.pop(cob_key, cob_now)
     invalidate = (_writable(profile, cob_key) and cob_now is not None
                   and not (_as_int(cob_now) or 0) & COB_ID_INVALID)
-    if invalidate:
-        steps.append(Step(cob_key, _with_bits(cob_now, COB_ID_INVALID), temporary=True))  # type: ignore[arg-type]
+    if invalidate and cob_now is not None:  # invalidate implies cob_now
+        steps.append(Step(cob_key, _with_bits(cob_now, COB_ID_INVALID), temporary=True))
     steps += [Step(k, remaining.pop(k)) for k in sorted(k for k in remaining if k[0] == comm)]
     mapping = pdo_mapping_of(comm)
+    assert mapping is not None  # comm is a PDO communication index (_pdo_communication_indices)
     mapped = sorted(k for k in remaining if k[0] == mapping and k[1] > 0)
     count_key = (mapping, 0)
     count_target = remaining.pop(count_key, current.get(count_key))

@@ -130,8 +130,8 @@ def read_scaling(description: EncoderDescription, read: Reader, offset: int) -> 
     """6000h code sequence and scaling bits, 6001h, 6002h and the preset offset given."""
     objects = description.objects
     params = read(objects.operating, 0) or 0
-    always = objects.scaling_bit is None  # POSITAL: the scaling objects always apply
-    enabled = always or (bool(params >> objects.scaling_bit & 1) and description.scaling)  # type: ignore[operator]
+    bit = objects.scaling_bit  # None (POSITAL): the scaling objects always apply
+    enabled = bit is None or (bool(params >> bit & 1) and description.scaling)
     return Scaling(
         ccw=bool(params >> od.CODE_SEQUENCE_BIT & 1),
         enabled=enabled,

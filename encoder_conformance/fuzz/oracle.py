@@ -136,6 +136,7 @@ class Judge:
                 and reply[1:4] == transfer.mux)
 
     def _one(self, exchange: Exchange, rest: list[Exchange] | None = None) -> list[str]:
+        rest = rest or []
         frame, replies = exchange.request.frame, exchange.replies
         if replies and self._ends_open_transfer(frame, replies[0], answered=len(replies) > 1):
             self.transfer = None

@@ -56,5 +56,5 @@ def write_in_background() -> BackgroundWriter | None:
         return None
     logger = loggers[0]
     writer = BackgroundWriter(logger._report_item)
-    logger._report_item = writer.submit  # type: ignore[method-assign]
+    logger._report_item = writer.submit  # type: ignore[method-assign]  # why: replaces allure's method on purpose
     return writer

@@ -102,7 +102,7 @@ def skip_reason_key(reason: str) -> str:
 
 def _banner(summary: RunSummary) -> str:
     verdict = summary.overall
-    counts = Counter(r.outcome for r in summary.results)
+    counts: Counter[str] = Counter(r.outcome for r in summary.results)
     figures = ", ".join(f"{counts[key]} {label if counts[key] > 1 else label.removesuffix('s')}"
                         for key, label in (("passed", "passed"), ("failed", "failed"), ("error", "internal errors"),
                                            ("warning", "warnings"), ("skipped", "skipped")) if counts[key])

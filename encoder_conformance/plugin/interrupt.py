@@ -17,6 +17,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from types import FrameType
+from typing import Any, TypeAlias
 
 from ..exit_codes import interrupted_by
 
@@ -24,6 +25,8 @@ from ..exit_codes import interrupted_by
 RESTORE_BUDGET_S = 1.2
 HARD_LIMIT_S = 1.95
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: what signal.signal takes and gives back: a function, SIG_DFL/SIG_IGN, or None (a handler not set from Python)
+SignalHandler: TypeAlias = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
 
 #: signals that arrived before the run's guard was installed (``catch_early``): a KeyboardInterrupt raised
 #: while the interpreter runs a finaliser or a callback during start-up is printed and dropped, and the run
@@ -52,7 +55,7 @@ class InterruptGuard:
         self.at: float | None = None
         self._shielded = 0
         self._count = 0
-        self._previous: dict[int, object] = {}
+        self._previous: dict[int, SignalHandler] = {}
         self._stderr: int | None = None  # the real stderr: pytest redirects fd 2 while a test runs
 
     @property
@@ -76,7 +79,7 @@ class InterruptGuard:
 
     def uninstall(self) -> None:
         for sig, handler in self._previous.items():
-            signal.signal(sig, handler)  # type: ignore[arg-type]
+            signal.signal(sig, handler)
         self._previous.clear()
         if self._stderr is not None:
             with contextlib.suppress(OSError):

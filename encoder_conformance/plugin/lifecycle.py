@@ -128,7 +128,7 @@ def give_back(config: pytest.Config) -> RestoreRecord | None:
 _RUN: list[pytest.Config | None] = [None]  # the running config, for pytest_keyboard_interrupt (gets none)
 
 
-def give_back_now(excinfo: object) -> None:
+def give_back_now(excinfo: pytest.ExceptionInfo[BaseException]) -> None:
     """Interrupted or stopped: restore at once, before pytest spends time formatting the traceback."""
     config = _RUN[0]
     if config is not None:
@@ -137,7 +137,7 @@ def give_back_now(excinfo: object) -> None:
     traceback = getattr(excinfo, "traceback", None)
     if traceback and type(getattr(excinfo, "value", None)) is KeyboardInterrupt:
         # pytest shows only the last entry of a Ctrl-C; a repr of the whole deep stack takes ~0.5 s
-        excinfo.traceback = traceback[-1:]  # type: ignore[attr-defined]
+        excinfo.traceback = traceback[-1:]
 
 
 def trace(config: pytest.Config, phase: str) -> None:

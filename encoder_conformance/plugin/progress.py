@@ -170,6 +170,8 @@ def pytest_configure(config: pytest.Config) -> None:
     if not wanted(config, sys.stdout.isatty(), os.environ):
         return
     reporter = config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is None:  # -p no:terminal: no terminal output to draw the line in
+        return
     reporter.showfspath = False  # the line replaces 'suites/test_x.py ....'
     writer = config.get_terminal_writer()
     show_after_s = 0.0 if os.environ.get(ENV_SWITCH) == "always" else SHOW_AFTER_S

@@ -201,7 +201,7 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
         relative = evidence.trace_path.relative_to(folder)
         extras.append(html_extras.url(relative.as_posix(), name=TRACE_LINKS[0]))
         extras.append(html_extras.url(relative.with_suffix(".log").as_posix(), name=TRACE_LINKS[1]))
-    report.extras = extras
+    report.extras = extras  # type: ignore[attr-defined]  # why: pytest-html's attribute, undeclared by TestReport
     for quirk_id, _ in evidence.deviations:
         add_property(item, report, "documented_deviation", quirk_id)
 
@@ -225,7 +225,8 @@ def settle_trace(item: pytest.Item) -> None:
     evidence.trace_path = None
     call = item.stash.get(_CALL_REPORT, None)  # pytest-html reads the call's extras at the teardown's logreport
     if call is not None:
-        call.extras = [e for e in getattr(call, "extras", []) if e.get("name") not in TRACE_LINKS]
+        kept = [e for e in getattr(call, "extras", []) if e.get("name") not in TRACE_LINKS]
+        call.extras = kept  # type: ignore[attr-defined]  # why: pytest-html's attribute, undeclared by TestReport
 
 
 class HtmlTable:

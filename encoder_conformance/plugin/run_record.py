@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from ..run_summary import RunSummary, TestResult, area_of
+from ..run_summary import Outcome, RunSummary, TestResult, area_of
 from . import acceptance, lifecycle
 from .evidence import EVIDENCE
 from .options import bench_settings, settings_of
@@ -73,7 +73,7 @@ def _message(report: pytest.TestReport) -> str:
     return text[:MESSAGE_LIMIT]
 
 
-def _outcome(report: pytest.TestReport) -> str | None:
+def _outcome(report: pytest.TestReport) -> Outcome | None:
     """The test's outcome from this phase's report, or None where the phase says nothing new: "error" only for an
     internal error of the tool (plugin/outcomes.py), a finding about the device in any phase is "failed"."""
     if is_internal_error(report):
@@ -89,6 +89,11 @@ def _outcome(report: pytest.TestReport) -> str | None:
     return None
 
 
+def _property(report: pytest.TestReport, name: str) -> str | None:
+    """The first value of a user property of the report (the plugin writes them as text)."""
+    return next((str(v) for k, v in report.user_properties if k == name), None)
+
+
 def note_report(item: pytest.Item, report: pytest.TestReport) -> None:
     """Add or update the test's result (a teardown error turns a pass into an error)."""
     summary = summary_of(item.config)
@@ -96,12 +101,12 @@ def note_report(item: pytest.Item, report: pytest.TestReport) -> None:
     if summary is None or outcome is None:
         return
     evidence = item.stash.get(EVIDENCE, None)
-    basis = next((v for k, v in report.user_properties if k == "verdict_basis"), None)
-    source = next((v for k, v in report.user_properties if k == "verdict_source"), None)
+    basis = _property(report, "verdict_basis")
+    source = _property(report, "verdict_source")
     message = _message(report) if outcome in ("failed", "error", "skipped") else ""
     if outcome == "warning":
-        message = "; ".join(v for k, v in report.user_properties if k == "inferred_problem")
-    lost = next((v for k, v in report.user_properties if k == lifecycle.LOST_PROPERTY), None)
+        message = "; ".join(str(v) for k, v in report.user_properties if k == "inferred_problem")
+    lost = _property(report, lifecycle.LOST_PROPERTY)
     if lost and lost not in message:
         message = f"{message[:MESSAGE_LIMIT // 2]}\n{lost}".strip()
     folder = report_dir(item.config)
@@ -112,11 +117,11 @@ def note_report(item: pytest.Item, report: pytest.TestReport) -> None:
     if existing is not None:  # a failure in the teardown after the call's verdict
         device_failure = outcome == "failed" and existing.outcome != "failed"
         if device_failure or (outcome == "error" and existing.outcome in ("passed", "warning")):
-            existing.outcome, existing.message = outcome, message  # type: ignore[assignment]
+            existing.outcome, existing.message = outcome, message
         elif lost and lost not in existing.message:  # the device went silent: the frames sent last
             existing.message = f"{existing.message[:MESSAGE_LIMIT // 2]}\n{lost}"
         return
-    result = TestResult(item.nodeid, area_of(item.nodeid), outcome, basis,  # type: ignore[arg-type]
+    result = TestResult(item.nodeid, area_of(item.nodeid), outcome, basis,
                         source or (evidence.spec if evidence else None), message, round(report.duration, 3), trace)
     item.stash[_RESULT] = result
     summary.results.append(result)
@@ -131,7 +136,8 @@ def completed(session: pytest.Session) -> RunSummary | None:
     summary, folder = summary_of(config), report_dir(config)
     if summary is None or folder is None:
         return None
-    summary.identity = dict(config.stash.get(IDENTITY, {}))
+    identity = config.stash.get(IDENTITY, {})
+    summary.identity = dict(identity)
     label = config.getoption("--label-serial", default=None)
     if label is not None:
         summary.identity["serial number (label)"] = str(label)

@@ -77,7 +77,7 @@ def judge(item: pytest.Item, report: pytest.TestReport, exc: BaseException | Non
     add_property(item, report, "verdict_basis", basis)
     if evidence.basis_source:
         add_property(item, report, "verdict_source", evidence.basis_source)
-    outcome = report.outcome
+    outcome: str = report.outcome
     if hard_failure and basis == "inferred" and not strict(item.config) and not isinstance(exc, DutLostError):
         # the test's verdict rests on a rule we inferred and its check failed: a warning, as a recorded problem is
         evidence.inferred_problem(failure_text(report), evidence.basis_source or "our reading (no source given)")

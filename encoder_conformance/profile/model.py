@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 from functools import cached_property
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, overload
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -53,6 +53,10 @@ def _access(value: Any) -> Any:
     return value
 
 
+@overload
+def resolve_node_id_expression(value: int | str, node_id: int) -> int | str: ...
+@overload
+def resolve_node_id_expression(value: int | str | None, node_id: int) -> int | str | None: ...
 def resolve_node_id_expression(value: int | str | None, node_id: int) -> int | str | None:
     """Turn '$NODEID+0x180' into an int for ``node_id``; other values pass through."""
     if isinstance(value, str):
@@ -83,6 +87,8 @@ def _check_allowed(entry: EntrySpec, limits: tuple[int, int] | None) -> None:
     if limits is None:
         raise ValueError(f"allowed {text!r}: only integer types have allowed values, not {entry.type}")
     low, high = values.minimum, values.maximum
+    assert low is not None  # ValueSet.parse never gives an empty set
+    assert high is not None
     if low < limits[0] or high > limits[1]:
         raise ValueError(f"allowed {text!r} goes outside {entry.type} ({limits[0]}..{limits[1]})")
     if entry.min is not None and low < entry.min:

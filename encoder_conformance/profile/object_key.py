@@ -27,7 +27,7 @@ def parse_index(value: Any) -> int:
 class ObjectKey(NamedTuple):
     """An object index and sub-index."""
 
-    index: int
+    index: int  # type: ignore[assignment]  # why: CiA's name; the field shadows tuple.index (as it always has)
     sub: int = 0
 
     @classmethod

@@ -11,10 +11,10 @@ from .model import DeviceProfile, EntrySpec, ObjectSpec, resolve_node_id_express
 _ACCESS_TO_EDS = {"const": "const", "ro": "ro", "wo": "wo", "rw": "rw", "rwr": "rwr", "rww": "rww"}
 
 
-def initial_value(profile: DeviceProfile, index: int, sub: int, entry: EntrySpec, node_id: int) -> object:
+def initial_value(profile: DeviceProfile, index: int, sub: int, entry: EntrySpec, node_id: int) -> int | str:
     """The value a factory-fresh twin holds: the default, or the simulator's per-unit value."""
     sim = profile.simulator
-    per_unit = {
+    per_unit: dict[tuple[int, int], int | str] = {
         (0x1018, 3): sim.revision_number,
         (0x1018, 4): sim.serial_number,
         (0x650B, 0): sim.serial_number,  # CiA 406 serial number: the same as 1018h sub 4
@@ -23,9 +23,9 @@ def initial_value(profile: DeviceProfile, index: int, sub: int, entry: EntrySpec
     }
     for key in (f"0x{index:04X}.{sub}", f"0x{index:04X}" if sub == 0 else None):
         if key is not None:
-            for given, value in sim.values.items():
+            for given, given_value in sim.values.items():
                 if given.lower() == key.lower():
-                    return value
+                    return given_value
     if (index, sub) in per_unit and entry.default is None:
         return per_unit[(index, sub)]
     value = resolve_node_id_expression(entry.default, node_id)
@@ -47,11 +47,11 @@ def _variable(
     var.max = entry.max
     value = initial_value(profile, index, sub, entry, node_id)
     if isinstance(entry.default, str) and entry.type not in datatypes.STRING_TYPES:
-        var.default_raw = entry.default  # keep the $NODEID formula for EDS export
+        var.default_raw = entry.default  # type: ignore[attr-defined]  # why: canopen's EDS writer reads it, undeclared
     elif entry.default is not None:
-        var.default_raw = str(entry.default)
-    var.default = value
-    var.value = value
+        var.default_raw = str(entry.default)  # type: ignore[attr-defined]  # why: as above
+    var.default = value  # type: ignore[assignment]  # why: canopen says int, yet its own EDS reader stores str too
+    var.value = value  # type: ignore[assignment]  # why: as for default
     var.description = entry.manual or ""
     return var
 
@@ -82,8 +82,8 @@ def build_object_dictionary(profile: DeviceProfile, node_id: int | None = None) 
     info.vendor_number = profile.identity.vendor_id
     info.product_name = profile.identity.product_name
     info.product_number = profile.identity.product_code
-    info.nr_of_TXPDO = profile.capabilities.tpdos
-    info.nr_of_RXPDO = profile.capabilities.rpdos
+    info.nr_of_TXPDO = profile.capabilities.tpdos  # type: ignore[assignment]  # why: a count; canopen says bool
+    info.nr_of_RXPDO = profile.capabilities.rpdos  # type: ignore[assignment]  # why: as above
     info.simple_boot_up_slave = True
     info.allowed_baudrates = set(profile.bus.bitrates)
     return od

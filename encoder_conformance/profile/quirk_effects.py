@@ -28,6 +28,14 @@ Documentation = Any  # a key a manual documents that no code acts on
 P = TypeVar("P", bound="EffectParams")  # a params model, for typed lookups (``profile.params_of``)
 
 
+def _all_init_events() -> list[InitEvent]:
+    return ["power_on", "nmt_81h", "nmt_82h"]
+
+
+def _tpdo_and_sdo() -> list[Literal["tpdo", "sdo"]]:
+    return ["tpdo", "sdo"]
+
+
 def _doc(what: str) -> Any:
     return Field(default=None, description=f"documentation only: {what}")
 
@@ -163,7 +171,7 @@ class BitsForcedAtInit(ObjectAt):
 
     effect = "bits_forced_at_init"
     forced_bits: int = Field(description="the bits set at each listed event")
-    at: list[InitEvent] = Field(default_factory=lambda: ["power_on", "nmt_81h", "nmt_82h"],
+    at: list[InitEvent] = Field(default_factory=_all_init_events,
                                 description="the initialisation events (default all three)")
 
 
@@ -277,7 +285,7 @@ class LimitSwitchFlags(EffectParams):
     position_mask: int = Field(default=0xFFFFFFFF, description="the bits of the value that hold the position")
     min: LimitSwitch | None = Field(default=None, description="flag while the position is below the limit")
     max: LimitSwitch | None = Field(default=None, description="flag while the position is above the limit")
-    applies_to: list[Literal["tpdo", "sdo"]] = Field(default_factory=lambda: ["tpdo", "sdo"],
+    applies_to: list[Literal["tpdo", "sdo"]] = Field(default_factory=_tpdo_and_sdo,
                                                     description="where the flags show")
     status_bits_zero_mask: Documentation = _doc("bits the manual says read 0")
     sdo_read_of_value_object: Documentation = _doc("what an SDO read shows, as far as the manual says")

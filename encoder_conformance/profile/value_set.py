@@ -105,7 +105,8 @@ class ValueSet:
 
     def outside(self, other: ValueSet) -> ValueSet:
         """The values of this set that ``other`` lacks."""
-        gaps, cursor = [], None
+        gaps: list[tuple[int | None, int | None]] = []
+        cursor: int | None = None
         for start, end in other.ranges:
             gaps.append((cursor, start - 1))
             cursor = end + 1
@@ -125,7 +126,7 @@ class ValueSet:
         Each lies outside the set (the ranges are disjoint and not adjacent), so a device that
         enforces the set must refuse it. Empty when the set covers all of low..high.
         """
-        values = set()
+        values: set[int] = set()
         for start, end in self.ranges:
             values.update(v for v in (start - 1, end + 1) if low <= v <= high)
         return sorted(values)

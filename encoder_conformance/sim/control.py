@@ -8,6 +8,7 @@ the client (``encoder_conformance.sim_process``) stays light: a bench's power co
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from multiprocessing.connection import Connection, Listener
 from typing import TYPE_CHECKING, Any
 
@@ -71,7 +72,7 @@ def _each(nodes: list[Any], method: str) -> None:
 def _execute(host: SimulatorHost, command: str, node_id: int | None, args: tuple[Any, ...]) -> Any:
     node = host.node(node_id)
     device = host.device_nodes(node)  # a redundant device's nodes share one power supply
-    actions = {
+    actions: dict[str, Callable[..., Any]] = {
         "power_cycle": lambda: _each(device, "power_cycle"),
         "power_off": lambda: _each(device, "power_off"),
         "power_on": lambda: _each(device, "power_on"),

@@ -194,7 +194,7 @@ class EncoderFunction:
         return value if isinstance(value, int) else None
 
     # -- writes ------------------------------------------------------------------------------
-    def on_write(self, key: Key, value: int | str | bytes) -> None:
+    def on_write(self, key: Key, value: int | float | str | bytes) -> None:
         """A write passed all checks: freeze the position if the profile says so, apply a preset."""
         duration = self.freeze_rule.duration_s(key[0], value) if self.freeze_rule else 0.0
         if duration > 0:

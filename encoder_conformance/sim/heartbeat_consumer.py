@@ -10,6 +10,7 @@ node (reset, power off) stops the watch.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 
 from ..cia301 import HEARTBEAT_CONSUMER, EmcyCode
 from .faults import breaks
@@ -54,7 +55,7 @@ class HeartbeatConsumer:
             if node != producer or not time_ms:
                 continue
             self._stop_one(sub)
-            self._watches[sub] = self._scheduler.call_later(time_ms / 1000, lambda s=sub: self._timed_out(s))
+            self._watches[sub] = self._scheduler.call_later(time_ms / 1000, partial(self._timed_out, sub))
 
     def _timed_out(self, sub: int) -> None:
         self._watches.pop(sub, None)

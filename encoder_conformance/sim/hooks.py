@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from .nmt import NmtState
 from .nvm import Key
 
-Value = int | str | bytes
+Value = int | float | str | bytes  # float: a REAL32/REAL64 entry
 #: refuses a write by raising SdoAbort
 Gate = Callable[[Key, Value], None]
 #: carries out a command written to an object; True when it consumed the write (nothing is stored)

@@ -16,6 +16,8 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
+from queue import Queue
+from typing import TYPE_CHECKING, Any, cast
 
 import can
 from can.interfaces.virtual import VirtualBus, channels_lock
@@ -26,6 +28,9 @@ from ..profile.quirk_effects import SecondNode
 from .faults import FaultSet
 from .node import SimulatedNode
 from .scheduler import DeadlineScheduler
+
+if TYPE_CHECKING:
+    from can_remote.server import RemoteServer
 
 log = logging.getLogger(__name__)
 SERVER_POLL_S = 0.05
@@ -47,7 +52,7 @@ class _DirectDispatch:
 class SimulatorHost:
     """Owns the bus the simulated nodes sit on."""
 
-    def __init__(self, channel: str, interface: str = "virtual", **bus_kwargs: object) -> None:
+    def __init__(self, channel: str, interface: str = "virtual", **bus_kwargs: Any) -> None:
         self.channel = channel
         self.bus = can.Bus(interface=interface, channel=channel, **bus_kwargs)
         self.scheduler = DeadlineScheduler()
@@ -55,7 +60,7 @@ class SimulatorHost:
         self._primary_of: dict[int, SimulatedNode] = {}  # id(sibling) -> the node whose quirk added it
         self._send_lock = threading.Lock()
         self._notifier = can.Notifier(self.bus, [self._dispatch], timeout=0.05)
-        self._remote = None
+        self._remote: RemoteServer | None = None
 
     def add_node(
         self,
@@ -175,11 +180,12 @@ class SimulatorHost:
         if not isinstance(self.bus, VirtualBus):
             return
         self._notifier.stop()
-        direct = _DirectDispatch(self._dispatch)
+        # cast: python-can types the list as holding Queues; the stand-in has the one method it calls, put
+        direct = cast("Queue[can.Message]", _DirectDispatch(self._dispatch))
         channel = self.bus.channel  # the list of listener queues of this virtual channel
         with channels_lock:
             channel[channel.index(self.bus.queue)] = direct
-        self.bus.queue = direct  # type: ignore[assignment]  # its own frames are still not delivered to it
+        self.bus.queue = direct  # its own frames are still not delivered to it
 
     def shutdown(self) -> None:
         for node in self.nodes:

@@ -94,7 +94,7 @@ class LssConfiguration:
             self.nvm.remove_many(back_to_factory)
         rest = {key: value for key, value in changed.items() if key not in back_to_factory}
         if rest:
-            self.nvm.put_many(rest)  # type: ignore[arg-type]
+            self.nvm.put_many(rest)
 
     # -- what the node starts with ------------------------------------------------------------------
     def stored_node_id(self) -> int | None:

@@ -222,7 +222,8 @@ class SimulatedNode:
 
         def address() -> tuple[int, int, int, int]:  # 1018h as the device shows it (identity faults included)
             parts = [self.current_value((0x1018, sub)) if self.store.has((0x1018, sub)) else 0 for sub in range(1, 5)]
-            return tuple(p if isinstance(p, int) else 0 for p in parts)  # type: ignore[return-value]
+            first, second, third, fourth = (p if isinstance(p, int) else 0 for p in parts)
+            return first, second, third, fourth
 
         self.lss = assemble(LssBehaviour, self.faults)(self.profile, self.nvm, self.store, self.nmt, address,
                                                        self._send, self.faults)
@@ -329,22 +330,22 @@ class SimulatedNode:
                 # every state: each listener knows when a SYNC acts on it (the TPDO engine only in operational,
                 # CiA 301 §7.3.2.2), so that a fault of the listener alone can break that
                 counter = msg.data[0] if msg.dlc >= 1 else None
-                for listener in self.hooks.sync:
-                    listener(counter)
+                for sync_listener in self.hooks.sync:
+                    sync_listener(counter)
                 for length_listener in self.hooks.sync_length:
                     length_listener(msg.dlc)
             elif 0x701 <= can_id <= 0x77F and msg.dlc == 1 and not msg.is_extended_id and not msg.is_remote_frame:
                 for heartbeat_listener in self.hooks.heartbeat:
                     heartbeat_listener(can_id - 0x700)
             elif msg.is_remote_frame and not msg.is_extended_id:
-                for listener in self.hooks.remote_frame:  # answered only by TPDOs that allow RTR
-                    listener(can_id)
+                for rtr_listener in self.hooks.remote_frame:  # answered only by TPDOs that allow RTR
+                    rtr_listener(can_id)
 
     # -- control API (used by the control server and in-process tests) ----------------------
     def position(self) -> int:
         return self.encoder.position()
 
-    def current_value(self, key: Key, channel: str = "sdo") -> int | str | bytes:
+    def current_value(self, key: Key, channel: str = "sdo") -> int | float | str | bytes:
         return self.values.current(key, channel)
 
     def encode_current(self, key: Key, channel: str = "sdo") -> bytes:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 Key = tuple[int, int]
@@ -25,20 +25,20 @@ class NonVolatileMemory:
 
     def __init__(self, path: Path | None = None) -> None:
         self.path = path
-        self._values: dict[Key, int | str] = {}
+        self._values: dict[Key, int | float | str] = {}
         #: told of every change ("stored" / "removed", the keys): the simulator's log
         self.listeners: list[Callable[[str, list[Key]], None]] = []
         if path is not None and path.exists():
             raw = json.loads(path.read_text(encoding="utf-8"))
             self._values = {_decode_key(k): v for k, v in raw.get("values", {}).items()}
 
-    def get(self, key: Key) -> int | str | None:
+    def get(self, key: Key) -> int | float | str | None:
         return self._values.get(key)
 
     def __contains__(self, key: Key) -> bool:
         return key in self._values
 
-    def put_many(self, values: dict[Key, int | str]) -> None:
+    def put_many(self, values: Mapping[Key, int | float | str]) -> None:
         self._values.update(values)
         self._flush()
         for listener in self.listeners:
@@ -51,7 +51,7 @@ class NonVolatileMemory:
         for listener in self.listeners:
             listener("removed (back to defaults)", keys)
 
-    def snapshot(self) -> dict[Key, int | str]:
+    def snapshot(self) -> dict[Key, int | float | str]:
         return dict(self._values)
 
     def _flush(self) -> None:

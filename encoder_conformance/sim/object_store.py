@@ -32,7 +32,7 @@ class ObjectStore:
         self.entries: dict[Key, EntrySpec] = {
             (index, sub): entry for index, sub, _, entry in profile.iter_entries()
         }
-        self.values: dict[Key, int | str | bytes] = {}
+        self.values: dict[Key, int | float | str | bytes] = {}
         excluded = profile.quirk_objects(RestoreExcludes)
         self.restore_excluded = excluded[1] if excluded else frozenset()
         self.reload(lambda index: True, node_id)
@@ -53,10 +53,10 @@ class ObjectStore:
         return datatypes.size_bytes(self.entries[key].type)
 
     # -- values --------------------------------------------------------------------------
-    def get(self, key: Key) -> int | str | bytes:
+    def get(self, key: Key) -> int | float | str | bytes:
         return self.values[key]
 
-    def set(self, key: Key, value: int | str | bytes) -> None:
+    def set(self, key: Key, value: int | float | str | bytes) -> None:
         self.values[key] = value
 
     def encode(self, key: Key) -> bytes:
@@ -67,19 +67,20 @@ class ObjectStore:
             return datatypes.string_bytes(self.entries[key].type, value)
         return self.variable(key).encode_raw(value)
 
-    def decode(self, key: Key, data: bytes) -> int | str | bytes:
+    def decode(self, key: Key, data: bytes) -> int | float | str | bytes:
         entry = self.entries[key]
         if entry.type == "VISIBLE_STRING":
             return data.decode("latin-1")
         if entry.type in datatypes.STRING_TYPES:
             return bytes(data)
-        return self.variable(key).decode_raw(data)
+        value = self.variable(key).decode_raw(data)
+        # canopen hands back the data itself for a type it cannot unpack: as bytes, like the string types above
+        return bytes(value) if isinstance(value, bytearray) else value
 
     # -- persistence ---------------------------------------------------------------------
     def default_of(self, key: Key, node_id: int) -> int | str:
         entry = self.entries[key]
-        value = initial_value(self.profile, key[0], key[1], entry, node_id)
-        return value  # type: ignore[return-value]
+        return initial_value(self.profile, key[0], key[1], entry, node_id)
 
     def reload(self, in_scope: Callable[[int], bool], node_id: int) -> None:
         """Set every entry in scope to its stored value, else its (node-id resolved) default."""
@@ -90,7 +91,7 @@ class ObjectStore:
             if stored is not None and entry.persisted_by != "none":
                 self.values[key] = stored
             else:
-                self.values[key] = resolve_node_id_expression(self.default_of(key, node_id), node_id)  # type: ignore[assignment]
+                self.values[key] = resolve_node_id_expression(self.default_of(key, node_id), node_id)
 
     def storable_keys(self, group: str) -> list[Key]:
         """Entries that 1010h with ``group`` writes to NVM: those labelled so (store_all: every store_* label)."""
@@ -101,20 +102,30 @@ class ObjectStore:
             and (group == "store_all" or entry.persisted_by == group)
         ]
 
+    def nvm_values(self, keys: list[Key]) -> dict[Key, int | float | str]:
+        """The current values of ``keys``, less those NVM does not keep (bytes)."""
+        values: dict[Key, int | float | str] = {}
+        for key in keys:
+            value = self.values[key]
+            if not isinstance(value, bytes):
+                values[key] = value
+        return values
+
     def store(self, group: str) -> None:
         keys = self.storable_keys(group)
-        self.nvm.put_many({key: self.values[key] for key in keys if not isinstance(self.values[key], bytes)})
+        self.nvm.put_many(self.nvm_values(keys))
 
     def store_all_storable(self) -> None:
         """Write every storable entry (store_* groups and manufacturer_store) to NVM at once."""
         storable = ("store_all", "store_comm", "store_app", "store_manufacturer", "manufacturer_store")
         keys = [key for key, entry in self.entries.items() if entry.writable and entry.persisted_by in storable]
-        self.nvm.put_many({key: self.values[key] for key in keys if not isinstance(self.values[key], bytes)})
+        self.nvm.put_many(self.nvm_values(keys))
 
     def persist(self, key: Key) -> None:
         """Write one entry to NVM now (quirk store_automatic), unless it cannot be stored."""
-        if self.entries[key].persisted_by not in ("none", "volatile") and not isinstance(self.values[key], bytes):
-            self.nvm.put_many({key: self.values[key]})
+        value = self.values[key]
+        if self.entries[key].persisted_by not in ("none", "volatile") and not isinstance(value, bytes):
+            self.nvm.put_many({key: value})
 
     def restore_defaults(self, group: str) -> None:
         """Forget stored values of the group; defaults become active at the next reset.
@@ -129,8 +140,9 @@ class ObjectStore:
 
     def persist_auto(self, key: Key) -> None:
         """Entries with persisted_by: auto go to NVM on every write."""
-        if self.entries[key].persisted_by == "auto" and not isinstance(self.values[key], bytes):
-            self.nvm.put_many({key: self.values[key]})
+        value = self.values[key]
+        if self.entries[key].persisted_by == "auto" and not isinstance(value, bytes):
+            self.nvm.put_many({key: value})
 
 
 @breaks(ObjectStore, "wrong_default")

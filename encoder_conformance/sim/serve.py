@@ -106,14 +106,15 @@ def serve(
         host.add_node(node.profile, node.node_id, nvm_path, FaultSet(faults), serial_number=node.serial_number,
                       booted=True)
     host.add_siblings()  # second_node quirk: the redundant interface's other node
+    can_url = f"ws://{can_host}:{can_port}/"
     info = {
-        "can": f"ws://{can_host}:{can_port}/",
+        "can": can_url,
         "control": control_address,
         "node_id": host.nodes[0].node_id,
         "nodes": [{**node.describe(), "serial_number": node.profile.simulator.serial_number}
                   for node in host.nodes],
     }
-    _log_start(host, info["can"], control_address)
+    _log_start(host, can_url, control_address)
     if ready_line:
         print("READY " + json.dumps(info), flush=True)
     else:

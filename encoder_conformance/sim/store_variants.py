@@ -49,8 +49,8 @@ class ParameterSets:
     def save_set(self, sub: int, store: ObjectStore, nvm: NonVolatileMemory) -> None:
         """1010h sub: copy the set objects' current values into their set."""
         number = self.saves_set[sub]
-        nvm.put_many({set_slot(number, key): store.get(key) for key in self.set_objects  # type: ignore[misc]
-                      if store.has(key) and not isinstance(store.get(key), bytes)})
+        values = store.nvm_values([key for key in self.set_objects if store.has(key)])
+        nvm.put_many({set_slot(number, key): value for key, value in values.items()})
 
     def reload(self, sub: int, store: ObjectStore, nvm: NonVolatileMemory, default: Callable[[Key], Any],
                group_keys: Callable[[int], list[Key]]) -> None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from functools import partial
 
 from ..cia301 import COB_ID_INVALID, COB_ID_NO_RTR, RTR_EVENT, RTR_SYNCHRONOUS, SYNC_COUNTER_OVERFLOW
 from .faults import breaks
@@ -182,7 +183,7 @@ class TpdoEngine:
             if config.event_timer_ms > 0:
                 period = self.timer_period_s(config)
                 self._jobs.append(
-                    self._scheduler.call_later(period, lambda c=config: self._transmit(c), period)
+                    self._scheduler.call_later(period, partial(self._transmit, config), period)
                 )
         if any(c.on_change for c in self._configs):
             self._jobs.append(self._scheduler.call_later(CHANGE_POLL_S, self._poll_changes, CHANGE_POLL_S))

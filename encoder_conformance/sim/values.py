@@ -80,4 +80,4 @@ IDENTITY_FAULTS = [
 class WrongDeviceName(ObjectValues):
     def shown(self, key: Key, value: Value) -> Value:
         value = super().shown(key, value)
-        return f"X{value}" if key == (0x1008, 0) else value
+        return f"X{value}" if key == (0x1008, 0) and isinstance(value, str) else value  # 1008h: a VISIBLE_STRING

@@ -30,7 +30,7 @@ def _only_profile_defaults(profile: DeviceProfile, od: canopen.ObjectDictionary)
         var = _od_variable(od, index, sub)
         if entry.default is None:
             var.default = None
-            var.default_raw = None
+            var.default_raw = None  # type: ignore[attr-defined]  # why: canopen's EDS writer reads it, undeclared
         if isinstance(var.value, str) and var.data_type in (
             canopen.objectdictionary.OCTET_STRING,
             canopen.objectdictionary.DOMAIN,

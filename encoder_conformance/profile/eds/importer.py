@@ -140,10 +140,12 @@ def _entry(var: ODVariable, cleaned: CleanedEds, notes: list[str]) -> dict[str, 
     where = f"0x{var.index:04X}.{var.subindex} {var.name!r}"
     section = cleaned.sections.get(_section_of(var), {})
     declared = parse_number(section.get("DataType", ""))  # canopen turns an unknown type into DOMAIN silently
-    unknown = var.data_type if _type_name(var.data_type) is None else declared
-    type_name = _type_name(var.data_type)
+    data_type = var.data_type
+    assert data_type is not None  # canopen's EDS reader always sets it (from the required DataType)
+    type_name = _type_name(data_type)
+    unknown = data_type if type_name is None else declared
     entry: dict[str, Any] = {}
-    if unknown is not None and _type_name(unknown) is None:
+    if type_name is None or (unknown is not None and _type_name(unknown) is None):  # the first implies the second
         notes.append(f"{where}: data type 0x{unknown:04X} is not a CiA 301 basic type; read as DOMAIN (bytes "
                      "as found): set the real type")
         type_name = "DOMAIN"
@@ -154,7 +156,7 @@ def _entry(var: ODVariable, cleaned: CleanedEds, notes: list[str]) -> dict[str, 
         entry["default"] = default
     low = _convert_value(section.get("LowLimit"), type_name, where, "LowLimit", notes, is_default=False)
     high = _convert_value(section.get("HighLimit"), type_name, where, "HighLimit", notes, is_default=False)
-    if low is not None and high is not None and low > high:
+    if isinstance(low, int) and isinstance(high, int) and low > high:  # limits are numbers (or None)
         notes.append(f"{where}: LowLimit {low} > HighLimit {high}; limits dropped")
         low = high = None
     if low is not None:

@@ -196,8 +196,8 @@ def _expand_compact(
     main = sections[obj.main]
     names = sections.pop(f"{obj.index:04X}Name", {})
     values = sections.pop(f"{obj.index:04X}Value", {})
-    template = {k: main.pop(k) for k in ("DataType", "AccessType", "PDOMapping", "LowLimit", "HighLimit")
-                if k in main}  # fmt: skip
+    template: dict[str, str] = {k: main.pop(k) for k in ("DataType", "AccessType", "PDOMapping", "LowLimit",
+                                                         "HighLimit") if k in main}  # fmt: skip
     default = main.pop("DefaultValue", None)
     entries = {0: {"ParameterName": "Highest sub-index supported", "ObjectType": "0x7",
                    "DataType": "0x0005", "AccessType": "ro", "DefaultValue": str(count)}}  # fmt: skip
