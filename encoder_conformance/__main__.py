@@ -1,7 +1,7 @@
 import sys
 
 try:
-    from .cli import console_main
+    from encoder_conformance.cli.main import console_main
 except KeyboardInterrupt:  # Ctrl-C while Python is still importing: nothing was touched
     sys.exit(130)
 

@@ -7,6 +7,11 @@ class EncoderConformanceError(Exception):
     """Root of every error this library raises on purpose."""
 
 
+class UsageError(EncoderConformanceError):
+    """A bad option, file or combination on the command line: the message names it and says how to fix it
+    (one line on stderr, exit code 4)."""
+
+
 class ProfileError(EncoderConformanceError):
     """A device profile file is missing, malformed or inconsistent.
 

@@ -3,7 +3,7 @@
 Every test writes the CAM settings of channel 1 (high limits before low limits, where the device
 refuses a low limit that is not below its high limit), puts the position where each check needs it
 by presetting (no rotation needed, so the tests run on a bench without a motor) and compares 6300h
-sub 1 with the reference model (``encoder_model.cam``) fed with the settings read back from the
+sub 1 with the reference model (``models.encoder.cam``) fed with the settings read back from the
 device, step by step so that the hysteresis history is the device's. What each rule rests on:
 
 - window, polarity, enable: CiA 406 6300h..6302h, 6310h..6327h (WDGA M §7.5);
@@ -23,18 +23,18 @@ from dataclasses import dataclass, field, replace
 
 import pytest
 
-from encoder_conformance.checks import abort_accepted
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.pdo_mapping import MappingCustody, apply_mapping, describe, read_mapping
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
-from encoder_conformance.encoder_model import objects as od
-from encoder_conformance.encoder_model.cam import Cam
-from encoder_conformance.encoder_model.position import units_per_rev
-from encoder_conformance.encoder_model.reference import EncoderReference
+from encoder_conformance.models.encoder import objects as od
+from encoder_conformance.models.encoder.cam import Cam
+from encoder_conformance.models.encoder.position import units_per_rev
+from encoder_conformance.models.encoder.reference import EncoderReference
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import abort_accepted
 from fixtures.dut import return_to_preoperational
 from fixtures.encoder import EncoderBench
 

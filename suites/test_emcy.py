@@ -19,8 +19,7 @@ import time
 import can
 import pytest
 
-from encoder_conformance.checks import inconclusive_if_host_late
-from encoder_conformance.cia301 import (
+from encoder_conformance.cia.cia301 import (
     COB_ID_INVALID,
     EMCY_COB_ID,
     EMCY_INHIBIT_TIME,
@@ -32,6 +31,7 @@ from encoder_conformance.dut.emcy_trigger import HeartbeatTimeout, SyncLengthErr
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import inconclusive_if_host_late
 from fixtures.dut import return_to_preoperational
 from fixtures.nmt_state import start_operational
 

@@ -1,6 +1,6 @@
 """The encoder's position function (CiA 406 6000h-6004h, 6030h, 6500h, 6509h) against the reference model.
 
-Every expectation comes from ``encoder_conformance.encoder_model`` fed with the settings read from
+Every expectation comes from ``encoder_conformance.models.encoder`` fed with the settings read from
 the device, so what the twin computes and what the suite expects are one definition. The preset
 moves the position where a check needs it (any bench); checks of counting direction, scaling,
 the wrap and speed need real rotation and skip on a bench without a shaft drive. Settings, the
@@ -13,14 +13,14 @@ import time
 
 import pytest
 
-from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.reference_custody import ReferenceCustody
 from encoder_conformance.dut.store_watch import AUTO_STORED
-from encoder_conformance.encoder_model import objects as od
-from encoder_conformance.encoder_model.position import position_limits, units_per_rev, unsigned_in_span
+from encoder_conformance.models.encoder import objects as od
+from encoder_conformance.models.encoder.position import position_limits, units_per_rev, unsigned_in_span
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import documented_quirk
 
 pytestmark = [pytest.mark.spec("CiA 406 §6 (6000h-6004h, 6500h, 6509h)"), pytest.mark.requires("encoder")]
 

@@ -17,9 +17,9 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
 
-from encoder_conformance.encoder_model import objects as od
-from encoder_conformance.encoder_model.cam import cam_state
-from encoder_conformance.encoder_model.position import units_per_rev, unsigned_in_span
+from encoder_conformance.models.encoder import objects as od
+from encoder_conformance.models.encoder.cam import cam_state
+from encoder_conformance.models.encoder.position import units_per_rev, unsigned_in_span
 
 pytestmark = [pytest.mark.spec("CiA 406 §6 (6000h-6003h, 6300h-6302h)"), pytest.mark.destructive,
               pytest.mark.requires("encoder", "preset")]

@@ -16,9 +16,8 @@ from contextlib import nullcontext
 
 import pytest
 
-from encoder_conformance import cia305
-from encoder_conformance.checks import documented_quirk
-from encoder_conformance.cia305 import (
+from encoder_conformance.cia import cia305
+from encoder_conformance.cia.cia305 import (
     AUTO_BIT_RATE_INDEX,
     FASTSCAN_RESET_BIT,
     MAX_NODE_ID,
@@ -30,6 +29,7 @@ from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.lss_device import LssDevice, expect_success
 from encoder_conformance.dut.lss_master import LssAddress
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import documented_quirk
 from fixtures.lss import (
     SWITCH_DELAY_MS,
     activate,

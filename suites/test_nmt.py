@@ -4,15 +4,15 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.checks import documented_quirk
-from encoder_conformance.cia301 import COB_ID_INVALID, STATE_NAMES, cob_id_valid
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, STATE_NAMES, cob_id_valid
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
 from encoder_conformance.dut.stimulus import pdo_stimulus
-from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import documented_quirk
+from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2 (NMT state machine)")
 

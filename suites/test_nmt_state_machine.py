@@ -1,5 +1,5 @@
 """Generated sequences of NMT commands, SDO reads and writes, heartbeat changes and SYNCs, checked after
-every step against the CiA 301 model of a node (encoder_conformance/nmt_model.py, hypothesis stateful).
+every step against the CiA 301 model of a node (encoder_conformance/models/nmt.py, hypothesis stateful).
 
 Each step is one of: an NMT command (all five, to the node, to all nodes, or start / enter
 pre-operational to another node-ID, which must change nothing); an SDO write of a value the model
@@ -36,15 +36,15 @@ from hypothesis import strategies as st
 from hypothesis.control import currently_in_test_context
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule, run_state_machine_as_test
 
-from encoder_conformance.cia301 import COB_ID_INVALID, STATE_NAMES, NmtCommand, NmtState
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, STATE_NAMES, NmtCommand, NmtState
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver
 from encoder_conformance.dut.sdo_frames import upload_request
-from encoder_conformance.nmt_model import NmtModel, Tracked
-from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter
+from encoder_conformance.models.nmt import NmtModel, Tracked
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
+from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2.2 (NMT state diagram, services per state, initialisation)")
 

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.checks import documented_quirk
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import documented_quirk
 from fixtures.nmt_state import start_operational
 from fixtures.tpdo import configurable_tpdo as _configurable_tpdo
 

@@ -16,8 +16,7 @@ import can
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.checks import abort_accepted, expected_aborts
-from encoder_conformance.cia301 import (
+from encoder_conformance.cia.cia301 import (
     COB_ID_FIXED_WHILE_VALID,
     COB_ID_INVALID,
     COB_ID_NO_RTR,
@@ -34,6 +33,7 @@ from encoder_conformance.dut.sdo_frames import abort_name
 from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
+from encoder_conformance.suite_support.checks import abort_accepted, expected_aborts
 from fixtures.dut import return_to_preoperational
 from fixtures.nmt_state import start_operational
 from fixtures.tpdo import configurable_tpdo, maps_position

@@ -17,8 +17,7 @@ from dataclasses import dataclass
 
 import pytest
 
-from encoder_conformance.checks import assert_abort, documented_quirk, expected_aborts
-from encoder_conformance.cia301 import (
+from encoder_conformance.cia.cia301 import (
     COB_ID_INVALID,
     DUMMY_BITS,
     PDO_MAX_BITS,
@@ -41,6 +40,7 @@ from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import assert_abort, documented_quirk, expected_aborts
 from fixtures.dut import return_to_preoperational
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.38 (TPDO mapping)"), pytest.mark.requires("tpdos")]

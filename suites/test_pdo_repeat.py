@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.checks import documented_quirk
-from encoder_conformance.cia301 import COB_ID_INVALID, cob_id_valid
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import documented_quirk
 
 RESET_EVENTS = {"reset-node": "nmt_81h", "reset-communication": "nmt_82h"}
 

@@ -16,11 +16,11 @@ import time
 import can
 import pytest
 
-from encoder_conformance.checks import inconclusive_if_host_late
-from encoder_conformance.cia301 import SYNC_COB_ID
+from encoder_conformance.cia.cia301 import SYNC_COB_ID
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
+from encoder_conformance.suite_support.checks import inconclusive_if_host_late
 from fixtures.tpdo import configurable_tpdo, mapped_bytes_of, maps_position
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37"), pytest.mark.requires("tpdos"),

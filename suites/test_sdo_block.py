@@ -17,11 +17,11 @@ from collections.abc import Iterator
 
 import pytest
 
-from encoder_conformance.checks import judge_refusal
-from encoder_conformance.cia301 import SdoAbortCode, block_crc
+from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
 from encoder_conformance.dut.sdo_client import SdoProtocolClient
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import judge_refusal
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3.9-16 (SDO block transfer)")
 

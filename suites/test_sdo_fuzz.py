@@ -19,13 +19,13 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from encoder_conformance.checks import abort_accepted
-from encoder_conformance.cia301 import COB_ID_INVALID, SdoAbortCode
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, SdoAbortCode
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.fuzz import exclusions, replay, rounds
 from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.runner import Failure, FuzzRunner
 from encoder_conformance.fuzz.watch import EMCY_RULE, DeviceWatch
+from encoder_conformance.suite_support.checks import abort_accepted
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocol)")
 

@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.checks import expected_aborts, judge_refusal
-from encoder_conformance.cia301 import SdoAbortCode
+from encoder_conformance.cia.cia301 import SdoAbortCode
 from encoder_conformance.dut.device import SdoAborted
 from encoder_conformance.dut.sdo_client import SdoProtocolClient, echoes
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name, upload_request
 from encoder_conformance.profile import datatypes
+from encoder_conformance.suite_support.checks import expected_aborts, judge_refusal
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocols)")
 

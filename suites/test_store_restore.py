@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.checks import assert_abort, documented_quirk, expected_aborts
-from encoder_conformance.cia301 import LOAD, SAVE
+from encoder_conformance.cia.cia301 import LOAD, SAVE
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
-from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import assert_abort, documented_quirk, expected_aborts
+from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.13/§7.5.2.14"), pytest.mark.destructive]
 

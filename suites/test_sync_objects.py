@@ -16,8 +16,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.checks import abort_accepted
-from encoder_conformance.cia301 import (
+from encoder_conformance.cia.cia301 import (
     COB_ID_SYNC_GENERATE,
     COMMUNICATION_CYCLE_PERIOD,
     RESTRICTED_CAN_IDS,
@@ -30,6 +29,7 @@ from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
+from encoder_conformance.suite_support.checks import abort_accepted
 from fixtures.tpdo import configurable_tpdo
 
 pytestmark = [pytest.mark.spec("CiA 301 v4.2.0 §7.5.2.5 object 1005h (COB-ID SYNC)"),

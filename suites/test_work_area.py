@@ -2,7 +2,7 @@
 
 The limits are written so that low <= high at every moment, the position is put where each check needs
 it by presetting (no rotation needed), and 6400h sub 1 is compared with the reference model
-(``encoder_model.work_area``) fed with the limits read back from the device. The state values (00h
+(``models.encoder.work_area``) fed with the limits read back from the device. The state values (00h
 inside, 02h above the high limit, 04h below the low limit) rest on CiA 406 6400h and WDGA T 6.9;
 that the limits themselves belong to the work area is our inference (no text we know says so).
 """
@@ -13,8 +13,8 @@ from dataclasses import dataclass, field, replace
 
 import pytest
 
-from encoder_conformance.encoder_model import objects as od
-from encoder_conformance.encoder_model.reference import EncoderReference
+from encoder_conformance.models.encoder import objects as od
+from encoder_conformance.models.encoder.reference import EncoderReference
 from encoder_conformance.plugin.evidence import Evidence
 from fixtures.encoder import EncoderBench
 

@@ -23,12 +23,12 @@ from pathlib import Path
 import canopen
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
-from encoder_conformance.cia301 import SAVE
+from encoder_conformance.cia.cia301 import SAVE
 from encoder_conformance.dut import connection
 from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim_process import SimulatorControl, SimulatorProcess, start_simulator
+from encoder_conformance.sim.process import SimulatorControl, SimulatorProcess, start_simulator
 
 REPO = Path(__file__).resolve().parents[1]
 PROFILE = "wachendorff-wdga-mt"

@@ -18,7 +18,7 @@ from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.dut.sdo_frames import upload_request
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim_process import start_simulator
+from encoder_conformance.sim.process import start_simulator
 
 PROFILE = "wachendorff-wdga-mt"
 

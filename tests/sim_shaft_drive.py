@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from encoder_conformance.sim_process import SimulatorControl, parse_address
+from encoder_conformance.sim.process import SimulatorControl, parse_address
 
 if TYPE_CHECKING:
     from encoder_conformance.dut.actuator import ShaftDriveConfig

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from encoder_conformance.suite_runner import SessionResult, run_pytest
+from encoder_conformance.runs.suite_runner import SessionResult, run_pytest
 
 REPO = Path(__file__).resolve().parents[1]
 

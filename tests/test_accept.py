@@ -17,12 +17,12 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.accept_cli import exit_code, format_verdict
+from encoder_conformance.cli.accept import exit_code, format_verdict
+from encoder_conformance.config.station import StationError, load_station
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.plugin.acceptance import IDENTITY_CHECK, SELECTION, pytest_args
 from encoder_conformance.profile.model import SerialFormat
 from encoder_conformance.run_summary import RunSummary, TestResult
-from encoder_conformance.station import StationError, load_station
 
 REPO = Path(__file__).resolve().parents[1]
 #: fixtures that reset, power-cycle or store: none may be in an acceptance

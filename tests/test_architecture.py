@@ -81,12 +81,12 @@ def test_the_import_reader_sees_every_import(tmp_path):
     module.write_text(
         "from typing import TYPE_CHECKING\n"
         "if TYPE_CHECKING:\n    from .access import NodeObjectAccess\n"
-        "def f():\n    from ..dut import device\n    import encoder_conformance.cia301\n",
+        "def f():\n    from ..dut import device\n    import encoder_conformance.cia.cia301\n",
         encoding="utf-8",
     )
     found = _imports(module, root=tmp_path)
     assert {"encoder_conformance.sim.access", "encoder_conformance.dut.device",
-            "encoder_conformance.cia301"} <= found
+            "encoder_conformance.cia.cia301"} <= found
 
 
 def test_the_loop_finder_names_every_loop():
@@ -111,17 +111,57 @@ def test_only_the_simulator_fixture_imports_the_simulator(folder):
     assert offenders == []
 
 
-def test_simulator_imports_nothing_of_the_tester_side():
-    """sim/ stands behind the bus: it may use the profile and the CiA vocabulary, not the DUT layer,
-    the plugin, the command line or the suites' helpers."""
-    tester_side = ("dut", "plugin", "cli", "fault_matrix", "checks", "parameters", "sim_process", "restore_command",
-                   "lss_cli", "lss_command")
-    offenders = {
-        name: sorted(i for i in imports if i.split(".")[1] in tester_side)
-        for name, imports in _library_graph().items()
-        if name.startswith("encoder_conformance.sim.")
-    }
-    assert {k: v for k, v in offenders.items() if v} == {}
+#: the library's packages, bottom to top: a package imports from its own folder and lower layers only, never from
+#: a neighbour in its own layer (the simulator stands behind the bus: sim/ and dut/ share no code but the layers
+#: below them). "(root)" is the package's own top-level modules (errors, exit codes, paths, basis, run summary).
+LAYERS: list[set[str]] = [
+    {"(root)"},
+    {"cia", "config", "vcan"},
+    {"profile"},
+    {"models", "readings"},
+    {"dut", "sim", "history"},
+    {"fuzz", "plugin"},
+    {"suite_support"},
+    {"runs"},
+    {"cli"},
+]
+
+
+def _package_of(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 2 or (len(parts) == 2 and (LIBRARY / parts[1]).is_dir()) else "(root)"
+
+
+def test_every_package_has_a_layer_and_says_what_it_holds():
+    """A new folder is placed in the layer picture, and its __init__ docstring says what it holds."""
+    folders = {p.name for p in LIBRARY.iterdir() if (p / "__init__.py").is_file()}
+    placed = set().union(*LAYERS)
+    assert folders - placed == set()
+    undocumented = [f for f in sorted(folders) if not ast.get_docstring(ast.parse(
+        (LIBRARY / f / "__init__.py").read_text(encoding="utf-8")))]
+    assert undocumented == []
+
+
+def test_root_holds_only_the_bottom_layer():
+    """The package root keeps the modules every layer may use; each concern has a folder."""
+    root_modules = sorted(p.stem for p in LIBRARY.glob("*.py"))
+    assert root_modules == ["__init__", "__main__", "basis", "errors", "exit_codes", "paths", "run_summary"]
+
+
+def test_packages_import_only_lower_layers():
+    """Imports run downwards: no package reaches up or sideways (e.g. the simulator never imports the DUT
+    layer, the plugin or the command line; the run tools never import the command line)."""
+    layer_of = {package: n for n, packages in enumerate(LAYERS) for package in packages}
+    upward = []
+    for name, imports in _library_graph().items():
+        if name in ("encoder_conformance", "encoder_conformance.__main__"):  # the entry points sit on top
+            continue
+        own = _package_of(name)
+        for target in imports:
+            other = _package_of(target)
+            if other != own and layer_of.get(other, -1) >= layer_of[own]:
+                upward.append(f"{name} -> {target}")
+    assert sorted(upward) == []
 
 
 def test_no_module_over_400_lines_without_a_reason():
@@ -135,16 +175,16 @@ def test_no_module_over_400_lines_without_a_reason():
     assert long == []
 
 
-#: CiA 301 numbers that only encoder_conformance/cia301.py may spell out (signatures, abort codes)
+#: CiA 301 numbers that only encoder_conformance/cia/cia301.py may spell out (signatures, abort codes)
 CIA_LITERALS = re.compile(r"0x(65766173|64616F6C|0[5-8]0[0-9A-F]{5})\b", re.IGNORECASE)
 
 
 def test_cia_numbers_are_defined_once():
-    """The 'save'/'load' signatures and SDO abort codes are named in cia301.py and imported elsewhere."""
+    """The 'save'/'load' signatures and SDO abort codes are named in cia/cia301.py and imported elsewhere."""
     spelled = []
     for folder in (LIBRARY, REPO / "suites", REPO / "fixtures"):
         for path in folder.rglob("*.py"):
-            if path.name == "cia301.py":
+            if path.relative_to(REPO).as_posix() == "encoder_conformance/cia/cia301.py":
                 continue
             for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
                 code = line.split("#", 1)[0]

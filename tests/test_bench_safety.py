@@ -28,7 +28,7 @@ import pytest
 from bench_twin import CUSTOMER_VALUES, REPO, as_found_problems, start_twin, wait_for_line
 
 from encoder_conformance.exit_codes import RunExit
-from encoder_conformance.host_load import busy_process
+from encoder_conformance.runs.host_load import busy_process
 
 #: seconds after the start of the run at which Ctrl-C arrives (the suites start about 1.5 s in)
 INTERRUPT_AT_S = [1.0, 2.0, 3.0, 4.5, 6.0, 7.5, 9.0]  # 10.5 s and 12 s came after the end of faster runs

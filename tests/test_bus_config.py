@@ -1,4 +1,4 @@
-"""Bus configuration precedence and the recorded source of every setting (bus_config.py).
+"""Bus configuration precedence and the recorded source of every setting (config/bus.py).
 
 python-can reads can.rc, CAN_* environment variables and config files; each test starts from a
 clean slate (empty can.rc, no CAN_* variables, no config files) and adds one source at a time.
@@ -12,7 +12,7 @@ import can
 import can.util
 import pytest
 
-from encoder_conformance.bus_config import SIMULATOR, BusConfig, resolve_bus_config
+from encoder_conformance.config.bus import SIMULATOR, BusConfig, resolve_bus_config
 from encoder_conformance.errors import EncoderConformanceError
 
 ENV_VARS = ("CAN_INTERFACE", "CAN_CHANNEL", "CAN_BITRATE", "CAN_CONFIG")

@@ -1,7 +1,7 @@
 """The command line: faults, profile list, and ``sim`` serving a simulator on python-can-remote.
 
 The quick commands run as subprocesses started together by one module fixture; ``sim`` is
-started through sim_process.start_simulator, which waits for its READY line.
+started through sim.process.start_simulator, which waits for its READY line.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import can
 import pytest
 
 from encoder_conformance.dut.frames import FrameLog
-from encoder_conformance.fault_catalogue import FAULTS, VARIANTS
 from encoder_conformance.profile.loader import DEFAULT_PROFILE_DIR
-from encoder_conformance.sim_process import SimulatorControl, start_simulator
+from encoder_conformance.sim.fault_catalogue import FAULTS, VARIANTS
+from encoder_conformance.sim.process import SimulatorControl, start_simulator
 
 REPO = Path(__file__).resolve().parents[1]
 MINIMAL = REPO / "tests" / "data" / "profiles" / "minimal-encoder.yaml"

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance import cli
+from encoder_conformance.cli import main as cli
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.plugin import interrupt
 from encoder_conformance.profile.loader import DEFAULT_PROFILE_DIR

@@ -12,8 +12,10 @@ from types import SimpleNamespace
 import can
 import pytest
 
-from encoder_conformance.bus_config import BusConfig
-from encoder_conformance.cia301 import LOAD, SAVE
+from encoder_conformance.cia.cia301 import LOAD, SAVE
+from encoder_conformance.cli.restore import RestoreRequest, restore_from_snapshot
+from encoder_conformance.config.bus import BusConfig
+from encoder_conformance.config.station import StationError, load_station
 from encoder_conformance.dut.custody import Custody, RestoreRecord
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.encoder_access import EncoderAccess
@@ -27,8 +29,6 @@ from encoder_conformance.dut.write_plan import SCALING_GATE, plan_writes
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile
-from encoder_conformance.restore_command import RestoreRequest, restore_from_snapshot
-from encoder_conformance.station import StationError, load_station
 from tests import sim_rig
 from tests.sim_rig import WAIT_S, Rig
 

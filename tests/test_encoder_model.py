@@ -15,10 +15,10 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-import encoder_conformance.encoder_model.objects as od
-from encoder_conformance.encoder_model.cam import Cam, CamChannel, CamRules, CamTracker, cam_state, inside
-from encoder_conformance.encoder_model.objects import EncoderObjects
-from encoder_conformance.encoder_model.position import (
+import encoder_conformance.models.encoder.objects as od
+from encoder_conformance.models.encoder.cam import Cam, CamChannel, CamRules, CamTracker, cam_state, inside
+from encoder_conformance.models.encoder.objects import EncoderObjects
+from encoder_conformance.models.encoder.position import (
     EncoderGeometry,
     Scaling,
     counts_for_position,
@@ -32,15 +32,15 @@ from encoder_conformance.encoder_model.position import (
     turns_for_counts,
     unsigned_in_span,
 )
-from encoder_conformance.encoder_model.reference import EncoderReference
-from encoder_conformance.encoder_model.settings import (
+from encoder_conformance.models.encoder.reference import EncoderReference
+from encoder_conformance.models.encoder.settings import (
     DEFAULT_STEPS_PER_REV,
     EncoderDescription,
     EncoderSettings,
     read_settings,
 )
-from encoder_conformance.encoder_model.speed import S16_MAX, S16_MIN, speed_value
-from encoder_conformance.encoder_model.work_area import ABOVE, BELOW, area_state
+from encoder_conformance.models.encoder.speed import S16_MAX, S16_MIN, speed_value
+from encoder_conformance.models.encoder.work_area import ABOVE, BELOW, area_state
 
 MANY = settings(max_examples=max(200, settings().max_examples))  # never fewer than the profile
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.fault_catalogue import FAULTS, faults_for
-from encoder_conformance.fault_matrix import REPO_ROOT, format_matrix, run_matrix, run_until_caught
 from encoder_conformance.profile.loader import load_profile
+from encoder_conformance.runs.fault_matrix import REPO_ROOT, format_matrix, run_matrix, run_until_caught
+from encoder_conformance.sim.fault_catalogue import FAULTS, faults_for
 
 MAIN_PROFILE = "wachendorff-wdga-mt"
 #: profiles with what the WDGA lacks, tried in order: a write-only object; a store-by-reboot command;

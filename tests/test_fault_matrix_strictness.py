@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from encoder_conformance import fault_matrix
-from encoder_conformance.fault_catalogue import FAULTS, JUDGED_STRICTLY
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
-from encoder_conformance.suite_runner import SessionResult
+from encoder_conformance.runs import fault_matrix
+from encoder_conformance.runs.suite_runner import SessionResult
+from encoder_conformance.sim.fault_catalogue import FAULTS, JUDGED_STRICTLY
 
 JUNIT = '<testsuite><testcase classname="suites.test_cam" name="test_something"/></testsuite>'
 

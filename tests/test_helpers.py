@@ -12,11 +12,11 @@ import pytest
 
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import FrameLog, format_frames
-from encoder_conformance.parameters import STORE_GROUPS, changeable_parameter
+from encoder_conformance.models.timing import interval_stats
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import HeartbeatTolerance
 from encoder_conformance.sim.nvm import NonVolatileMemory
-from encoder_conformance.timing import interval_stats
+from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter
 
 MINIMAL = Path(__file__).resolve().parent / "data" / "profiles" / "minimal-encoder.yaml"
 
@@ -193,8 +193,8 @@ def test_nvm_in_memory_writes_no_file(tmp_path):
 
 
 def test_quirk_faults_name_known_faults_and_effects():
-    from encoder_conformance.fault_catalogue import FAULTS, QUIRK_EFFECT_OF_FAULT, faults_for
     from encoder_conformance.profile.quirks import EFFECTS
+    from encoder_conformance.sim.fault_catalogue import FAULTS, QUIRK_EFFECT_OF_FAULT, faults_for
 
     assert set(QUIRK_EFFECT_OF_FAULT) <= set(FAULTS)
     assert set(QUIRK_EFFECT_OF_FAULT.values()) <= set(EFFECTS)
@@ -208,7 +208,7 @@ def test_every_suite_module_is_the_target_of_a_fault_group():
     """A new suite module needs faults made for it (sim/faults.py FAULT_GROUPS), and targets must exist."""
     from pathlib import Path
 
-    from encoder_conformance.fault_catalogue import TARGET_MODULES
+    from encoder_conformance.sim.fault_catalogue import TARGET_MODULES
 
     suites = {p.stem for p in (Path(__file__).resolve().parents[1] / "suites").glob("test_*.py")}
     targets = {module for modules in TARGET_MODULES.values() for module in modules}

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.cli import main
+from encoder_conformance.cli.main import main
 from encoder_conformance.history import certificate, db
 from encoder_conformance.run_summary import MODULE_AREAS, RunSummary, TestResult, area_of
 

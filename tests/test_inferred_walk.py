@@ -18,10 +18,10 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
 from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
-from encoder_conformance.suite_runner import run_pytest
+from encoder_conformance.runs.suite_runner import run_pytest
+from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
 
 PROFILE = "wachendorff-wdga-mt"
 #: faults whose tests need what the WDGA lacks (a writable 1019h)

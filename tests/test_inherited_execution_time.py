@@ -9,7 +9,7 @@ that failed (the preset read back as the frozen old position).
 from __future__ import annotations
 
 from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
-from encoder_conformance.suite_runner import run_pytest
+from encoder_conformance.runs.suite_runner import run_pytest
 
 PROFILE = "siko-wx58m-1212-mt"
 MODULE = SUITES_DIR / "test_encoder_position.py"

@@ -1,4 +1,4 @@
-"""The bench command ``lss`` (lss_command.py) against twins, and ``sim --copies N --unconfigured``.
+"""The bench command ``lss`` (cli/lss_actions.py) against twins, and ``sim --copies N --unconfigured``.
 
 Issue: "the simulator can serve N copies of a profile with different serial numbers so that fastscan
 and identify are tested with 2-8 nodes"; ``lss scan`` finds one unconfigured device in < 1 s and eight
@@ -21,19 +21,19 @@ from pathlib import Path
 import can
 import pytest
 
-from encoder_conformance.bus_config import BusConfig
-from encoder_conformance.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand
-from encoder_conformance.cli import main as cli_main
+from encoder_conformance.cia.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand
+from encoder_conformance.cli.lss_actions import LssOptions, Target, scan, set_bitrate, set_node_id
+from encoder_conformance.cli.main import main as cli_main
+from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.dut.lss_find import error_text
 from encoder_conformance.dut.lss_master import LssAnswer
 from encoder_conformance.exit_codes import RunExit
-from encoder_conformance.lss_command import LssOptions, Target, scan, set_bitrate, set_node_id
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.sim.host import SimulatorHost
 from encoder_conformance.sim.lss_slave import LssSlave
 from encoder_conformance.sim.node import SimulatedNode
-from encoder_conformance.sim_process import SimulatorProcess, start_simulator
+from encoder_conformance.sim.process import SimulatorProcess, start_simulator
 
 REPO = Path(__file__).resolve().parents[1]
 PROFILE = load_profile("cia406-c3-st").profile

@@ -11,8 +11,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from encoder_conformance.bus_config import BusConfig
-from encoder_conformance.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand, LssState
+from encoder_conformance.cia.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand, LssState
+from encoder_conformance.cli.restore import RestoreRequest, restore_from_snapshot
+from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.dut.custody import Custody
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.lss_device import LssDevice, expect_success, table_index
@@ -21,7 +22,6 @@ from encoder_conformance.dut.snapshot import Snapshot
 from encoder_conformance.dut.store_watch import StoreWatch
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.restore_command import RestoreRequest, restore_from_snapshot
 from encoder_conformance.sim.node import SimulatedNode
 from tests import sim_rig
 from tests.sim_rig import Rig

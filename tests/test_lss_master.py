@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import can
 import pytest
 
-from encoder_conformance.cia305 import MASTER_COB_ID, SLAVE_COB_ID, UNCONFIGURED_NODE_ID, LssState
+from encoder_conformance.cia.cia305 import MASTER_COB_ID, SLAVE_COB_ID, UNCONFIGURED_NODE_ID, LssState
 from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.dut.lss_master import LssAddress, LssMaster
 from encoder_conformance.profile.loader import load_profile

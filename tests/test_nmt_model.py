@@ -1,11 +1,11 @@
-"""The CiA 301 NMT model the state-machine suite compares devices with (encoder_conformance/nmt_model.py)."""
+"""The CiA 301 NMT model the state-machine suite compares devices with (encoder_conformance/models/nmt.py)."""
 
 from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.cia301 import NmtCommand, NmtState
-from encoder_conformance.nmt_model import NmtModel, Tracked
+from encoder_conformance.cia.cia301 import NmtCommand, NmtState
+from encoder_conformance.models.nmt import NmtModel, Tracked
 
 NODE = 5
 

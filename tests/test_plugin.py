@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.fault_catalogue import FAULTS
+from encoder_conformance.sim.fault_catalogue import FAULTS
 
 REPO = Path(__file__).resolve().parents[1]
 USAGE_ERROR = int(pytest.ExitCode.USAGE_ERROR)

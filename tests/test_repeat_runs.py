@@ -6,9 +6,9 @@ import subprocess
 import sys
 from collections import Counter
 
-from encoder_conformance.fault_matrix import RunResult
 from encoder_conformance.paths import REPO_ROOT
-from encoder_conformance.repeat_runs import RepeatedRuns, _failure_messages, _measurements
+from encoder_conformance.runs.fault_matrix import RunResult
+from encoder_conformance.runs.repeat import RepeatedRuns, _failure_messages, _measurements
 
 JUNIT = """<testsuites><testsuite>
 <testcase classname="suites.test_pdo_timing" name="test_latency">

@@ -26,7 +26,7 @@ from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
 from encoder_conformance.plugin.outcomes import is_device_finding
 from encoder_conformance.run_summary import INTERNAL_ERROR_TEXT, RunSummary, TestResult
-from encoder_conformance.suite_runner import run_pytest
+from encoder_conformance.runs.suite_runner import run_pytest
 
 PROFILE = "wachendorff-wdga-mt"
 INJECTED = "test_vendor_id_matches_profile"

@@ -10,7 +10,7 @@ import struct
 
 import pytest
 
-from encoder_conformance.cia301 import SdoAbortCode, block_crc
+from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.sdo_client import SdoProtocolClient
 from encoder_conformance.profile.loader import load_profile

@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import pytest
 
-from encoder_conformance.cia301 import SdoAbortCode
+from encoder_conformance.cia.cia301 import SdoAbortCode
 from encoder_conformance.fuzz.oracle import Exchange, Judge
 from encoder_conformance.fuzz.strategies import Request
 from encoder_conformance.readings import sdo as sdo_readings

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.fault_catalogue import TARGET_MODULES
 from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
-from encoder_conformance.suite_runner import run_pytest
+from encoder_conformance.runs.suite_runner import run_pytest
+from encoder_conformance.sim.fault_catalogue import TARGET_MODULES
 
 PROFILE = "wachendorff-wdga-mt"
 #: CI runs one order every time (replayable); set ENCODER_CONFORMANCE_SHUFFLE_SEED to try others

@@ -17,11 +17,11 @@ import canopen
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.cia301 import SdoAbortCode
-from encoder_conformance.fault_catalogue import TARGET_MODULES, faults_for
+from encoder_conformance.cia.cia301 import SdoAbortCode
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.sim.fault_catalogue import TARGET_MODULES, faults_for
 from encoder_conformance.sim.node import SimulatedNode
 from tests import sim_rig
 

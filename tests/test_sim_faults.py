@@ -6,7 +6,7 @@ import ast
 from pathlib import Path
 
 import encoder_conformance.sim.node
-from encoder_conformance.fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS
+from encoder_conformance.sim.fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS
 from encoder_conformance.sim.faults import FaultSet, assemble, implemented_faults
 from encoder_conformance.sim.heartbeat import HeartbeatProducer
 

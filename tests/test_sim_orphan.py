@@ -13,7 +13,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 TESTER = """
 import time
-from encoder_conformance.sim_process import start_simulator
+from encoder_conformance.sim.process import start_simulator
 sim = start_simulator("waycon-sx")
 print("SIMPID", sim.process.pid, flush=True)
 time.sleep(120)

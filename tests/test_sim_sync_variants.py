@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.cia301 import EmcyCode
+from encoder_conformance.cia.cia301 import EmcyCode
 from encoder_conformance.profile.loader import load_profile
 from tests import sim_rig
 from tests.sim_rig import WAIT_S, Rig

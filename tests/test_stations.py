@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.cli_usage import UsageError
+from encoder_conformance.cli.usage import UsageError
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.run_summary import RunSummary, TestResult
-from encoder_conformance.stations import (
+from encoder_conformance.runs.stations import (
     StationRun,
     child_command,
     format_table,

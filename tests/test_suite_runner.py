@@ -7,7 +7,7 @@ import subprocess
 
 import pytest
 
-from encoder_conformance.suite_runner import run_pytest
+from encoder_conformance.runs.suite_runner import run_pytest
 
 SESSION = '''
 import os

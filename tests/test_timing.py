@@ -11,11 +11,11 @@ import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
 
-from encoder_conformance.checks import check_periodic
 from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe
+from encoder_conformance.models.timing import schedule_fit
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.profile.model import HeartbeatTolerance
-from encoder_conformance.timing import schedule_fit
+from encoder_conformance.suite_support.checks import check_periodic
 
 PERIOD_MS = 50.0
 _SVG = "{http://www.w3.org/2000/svg}"
@@ -121,7 +121,7 @@ def test_probe_measures_wakeups():
 
 
 def test_timing_summary_percentiles_and_error():
-    from encoder_conformance.timing import TimingSummary
+    from encoder_conformance.models.timing import TimingSummary
 
     summary = TimingSummary.of([float(n) for n in range(1, 101)], nominal=50.0)
     assert (summary.count, summary.p50, summary.max) == (100, 50.5, 100.0)

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.exit_codes import RunExit
-from encoder_conformance.fault_catalogue import VARIANTS
+from encoder_conformance.sim.fault_catalogue import VARIANTS
 from tests.bench_twin import CUSTOMER_VALUES, REPO, ExternalTwin, as_found_problems, start_twin
 
 #: bench -> the readings its twin plays (each applies to the WDGA; together they touch LSS, SDO, EMCY and PDO)

@@ -12,10 +12,10 @@ import re
 
 import pytest
 
-from encoder_conformance.fault_catalogue import FAULTS, TARGET_MODULES, VARIANTS
 from encoder_conformance.paths import SUITES_DIR
 from encoder_conformance.readings import all_readings
-from encoder_conformance.variant_matrix import REPRESENTATIVE_PROFILES, format_runs, plan, run_variants
+from encoder_conformance.runs.variant_matrix import REPRESENTATIVE_PROFILES, format_runs, plan, run_variants
+from encoder_conformance.sim.fault_catalogue import FAULTS, TARGET_MODULES, VARIANTS
 
 #: a source a vendor can look up: a CiA document with its version and a section or table, or a manual's section
 _CITABLE = re.compile(r"(CiA 30[1-9]|CiA 4\d\d)( v\d[\d.]*)? (§|table |figure )\d|manual|M §|§\d")

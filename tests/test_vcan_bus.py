@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance import cli
+from encoder_conformance.cli import main as cli
 from encoder_conformance.vcan import (
     BuildError,
     VirtualCan,

@@ -84,7 +84,7 @@ def test_abort_code_family_mode(tmp_path):
 
 def test_run_strict_maps_to_strict_inferred(monkeypatch):
     """`encoder-conformance run --strict` asks pytest for --strict-inferred (pytest's own --strict is another thing)."""
-    from encoder_conformance import cli
+    from encoder_conformance.cli import main as cli
     from encoder_conformance.plugin import interrupt
 
     seen: list[list[str]] = []

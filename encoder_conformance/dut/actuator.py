@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from .power import BenchPower
+from encoder_conformance.dut.power import BenchPower
 
 
 class ShaftDrive(Protocol):

@@ -14,9 +14,9 @@ from typing import Any, cast
 import can
 import canopen
 
-from ..errors import BusSetupError
-from .frames import FrameLog
-from .tracing_bus import TracingBus
+from encoder_conformance.dut.frames import FrameLog
+from encoder_conformance.dut.tracing_bus import TracingBus
+from encoder_conformance.errors import BusSetupError
 
 OPEN_TIMEOUT_S = 5.0
 #: canopen's notifier waits this long per receive call; its default 1 s delays every disconnect by up to 1 s

@@ -23,20 +23,28 @@ from pathlib import Path
 
 from canopen.sdo.exceptions import SdoAbortedError
 
-from ..cia301 import COMMAND_FOR_STATE, STATE_NAMES, NmtState
-from ..errors import BusLostError, DutLostError
-from .device import DeviceUnderTest, wake_if_silent
-from .frames import Mark
-from .identity import identity_mismatch, read_identity
-from .persist import CannotPersist, store_commands_for
-from .power import BenchPower
-from .reference_custody import ReferenceCustody
-from .reference_point import ReferencePoint
-from .restart_watch import RestartWatch
-from .sdo_frames import abort_name
-from .snapshot import Key, Snapshot, SnapshotEntry, custody_keys, hex_or_none, is_stored, read_values
-from .store_watch import StoreWatch
-from .write_plan import plan_writes
+from encoder_conformance.cia.cia301 import COMMAND_FOR_STATE, STATE_NAMES, NmtState
+from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
+from encoder_conformance.dut.frames import Mark
+from encoder_conformance.dut.identity import identity_mismatch, read_identity
+from encoder_conformance.dut.persist import CannotPersist, store_commands_for
+from encoder_conformance.dut.power import BenchPower
+from encoder_conformance.dut.reference_custody import ReferenceCustody
+from encoder_conformance.dut.reference_point import ReferencePoint
+from encoder_conformance.dut.restart_watch import RestartWatch
+from encoder_conformance.dut.sdo_frames import abort_name
+from encoder_conformance.dut.snapshot import (
+    Key,
+    Snapshot,
+    SnapshotEntry,
+    custody_keys,
+    hex_or_none,
+    is_stored,
+    read_values,
+)
+from encoder_conformance.dut.store_watch import StoreWatch
+from encoder_conformance.dut.write_plan import plan_writes
+from encoder_conformance.errors import BusLostError, DutLostError
 
 
 class PreflightError(Exception):

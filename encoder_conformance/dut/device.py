@@ -19,13 +19,13 @@ import can
 import canopen
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
-from ..cia301 import NMT_COMMAND_NAMES, SDO_REQUEST_BASE, SYNC_COB_ID
-from ..encoder_model.freeze import FreezeRule
-from ..errors import BusLostError, DutLostError, RunInterrupted
-from ..profile.model import DeviceProfile
-from ..profile.quirk_effects import SilentUntilBusTraffic
-from . import sdo_frames
-from .frames import FrameLog, Mark, format_frames
+from encoder_conformance.cia.cia301 import NMT_COMMAND_NAMES, SDO_REQUEST_BASE, SYNC_COB_ID
+from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.frames import FrameLog, Mark, format_frames
+from encoder_conformance.errors import BusLostError, DutLostError, RunInterrupted
+from encoder_conformance.models.encoder.freeze import FreezeRule
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.quirk_effects import SilentUntilBusTraffic
 
 #: how much later than the device owes a frame may reach this tester: bus arbitration, a busy PC, the
 #: remote twin's websocket hop. Measured on the 2-core CI machine with two runs and a busy process beside

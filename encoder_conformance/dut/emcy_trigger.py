@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import can
 
-from ..basis import Basis
-from ..cia301 import (
+from encoder_conformance.basis import Basis
+from encoder_conformance.cia.cia301 import (
     COB_ID_FRAME_29_BIT,
     COB_ID_INVALID,
     EMCY_BASE,
@@ -33,10 +33,10 @@ from ..cia301 import (
     EmcyCode,
     NmtState,
 )
-from ..profile import quirk_effects as fx
-from .actuator import BenchActuator, ErrorStimulus
-from .device import DeviceUnderTest, answer_window
-from .frames import Mark
+from encoder_conformance.dut.actuator import BenchActuator, ErrorStimulus
+from encoder_conformance.dut.device import DeviceUnderTest, answer_window
+from encoder_conformance.dut.frames import Mark
+from encoder_conformance.profile import quirk_effects as fx
 
 Write = Callable[[int, int, bytes], None]
 BENCH_CODE = 0x4200  # device temperature (CiA 301 table 21), as the WDGA sends it

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import time
 
-from ..encoder_model import objects as od
-from ..encoder_model.freeze import FreezeRule
-from ..encoder_model.reference import EncoderReference
-from ..encoder_model.settings import EncoderDescription, EncoderSettings, read_settings
-from ..profile import datatypes
-from ..profile import quirk_effects as fx
-from .device import DeviceUnderTest
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.models.encoder import objects as od
+from encoder_conformance.models.encoder.freeze import FreezeRule
+from encoder_conformance.models.encoder.reference import EncoderReference
+from encoder_conformance.models.encoder.settings import EncoderDescription, EncoderSettings, read_settings
+from encoder_conformance.profile import datatypes
+from encoder_conformance.profile import quirk_effects as fx
 
 
 class EncoderAccess:

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import can
 
-from ..errors import BusLostError
-from .clock import FrameClock
+from encoder_conformance.dut.clock import FrameClock
+from encoder_conformance.errors import BusLostError
 
 log = logging.getLogger(__name__)
 

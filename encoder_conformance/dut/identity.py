@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 from canopen.sdo.exceptions import SdoAbortedError
 
-from ..profile.model import DeviceProfile
-from .device import DeviceUnderTest
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.profile.model import DeviceProfile
 
 #: what a device without a serial number reads (SIKO WV58M manual p.37-38: 650Bh = FFFFFFFFh "not supported")
 NO_SERIAL = (0, 0xFFFFFFFF)

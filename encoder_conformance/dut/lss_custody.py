@@ -25,12 +25,12 @@ from dataclasses import dataclass
 
 import can
 
-from ..cia301 import NMT_COMMAND_NAMES
-from ..cia305 import UNCONFIGURED_NODE_ID, LssState
-from .device import DeviceUnderTest, wake_if_silent
-from .frames import Mark
-from .lss_master import LssAddress, LssAnswer, LssMaster
-from .sdo_frames import upload_request
+from encoder_conformance.cia.cia301 import NMT_COMMAND_NAMES
+from encoder_conformance.cia.cia305 import UNCONFIGURED_NODE_ID, LssState
+from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
+from encoder_conformance.dut.frames import Mark
+from encoder_conformance.dut.lss_master import LssAddress, LssAnswer, LssMaster
+from encoder_conformance.dut.sdo_frames import upload_request
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import can
 
-from ..cia305 import (
+from encoder_conformance.cia.cia305 import (
     BIT_TIMING_TABLE_0,
     FASTSCAN_RESET_BIT,
     MASTER_COB_ID,
@@ -22,12 +22,12 @@ from ..cia305 import (
     LssCommand,
     LssState,
 )
-from ..profile import quirk_effects as fx
-from .device import DeviceUnderTest
-from .frames import Mark
-from .lss_custody import Changes, LssCustody, failure
-from .lss_master import LssAddress, LssAnswer, LssMaster
-from .sdo_frames import upload_request
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.frames import Mark
+from encoder_conformance.dut.lss_custody import Changes, LssCustody, failure
+from encoder_conformance.dut.lss_master import LssAddress, LssAnswer, LssMaster
+from encoder_conformance.dut.sdo_frames import upload_request
+from encoder_conformance.profile import quirk_effects as fx
 
 
 def table_index(bitrate: int, table: dict[int, int] = BIT_TIMING_TABLE_0) -> int | None:

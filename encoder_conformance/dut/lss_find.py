@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import can
 
-from ..cia305 import (
+from encoder_conformance.cia.cia305 import (
     ERROR_MANUFACTURER,
     ERROR_NONE,
     ERROR_OUT_OF_RANGE,
@@ -28,7 +28,7 @@ from ..cia305 import (
     LssCommand,
     LssState,
 )
-from .lss_master import LssAddress, LssAnswer, LssMaster
+from encoder_conformance.dut.lss_master import LssAddress, LssAnswer, LssMaster
 
 #: a loop guard: more unconfigured devices than a network has node-IDs is a device that keeps answering
 MAX_DEVICES = 127

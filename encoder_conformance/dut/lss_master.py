@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import can
 
-from ..cia305 import (
+from encoder_conformance.cia.cia305 import (
     ADDRESS_PARTS,
     FASTSCAN_RESET_BIT,
     IDENTIFY_RANGE_COMMANDS,
@@ -27,8 +27,8 @@ from ..cia305 import (
     LssCommand,
     LssState,
 )
-from .device import TESTER_MARGIN_S, answer_window
-from .frames import FrameLog, Mark
+from encoder_conformance.dut.device import TESTER_MARGIN_S, answer_window
+from encoder_conformance.dut.frames import FrameLog, Mark
 
 #: the shortest response window a learned one may be (``LssMaster.learned_window``)
 WINDOW_FLOOR_S = 0.01

@@ -11,10 +11,10 @@ import time
 from collections.abc import Callable
 from typing import Protocol
 
-from ..cia301 import NMT_COMMAND_NAMES, STATE_NAMES
-from .device import DeviceUnderTest
-from .frames import Mark, format_frames
-from .sdo_frames import upload_request
+from encoder_conformance.cia.cia301 import NMT_COMMAND_NAMES, STATE_NAMES
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.frames import Mark, format_frames
+from encoder_conformance.dut.sdo_frames import upload_request
 
 COMMAND_TARGET = {"start": 0x05, "stop": 0x04, "pre-operational": 0x7F}
 ENTER = {"pre-operational": "pre-operational", "operational": "start", "stopped": "stop"}

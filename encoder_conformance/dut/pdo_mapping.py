@@ -14,9 +14,9 @@ from types import TracebackType
 
 from canopen.sdo.exceptions import SdoAbortedError
 
-from ..cia301 import COB_ID_INVALID, cob_id_valid, mapping_fields, mapping_word, pdo_mapping_of
-from .device import DeviceUnderTest
-from .write_plan import Key, plan_writes
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid, mapping_fields, mapping_word, pdo_mapping_of
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.write_plan import Key, plan_writes
 
 Entry = tuple[int, int, int]  # (index, sub-index, length in bits)
 U8, U32 = 1, 4

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..cia301 import SAVE, STORE_PARAMETERS, STORE_SUB_OF_GROUP
-from ..profile import quirk_effects as fx
-from ..profile.model import DeviceProfile
-from . import sdo_frames
-from .device import DeviceUnderTest
+from encoder_conformance.cia.cia301 import SAVE, STORE_PARAMETERS, STORE_SUB_OF_GROUP
+from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.model import DeviceProfile
 
 __all__ = ["SAVE", "STORE_SUB", "CannotPersist", "StoreCommand", "persist_entry", "store_commands_for"]
 

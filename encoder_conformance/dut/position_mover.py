@@ -11,9 +11,9 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from ..encoder_model.position import units_per_rev, unsigned_in_span
-from .actuator import ReturningShaft, ShaftDrive
-from .encoder_access import EncoderAccess
+from encoder_conformance.dut.actuator import ReturningShaft, ShaftDrive
+from encoder_conformance.dut.encoder_access import EncoderAccess
+from encoder_conformance.models.encoder.position import units_per_rev, unsigned_in_span
 
 #: corrections after the first turn (scaling may round a distance to a neighbouring unit)
 CORRECTIONS = 4

@@ -14,19 +14,19 @@ from collections.abc import Mapping
 
 from canopen.sdo.exceptions import SdoAbortedError
 
-from ..cia301 import STORE_PARAMETERS
-from .device import DeviceUnderTest
-from .encoder_access import EncoderAccess
-from .persist import CannotPersist, store_commands_for
-from .reference_point import (
+from encoder_conformance.cia.cia301 import STORE_PARAMETERS
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.encoder_access import EncoderAccess
+from encoder_conformance.dut.persist import CannotPersist, store_commands_for
+from encoder_conformance.dut.reference_point import (
     Outcome,
     ReferencePoint,
     give_back_reference_point,
     has_reference_point,
     same_offset,
 )
-from .sdo_frames import abort_name
-from .store_watch import AUTO_STORED
+from encoder_conformance.dut.sdo_frames import abort_name
+from encoder_conformance.dut.store_watch import AUTO_STORED
 
 Key = tuple[int, int]
 

@@ -14,12 +14,12 @@ from __future__ import annotations
 import time
 from dataclasses import asdict, dataclass
 
-from ..encoder_model import objects as od
-from ..encoder_model.objects import EncoderObjects
-from ..encoder_model.position import unsigned_in_span
-from ..profile.model import DeviceProfile
-from .device import TESTER_MARGIN_S
-from .encoder_access import EncoderAccess
+from encoder_conformance.dut.device import TESTER_MARGIN_S
+from encoder_conformance.dut.encoder_access import EncoderAccess
+from encoder_conformance.models.encoder import objects as od
+from encoder_conformance.models.encoder.objects import EncoderObjects
+from encoder_conformance.models.encoder.position import unsigned_in_span
+from encoder_conformance.profile.model import DeviceProfile
 
 Key = tuple[int, int]
 

@@ -12,7 +12,7 @@ import threading
 
 import can
 
-from ..cia301 import NmtCommand
+from encoder_conformance.cia.cia301 import NmtCommand
 
 _DOWNLOADS = {1, 6}  # SDO client command specifiers: initiate download, block download
 

@@ -15,10 +15,10 @@ from dataclasses import dataclass, field
 
 import can
 
-from ..cia301 import SdoAbortCode, block_crc
-from .device import DeviceUnderTest
-from .frames import Mark
-from .sdo_frames import SdoResponse, abort_name, expedited_download_request, upload_request
+from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.frames import Mark
+from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name, expedited_download_request, upload_request
 
 SEGMENT_BYTES = 7
 MAX_BLKSIZE = 127

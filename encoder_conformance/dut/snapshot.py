@@ -18,10 +18,10 @@ from pathlib import Path
 
 from canopen.sdo.exceptions import SdoAbortedError
 
-from ..profile.model import DeviceProfile, EntrySpec
-from .device import DeviceUnderTest
-from .reference_point import ReferencePoint, preset_keys
-from .store_watch import store_command_objects
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.reference_point import ReferencePoint, preset_keys
+from encoder_conformance.dut.store_watch import store_command_objects
+from encoder_conformance.profile.model import DeviceProfile, EntrySpec
 
 SNAPSHOT_FILE = "device-snapshot.json"
 FORMAT = "encoder-conformance device snapshot 1"

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import can
 
-from ..cia301 import SDO_REQUEST_BASE
+from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE
 
 SDO_RESPONSE_BASE = 0x580
 #: CiA 301 v4.2.0 clauses a start-up reply can break

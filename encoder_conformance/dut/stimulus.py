@@ -6,9 +6,9 @@ from collections.abc import Callable
 
 import can
 
-from .actuator import ShaftDrive
-from .device import DeviceUnderTest
-from .frames import Mark
+from encoder_conformance.dut.actuator import ShaftDrive
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.frames import Mark
 
 SYNC_SPACING_S = 0.01  # 100 SYNCs per second: a usual bus cycle
 TURN_PER_SYNC = 0.01  # revolutions the shaft turns before each SYNC (1 rev/s at the SYNC spacing)

@@ -14,11 +14,15 @@ from collections import Counter
 
 import can
 
-from ..cia301 import RESTORE_DEFAULT_PARAMETERS, STORE_PARAMETERS
-from ..cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
-from ..cia305 import LssCommand
-from ..profile.model import DeviceProfile
-from ..profile.quirk_effects import LssConfigAutoStored, ManufacturerStoreObject, StoreRebootsWithoutReply
+from encoder_conformance.cia.cia301 import RESTORE_DEFAULT_PARAMETERS, STORE_PARAMETERS
+from encoder_conformance.cia.cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
+from encoder_conformance.cia.cia305 import LssCommand
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.quirk_effects import (
+    LssConfigAutoStored,
+    ManufacturerStoreObject,
+    StoreRebootsWithoutReply,
+)
 
 #: SDO client command specifiers that start a download (CiA 301 §7.2.4.3): initiate, block initiate
 _DOWNLOAD_INITIATE = {1, 6}

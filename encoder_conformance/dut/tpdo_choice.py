@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..cia301 import COB_ID_INVALID, cob_id_valid
-from ..profile import quirk_effects as fx
-from ..profile.value_domain import declared_domain
-from .device import DeviceUnderTest
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.value_domain import declared_domain
 
 
 class NoUsableTpdo(Exception):

@@ -21,8 +21,8 @@ from typing import Any
 
 import can
 
-from ..errors import BusLostError
-from .frames import FrameLog
+from encoder_conformance.dut.frames import FrameLog
+from encoder_conformance.errors import BusLostError
 
 log = logging.getLogger(__name__)
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..cia301 import COB_ID_INVALID, RPDO_COMMUNICATION, TPDO_COMMUNICATION, pdo_mapping_of
-from ..profile.model import DeviceProfile
-from ..profile.quirk_effects import WritesNeedScalingBit
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, RPDO_COMMUNICATION, TPDO_COMMUNICATION, pdo_mapping_of
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.quirk_effects import WritesNeedScalingBit
 
 Key = tuple[int, int]
 SCALING_GATE = (0x6000, 0)  # CiA 406 operating parameters; bit 2 = scaling function control

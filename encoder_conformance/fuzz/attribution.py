@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from .oracle import Exchange, fits, reply_required
-from .strategies import Request
+from encoder_conformance.fuzz.oracle import Exchange, fits, reply_required
+from encoder_conformance.fuzz.strategies import Request
 
 Event = tuple[bool, bytes]  # (sent by the tester, data)
 

@@ -8,10 +8,10 @@ the CiA 406 preset); a profile adds its own in ``sdo_fuzz_never_write`` (index -
 
 from __future__ import annotations
 
-from ..cia301 import RESTORE_DEFAULT_PARAMETERS, STORE_PARAMETERS
-from ..encoder_model.objects import HIGH_PRECISION_PRESET, EncoderObjects
-from ..profile import quirk_effects as fx
-from ..profile.model import DeviceProfile
+from encoder_conformance.cia.cia301 import RESTORE_DEFAULT_PARAMETERS, STORE_PARAMETERS
+from encoder_conformance.models.encoder.objects import HIGH_PRECISION_PRESET, EncoderObjects
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.model import DeviceProfile
 
 #: quirk effects whose object a write must never reach, and why
 _QUIRK_OBJECTS: tuple[tuple[type[fx.ObjectAt], str], ...] = (

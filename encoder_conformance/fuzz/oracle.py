@@ -20,8 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from itertools import pairwise
 
-from ..dut.sdo_frames import ABORT_SCS, ANSWER_SCS, answers
-from .strategies import Request
+from encoder_conformance.dut.sdo_frames import ABORT_SCS, ANSWER_SCS, answers
+from encoder_conformance.fuzz.strategies import Request
 
 ABORT = 0x80
 SEGMENT_CCS = (0, 3)

@@ -10,8 +10,8 @@ from collections.abc import Sequence
 
 import can
 
-from ..dut.frames import format_frames
-from .strategies import Request
+from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.fuzz.strategies import Request
 
 
 def candump_lines(cob_id: int, requests: Sequence[Request], channel: str = "can0") -> str:

@@ -15,13 +15,13 @@ from dataclasses import dataclass, field
 
 import can
 
-from ..cia301 import SDO_REQUEST_BASE, SdoAbortCode
-from ..dut import sdo_frames
-from ..dut.device import DeviceUnderTest
-from .attribution import attribute
-from .oracle import Exchange, Judge, reply_required
-from .strategies import Example, Request, client_abort
-from .watch import DeviceWatch
+from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE, SdoAbortCode
+from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.fuzz.attribution import attribute
+from encoder_conformance.fuzz.oracle import Exchange, Judge, reply_required
+from encoder_conformance.fuzz.strategies import Example, Request, client_abort
+from encoder_conformance.fuzz.watch import DeviceWatch
 
 FENCE = Request(sdo_frames.upload_request(0x1000, 0))
 #: the code of the closing abort: "SDO protocol timed out" (CiA 301 §7.2.4.3.17), the client gives up

@@ -23,8 +23,8 @@ from functools import cache
 
 from hypothesis import strategies as st
 
-from ..profile import datatypes
-from ..profile.model import DeviceProfile
+from encoder_conformance.profile import datatypes
+from encoder_conformance.profile.model import DeviceProfile
 
 Mux = tuple[int, int]
 #: CiA 301 §7.4.1 index areas in which no object can be writable: data types and the reserved area

@@ -2,6 +2,6 @@
 
 db.py: ``record_run(summary, db_path)`` appends a run, ``history_path`` says where the database is;
 certificate.py: ``render_certificate`` (RunSummary -> HTML) and ``write_certificate``; views.py: what
-``history`` prints; cli.py: its arguments. The pytest side is plugin/history_hook.py. Nothing is imported
+``history`` prints (its arguments: cli/history.py). The pytest side is plugin/history_hook.py. Nothing is imported
 here, so the command line stays light at start-up.
 """

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from jinja2 import Environment
 
-from ..run_summary import RunSummary
+from encoder_conformance.run_summary import RunSummary
 
 HTML_NAME = "certificate.html"
 PDF_NAME = "certificate.pdf"

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
-from ..paths import REPO_ROOT
-from ..run_summary import RunSummary, TestResult
+from encoder_conformance.paths import REPO_ROOT
+from encoder_conformance.run_summary import RunSummary, TestResult
 
 SCHEMA_VERSION = 1
 ENV_VAR = "ENCODER_CONFORMANCE_HISTORY"

@@ -12,7 +12,7 @@ import sqlite3
 from collections.abc import Sequence
 from datetime import datetime
 
-from .db import StoredRun
+from encoder_conformance.history.db import StoredRun
 
 LIST_COLUMNS = (("id", "id"), ("date", "started"), ("kind", "kind"), ("profile", "profile_id"),
                 ("serial", "serial"), ("revision", "revision"), ("verdict", "overall"), ("station", "station"),

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import pytest
 
-from ..paths import SUITES_DIR
+from encoder_conformance.paths import SUITES_DIR
 
 KIND = "accept"
 KIND_OPTION = "--run-kind"  # declared by run_record.add_option

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from ..basis import BASES, Basis
-from .bus_trace import BusTrace
-from .timing_record import TimingMeasurement
+from encoder_conformance.basis import BASES, Basis
+from encoder_conformance.plugin.bus_trace import BusTrace
+from encoder_conformance.plugin.timing_record import TimingMeasurement
 
 __all__ = ["BASES", "EVIDENCE", "Basis", "Evidence", "InferredProblem", "Measurement", "TimingMeasurement"]
 

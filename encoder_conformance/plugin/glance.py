@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from html import escape
 from pathlib import PurePosixPath
 
-from ..run_summary import AREAS, INTERNAL_ERROR_TEXT, RunSummary, TestResult
+from encoder_conformance.run_summary import AREAS, INTERNAL_ERROR_TEXT, RunSummary, TestResult
 
 #: the banner's colour per overall verdict
 VERDICT_CLASS = {"PASS": "pass", "FAIL": "fail", "PASS WITH WARNINGS": "warn", "COULD NOT TEST": "none",

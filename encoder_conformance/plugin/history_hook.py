@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from ..history.certificate import write_certificate
-from ..history.db import ENV_VAR, OFF, HistoryError, history_path, note_certificate, record_run
-from .options import settings_of
-from .run_record import summary_of
+from encoder_conformance.history.certificate import write_certificate
+from encoder_conformance.history.db import ENV_VAR, OFF, HistoryError, history_path, note_certificate, record_run
+from encoder_conformance.plugin.options import settings_of
+from encoder_conformance.plugin.run_record import summary_of
 
 OPTION = "--history"
 

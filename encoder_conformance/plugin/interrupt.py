@@ -19,7 +19,7 @@ from contextlib import contextmanager
 from types import FrameType
 from typing import Any, TypeAlias
 
-from ..exit_codes import interrupted_by
+from encoder_conformance.exit_codes import interrupted_by
 
 #: the restore's share of the 2 s a Ctrl-C may take (the rest: reports, bus and simulator shutdown)
 RESTORE_BUDGET_S = 1.2

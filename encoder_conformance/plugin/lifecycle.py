@@ -19,11 +19,11 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from ..dut.custody import Custody, RestoreRecord
-from ..exit_codes import DESCRIPTIONS, RunExit
-from .interrupt import InterruptGuard
-from .outcomes import is_internal_error
-from .reporting import report_dir, runs_suites
+from encoder_conformance.dut.custody import Custody, RestoreRecord
+from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit
+from encoder_conformance.plugin.interrupt import InterruptGuard
+from encoder_conformance.plugin.outcomes import is_internal_error
+from encoder_conformance.plugin.reporting import report_dir, runs_suites
 
 
 @dataclass(frozen=True)

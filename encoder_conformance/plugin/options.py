@@ -8,13 +8,13 @@ from pathlib import Path
 
 import pytest
 
-from ..bus_config import BusConfig, resolve_bus_config
-from ..dut.actuator import ShaftDrivePlugin
-from ..fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS  # faults and conformant variants
-from ..paths import DEFAULT_PROFILE
-from ..profile.loader import LoadedProfile, load_profile
-from ..station import Station, StationError, StationPower, load_station
-from . import verdicts
+from encoder_conformance.config.bus import BusConfig, resolve_bus_config
+from encoder_conformance.config.station import Station, StationError, StationPower, load_station
+from encoder_conformance.dut.actuator import ShaftDrivePlugin
+from encoder_conformance.paths import DEFAULT_PROFILE
+from encoder_conformance.plugin import verdicts
+from encoder_conformance.profile.loader import LoadedProfile, load_profile
+from encoder_conformance.sim.fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS  # faults and conformant variants
 
 PROFILE_ENV = "ENCODER_CONFORMANCE_PROFILE"
 TRACE_OPTION = "--bus-trace"

@@ -28,7 +28,7 @@ from pathlib import Path
 import pytest
 from canopen.sdo.exceptions import SdoError
 
-from ..errors import BusLostError, DutLostError
+from encoder_conformance.errors import BusLostError, DutLostError
 
 #: the exception types that are findings about the device (see the module's docstring)
 DEVICE_FINDINGS: tuple[type[BaseException], ...] = (AssertionError, pytest.fail.Exception, DutLostError,

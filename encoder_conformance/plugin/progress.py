@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import pytest
 
-from ..run_summary import area_of
-from .reporting import runs_suites
+from encoder_conformance.plugin.reporting import runs_suites
+from encoder_conformance.run_summary import area_of
 
 ENV_SWITCH = "ENCODER_CONFORMANCE_PROGRESS"
 SHOW_AFTER_S = 2.0

@@ -9,15 +9,15 @@ from pathlib import Path
 
 import pytest
 
-from ..paths import REPO_ROOT, SUITES_DIR
-from ..run_summary import RunSummary
-from . import bus_trace
-from .allure_writer import BackgroundWriter, write_in_background
-from .evidence import EVIDENCE
-from .glance import Deviation, PageContext, render, skip_reason_key
-from .options import bench_settings, settings_of, trace_policy
-from .verdicts import STRICT_OPTION, add_property, terminal_lines
-from .verdicts import strict as verdicts_strict
+from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
+from encoder_conformance.plugin import bus_trace
+from encoder_conformance.plugin.allure_writer import BackgroundWriter, write_in_background
+from encoder_conformance.plugin.evidence import EVIDENCE
+from encoder_conformance.plugin.glance import Deviation, PageContext, render, skip_reason_key
+from encoder_conformance.plugin.options import bench_settings, settings_of, trace_policy
+from encoder_conformance.plugin.verdicts import STRICT_OPTION, add_property, terminal_lines
+from encoder_conformance.plugin.verdicts import strict as verdicts_strict
+from encoder_conformance.run_summary import RunSummary
 
 REPORT_DIR = pytest.StashKey[Path]()
 ALLURE_WRITER = pytest.StashKey[BackgroundWriter]()

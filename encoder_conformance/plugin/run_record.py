@@ -8,12 +8,12 @@ from pathlib import Path
 
 import pytest
 
-from ..run_summary import Outcome, RunSummary, TestResult, area_of
-from . import acceptance, lifecycle
-from .evidence import EVIDENCE
-from .options import bench_settings, settings_of
-from .outcomes import is_internal_error
-from .reporting import IDENTITY, report_dir, skip_reason
+from encoder_conformance.plugin import acceptance, lifecycle
+from encoder_conformance.plugin.evidence import EVIDENCE
+from encoder_conformance.plugin.options import bench_settings, settings_of
+from encoder_conformance.plugin.outcomes import is_internal_error
+from encoder_conformance.plugin.reporting import IDENTITY, report_dir, skip_reason
+from encoder_conformance.run_summary import Outcome, RunSummary, TestResult, area_of
 
 SUMMARY = pytest.StashKey[RunSummary]()
 _STARTED = pytest.StashKey[float]()

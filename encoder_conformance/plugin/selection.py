@@ -6,9 +6,9 @@ from collections.abc import Callable
 
 import pytest
 
-from ..profile.model import Capabilities, DeviceProfile, EntrySpec
-from ..profile.value_domain import probe_values
-from .options import settings_of
+from encoder_conformance.plugin.options import settings_of
+from encoder_conformance.profile.model import Capabilities, DeviceProfile, EntrySpec
+from encoder_conformance.profile.value_domain import probe_values
 
 #: fixture name -> which profile entries it is parametrised with
 ENTRY_FIXTURES = {

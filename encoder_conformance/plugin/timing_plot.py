@@ -12,7 +12,7 @@ from __future__ import annotations
 import html
 from collections.abc import Sequence
 
-from .plot_scale import Scale, tick_labels
+from encoder_conformance.plugin.plot_scale import Scale, tick_labels
 
 WIDTH, HEIGHT = 560, 192
 HISTOGRAM_BINS = 40

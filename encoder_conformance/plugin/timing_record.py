@@ -7,8 +7,8 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass, field
 
-from ..timing import TimingSummary
-from .timing_plot import render_svg
+from encoder_conformance.models.timing import TimingSummary
+from encoder_conformance.plugin.timing_plot import render_svg
 
 #: the figures each timing test gives JUnit (as properties "timing <name> <figure>_ms") and the report table
 REPORTED = ("mean", "p50", "p95", "p99", "max")

@@ -17,9 +17,9 @@ from dataclasses import dataclass, field
 
 import pytest
 
-from ..errors import DutLostError
-from .evidence import BASES, EVIDENCE
-from .outcomes import is_internal_error
+from encoder_conformance.errors import DutLostError
+from encoder_conformance.plugin.evidence import BASES, EVIDENCE
+from encoder_conformance.plugin.outcomes import is_internal_error
 
 STRICT_OPTION = "--strict-inferred"
 

@@ -16,11 +16,11 @@ from typing import TYPE_CHECKING, Any
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from ..errors import ProfileError
-from ..paths import PROFILE_DIR
-from . import model
-from .quirk_effects import EFFECT_MODELS
-from .quirks import DOCUMENTATION_ONLY
+from encoder_conformance.errors import ProfileError
+from encoder_conformance.paths import PROFILE_DIR
+from encoder_conformance.profile import model
+from encoder_conformance.profile.quirk_effects import EFFECT_MODELS
+from encoder_conformance.profile.quirks import DOCUMENTATION_ONLY
 
 if TYPE_CHECKING:
     from pydantic_core import ErrorDetails
@@ -290,7 +290,7 @@ def _where(path: Path, key: str) -> str:
 
 
 def _merge_eds(path: Path, data: dict[str, Any], eds_name: str) -> dict[str, Any]:
-    from .eds import objects_from_eds  # canopen's EDS parser is only needed here
+    from encoder_conformance.profile.eds import objects_from_eds  # canopen's EDS parser is only needed here
 
     eds_path = (path.parent / eds_name).resolve()
     try:

@@ -16,12 +16,12 @@ from typing import Annotated, Any, Literal, overload
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from ..basis import Basis
-from ..cia305 import AUTO_BIT_RATE_INDEX, BIT_TIMING_TABLE_0
-from . import datatypes
-from .quirk_effects import EffectParams, ObjectList, P
-from .quirks import Quirk, QuirkBase
-from .value_set import ValueSet
+from encoder_conformance.basis import Basis
+from encoder_conformance.cia.cia305 import AUTO_BIT_RATE_INDEX, BIT_TIMING_TABLE_0
+from encoder_conformance.profile import datatypes
+from encoder_conformance.profile.quirk_effects import EffectParams, ObjectList, P
+from encoder_conformance.profile.quirks import Quirk, QuirkBase
+from encoder_conformance.profile.value_set import ValueSet
 
 SCHEMA_VERSION = 1
 

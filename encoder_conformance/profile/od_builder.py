@@ -5,8 +5,8 @@ from __future__ import annotations
 import canopen
 from canopen.objectdictionary import ODArray, ODRecord, ODVariable
 
-from . import datatypes
-from .model import DeviceProfile, EntrySpec, ObjectSpec, resolve_node_id_expression
+from encoder_conformance.profile import datatypes
+from encoder_conformance.profile.model import DeviceProfile, EntrySpec, ObjectSpec, resolve_node_id_expression
 
 _ACCESS_TO_EDS = {"const": "const", "ro": "ro", "wo": "wo", "rw": "rw", "rwr": "rwr", "rww": "rww"}
 

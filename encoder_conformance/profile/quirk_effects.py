@@ -18,8 +18,8 @@ from typing import Any, ClassVar, Literal, TypeVar
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from ..cia301 import SAVE_SIGNATURE, SdoAbortCode
-from .object_key import ObjectIndex, ObjectKey, ObjectKeyField
+from encoder_conformance.cia.cia301 import SAVE_SIGNATURE, SdoAbortCode
+from encoder_conformance.profile.object_key import ObjectIndex, ObjectKey, ObjectKeyField
 
 Situation = Literal["write_ro", "read_wo", "no_object", "no_subindex", "length_high", "length_low",
                     "value_high", "value_low", "wrong_state", "store_signature"]

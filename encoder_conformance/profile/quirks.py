@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, TypeAlias, Union
 
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, TypeAdapter, create_model
 
-from .quirk_effects import EFFECT_MODELS, EffectParams
+from encoder_conformance.profile.quirk_effects import EFFECT_MODELS, EffectParams
 
 DOCUMENTATION_ONLY = "none"  # the union tag of a quirk without an effect
 

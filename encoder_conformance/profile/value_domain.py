@@ -7,10 +7,10 @@ value outside it; ``probe_values`` are the values just outside each boundary tha
 
 from __future__ import annotations
 
-from ..basis import Basis
-from . import datatypes
-from .model import DeviceProfile
-from .value_set import ValueSet
+from encoder_conformance.basis import Basis
+from encoder_conformance.profile import datatypes
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.value_set import ValueSet
 
 TPDO_COMMUNICATION = range(0x1800, 0x1A00)
 TRANSMISSION_TYPE_SUB = 2

@@ -10,18 +10,18 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..cia301 import ABORT_FOR_SITUATION, ERROR_HISTORY, RPDO_MAPPING, TPDO_MAPPING
-from ..cia301 import SdoAbortCode as Abort
-from ..profile import datatypes
-from ..profile import quirk_effects as fx
-from ..profile.model import DeviceProfile
-from ..profile.value_domain import declared_domain, refusal_basis
-from ..profile.value_set import ValueSet
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nvm import Key
-from .object_store import ObjectStore
-from .sdo_server import SdoAbort
+from encoder_conformance.cia.cia301 import ABORT_FOR_SITUATION, ERROR_HISTORY, RPDO_MAPPING, TPDO_MAPPING
+from encoder_conformance.cia.cia301 import SdoAbortCode as Abort
+from encoder_conformance.profile import datatypes
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.value_domain import declared_domain, refusal_basis
+from encoder_conformance.profile.value_set import ValueSet
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.object_store import ObjectStore
+from encoder_conformance.sim.sdo_server import SdoAbort
 
 
 def situation_codes(profile: DeviceProfile) -> dict[str, int]:

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..profile.quirk_effects import NmtAutostartObject
-from .faults import breaks
-from .hooks import NodeHooks
-from .nmt import NmtState
+from encoder_conformance.profile.quirk_effects import NmtAutostartObject
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks
+from encoder_conformance.sim.nmt import NmtState
 
 
 class Autostart:

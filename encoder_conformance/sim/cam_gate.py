@@ -9,12 +9,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..encoder_model import objects as od
-from ..profile.quirk_effects import CamLowBelowHigh
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nvm import Key
-from .sdo_server import SdoAbort
+from encoder_conformance.models.encoder import objects as od
+from encoder_conformance.profile.quirk_effects import CamLowBelowHigh
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.sdo_server import SdoAbort
 
 #: an integer entry as its data type reads it (SIGNED types negative), None where absent
 Reader = Callable[[int, int], "int | None"]

@@ -2,7 +2,7 @@
 
 Uses the standard library's multiprocessing.connection (authenticated, pickled tuples) rather
 than a hand-written protocol. This module imports nothing else of the simulator at run time, so
-the client (``encoder_conformance.sim_process``) stays light: a bench's power command starts it often.
+the client (``encoder_conformance.sim.process``) stays light: a bench's power command starts it often.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from multiprocessing.connection import Connection, Listener
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from .host import SimulatorHost
+    from encoder_conformance.sim.host import SimulatorHost
 
 AUTHKEY = b"encoder-conformance-sim"
 

@@ -15,7 +15,7 @@ import threading
 import time
 from collections.abc import Callable
 
-from ..cia301 import (
+from encoder_conformance.cia.cia301 import (
     COB_ID_FRAME_29_BIT,
     COB_ID_INVALID,
     EMCY_BASE,
@@ -27,12 +27,12 @@ from ..cia301 import (
     EmcyCode,
     SdoAbortCode,
 )
-from .faults import breaks
-from .hooks import NodeHooks, ReloadEvent
-from .nvm import Key
-from .object_store import ObjectStore
-from .scheduler import DeadlineScheduler, JobHandle
-from .sdo_server import SdoAbort
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, ReloadEvent
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.object_store import ObjectStore
+from encoder_conformance.sim.scheduler import DeadlineScheduler, JobHandle
+from encoder_conformance.sim.sdo_server import SdoAbort
 
 QUEUE_DEPTH = 8
 

@@ -18,21 +18,21 @@ import time
 from collections.abc import Iterable
 from dataclasses import replace
 
-from ..encoder_model import objects as od
-from ..encoder_model import position as pos
-from ..encoder_model.cam import Cam, CamChannel
-from ..encoder_model.freeze import FreezeRule
-from ..encoder_model.reference import EncoderReference
-from ..encoder_model.settings import EncoderDescription, EncoderSettings, read_settings
-from ..encoder_model.speed import speed_value
-from ..encoder_model.work_area import ABOVE, BELOW
-from ..profile import datatypes
-from ..profile.model import DeviceProfile
-from .faults import breaks
-from .nvm import Key, NonVolatileMemory
-from .object_store import ObjectStore
-from .scheduler import DeadlineScheduler
-from .shaft import Shaft
+from encoder_conformance.models.encoder import objects as od
+from encoder_conformance.models.encoder import position as pos
+from encoder_conformance.models.encoder.cam import Cam, CamChannel
+from encoder_conformance.models.encoder.freeze import FreezeRule
+from encoder_conformance.models.encoder.reference import EncoderReference
+from encoder_conformance.models.encoder.settings import EncoderDescription, EncoderSettings, read_settings
+from encoder_conformance.models.encoder.speed import speed_value
+from encoder_conformance.models.encoder.work_area import ABOVE, BELOW
+from encoder_conformance.profile import datatypes
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.nvm import Key, NonVolatileMemory
+from encoder_conformance.sim.object_store import ObjectStore
+from encoder_conformance.sim.scheduler import DeadlineScheduler
+from encoder_conformance.sim.shaft import Shaft
 
 #: NVM slot (index 0 is no object) for the preset offset (6509h's value, or the internal one without 6509h)
 OFFSET_KEY: Key = (0x0000, 0)

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from typing import TypeVar
 
-from ..fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS  # faults and conformant variants
+from encoder_conformance.sim.fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS  # faults and conformant variants
 
 T = TypeVar("T")
 

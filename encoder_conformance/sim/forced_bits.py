@@ -7,10 +7,10 @@ value changes; the stored one stays as written.
 
 from __future__ import annotations
 
-from ..profile.quirk_effects import BitsForcedAtInit
-from .faults import breaks
-from .hooks import NodeHooks, ReloadEvent
-from .object_store import ObjectStore
+from encoder_conformance.profile.quirk_effects import BitsForcedAtInit
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, ReloadEvent
+from encoder_conformance.sim.object_store import ObjectStore
 
 
 def force_bits(params: BitsForcedAtInit | None, store: ObjectStore, event: str) -> None:

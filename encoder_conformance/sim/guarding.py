@@ -8,11 +8,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..profile.quirk_effects import GuardingHeartbeatExclusive
-from .faults import breaks
-from .hooks import NodeHooks
-from .nvm import Key
-from .sdo_server import SdoAbort
+from encoder_conformance.profile.quirk_effects import GuardingHeartbeatExclusive
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.sdo_server import SdoAbort
 
 
 class GuardingHeartbeatExclusion:

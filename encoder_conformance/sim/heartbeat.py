@@ -8,11 +8,11 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nmt import NmtState
-from .nvm import Key
-from .scheduler import DeadlineScheduler, JobHandle
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.scheduler import DeadlineScheduler, JobHandle
 
 HEARTBEAT_OBJECT = 0x1017
 

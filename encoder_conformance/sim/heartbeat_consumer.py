@@ -12,12 +12,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from functools import partial
 
-from ..cia301 import HEARTBEAT_CONSUMER, EmcyCode
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nvm import Key
-from .scheduler import DeadlineScheduler, JobHandle
-from .sync_objects import COMMUNICATION_ERROR_BIT, Read
+from encoder_conformance.cia.cia301 import HEARTBEAT_CONSUMER, EmcyCode
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.scheduler import DeadlineScheduler, JobHandle
+from encoder_conformance.sim.sync_objects import COMMUNICATION_ERROR_BIT, Read
 
 
 class HeartbeatConsumer:

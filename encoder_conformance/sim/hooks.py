@@ -14,8 +14,8 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
-from .nmt import NmtState
-from .nvm import Key
+from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.nvm import Key
 
 Value = int | float | str | bytes  # float: a REAL32/REAL64 entry
 #: refuses a write by raising SdoAbort

@@ -22,12 +22,12 @@ from typing import TYPE_CHECKING, Any, cast
 import can
 from can.interfaces.virtual import VirtualBus, channels_lock
 
-from ..profile.loader import load_profile
-from ..profile.model import DeviceProfile
-from ..profile.quirk_effects import SecondNode
-from .faults import FaultSet
-from .node import SimulatedNode
-from .scheduler import DeadlineScheduler
+from encoder_conformance.profile.loader import load_profile
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.quirk_effects import SecondNode
+from encoder_conformance.sim.faults import FaultSet
+from encoder_conformance.sim.node import SimulatedNode
+from encoder_conformance.sim.scheduler import DeadlineScheduler
 
 if TYPE_CHECKING:
     from can_remote.server import RemoteServer

@@ -14,18 +14,18 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from ..cia301 import NmtState
-from ..cia305 import AUTO_BIT_RATE_INDEX, MAX_NODE_ID, SLAVE_COB_ID
-from ..profile import quirk_effects as fx
-from ..profile.model import DeviceProfile, resolve_node_id_expression
-from .faults import FaultSet, assemble, breaks
-from .hooks import NodeHooks, ReloadEvent
-from .lss_configuration import LssConfiguration
-from .lss_slave import LssSlave
-from .nmt_slave import NmtSlave
-from .nvm import NonVolatileMemory
-from .object_store import ObjectStore
-from .sim_log import log
+from encoder_conformance.cia.cia301 import NmtState
+from encoder_conformance.cia.cia305 import AUTO_BIT_RATE_INDEX, MAX_NODE_ID, SLAVE_COB_ID
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.model import DeviceProfile, resolve_node_id_expression
+from encoder_conformance.sim.faults import FaultSet, assemble, breaks
+from encoder_conformance.sim.hooks import NodeHooks, ReloadEvent
+from encoder_conformance.sim.lss_configuration import LssConfiguration
+from encoder_conformance.sim.lss_slave import LssSlave
+from encoder_conformance.sim.nmt_slave import NmtSlave
+from encoder_conformance.sim.nvm import NonVolatileMemory
+from encoder_conformance.sim.object_store import ObjectStore
+from encoder_conformance.sim.sim_log import log
 
 _STATES = {"pre-operational": NmtState.PRE_OPERATIONAL, "operational": NmtState.OPERATIONAL,
            "stopped": NmtState.STOPPED}

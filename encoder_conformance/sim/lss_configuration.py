@@ -13,12 +13,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..cia305 import MAX_NODE_ID, UNCONFIGURED_NODE_ID
-from ..profile import quirk_effects as fx
-from ..profile.model import DeviceProfile
-from .faults import breaks
-from .hooks import ReloadEvent
-from .nvm import Key, NonVolatileMemory
+from encoder_conformance.cia.cia305 import MAX_NODE_ID, UNCONFIGURED_NODE_ID
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import ReloadEvent
+from encoder_conformance.sim.nvm import Key, NonVolatileMemory
 
 #: NVM keys of the LSS-stored values on a device without a manufacturer object for them
 STORED_NODE_ID = (0x0000, 0x01)

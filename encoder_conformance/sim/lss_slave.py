@@ -14,7 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from ..cia305 import (
+from encoder_conformance.cia.cia305 import (
     BIT_TIMING_TABLE_0,
     ERROR_NONE,
     ERROR_OUT_OF_RANGE,
@@ -28,9 +28,9 @@ from ..cia305 import (
     LssCommand,
     LssState,
 )
-from .faults import breaks
-from .lss_configuration import LssConfiguration
-from .nvm import NonVolatileMemory
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.lss_configuration import LssConfiguration
+from encoder_conformance.sim.nvm import NonVolatileMemory
 
 Address = Callable[[], tuple[int, int, int, int]]  # 1018h sub 1..4 as the device holds them
 

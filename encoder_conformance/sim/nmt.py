@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..cia301 import NmtCommand, NmtState
+from encoder_conformance.cia.cia301 import NmtCommand, NmtState
 
 __all__ = ["TARGET", "NmtCommand", "NmtState", "emcy_allowed", "pdo_allowed", "sdo_allowed"]
 

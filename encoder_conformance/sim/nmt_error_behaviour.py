@@ -13,12 +13,12 @@ from __future__ import annotations
 import threading
 from typing import Protocol
 
-from ..cia301 import ERROR_REGISTER
-from .faults import breaks
-from .hooks import NodeHooks
-from .nmt import NmtState
-from .scheduler import DeadlineScheduler
-from .sync_objects import COMMUNICATION_ERROR_BIT, Read
+from encoder_conformance.cia.cia301 import ERROR_REGISTER
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks
+from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.scheduler import DeadlineScheduler
+from encoder_conformance.sim.sync_objects import COMMUNICATION_ERROR_BIT, Read
 
 
 class Nmt(Protocol):

@@ -12,13 +12,13 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 
-from ..cia301 import COMMUNICATION_AREA
-from ..cia305 import UNCONFIGURED_NODE_ID
-from .faults import breaks
-from .hooks import NodeHooks, ReloadEvent
-from .nmt import TARGET, NmtCommand, NmtState
-from .object_store import ObjectStore
-from .scheduler import DeadlineScheduler, JobHandle
+from encoder_conformance.cia.cia301 import COMMUNICATION_AREA
+from encoder_conformance.cia.cia305 import UNCONFIGURED_NODE_ID
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, ReloadEvent
+from encoder_conformance.sim.nmt import TARGET, NmtCommand, NmtState
+from encoder_conformance.sim.object_store import ObjectStore
+from encoder_conformance.sim.scheduler import DeadlineScheduler, JobHandle
 
 
 def _communication_area(index: int) -> bool:

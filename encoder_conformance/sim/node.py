@@ -19,50 +19,50 @@ from typing import Protocol, TypeVar
 
 import can
 
-from ..cia301 import HEARTBEAT_CONSUMER, SYNC_COUNTER_OVERFLOW, EmcyCode
-from ..cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
-from ..profile import quirk_effects as fx
-from ..profile.datatypes import as_signed
-from ..profile.model import DeviceProfile
-from ..profile.od_builder import initial_value
-from . import sdo_fuzz_faults, tpdo_sync_cycle  # noqa: F401  (register the SDO fuzzing faults, a TPDO variant)
-from .access import ObjectAccess, situation_codes
-from .autostart import Autostart
-from .cam_gate import CamLowLimitGate
-from .emcy import EmcyProducer
-from .encoder import EncoderFunction
-from .faults import FaultSet, assemble
-from .forced_bits import ForcedBits
-from .guarding import GuardingHeartbeatExclusion
-from .heartbeat import HeartbeatProducer
-from .heartbeat_consumer import HeartbeatConsumer
-from .hooks import NodeHooks, ReloadEvent
-from .lss_behaviour import LssBehaviour
-from .lss_configuration import usable_node_id
-from .nmt import NmtState
-from .nmt_error_behaviour import CommErrorBehaviour
-from .nmt_slave import NmtSlave
-from .nvm import Key, NonVolatileMemory
-from .object_store import ObjectStore
-from .pdo_cob_id import PdoCobIdRules
-from .pdo_layout import FixedTpdoLayout
-from .pdo_mapping import MappingRules
-from .scheduler import DeadlineScheduler
-from .sdo_block import BlockEngine
-from .sdo_channel import SdoChannel
-from .sdo_server import SdoServer
-from .send_repeat import SendRepeatCounters
-from .shaft import Shaft
-from .sim_log import EventLog
-from .store_commands import EncoderMemory, StoreCommands
-from .sync_counter import SyncCounterRules
-from .sync_objects import SyncCobIdRules, SyncConsumer, SyncLengthCheck
-from .sync_producer import SyncProducer
-from .sync_timeout import SyncTimeoutMonitor
-from .tpdo import TpdoEngine
-from .values import ObjectValues
-from .write_gates import preop_only, scaling_bit_needed
-from .zeroing import Zeroing
+from encoder_conformance.cia.cia301 import HEARTBEAT_CONSUMER, SYNC_COUNTER_OVERFLOW, EmcyCode
+from encoder_conformance.cia.cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.datatypes import as_signed
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.od_builder import initial_value
+from encoder_conformance.sim import sdo_fuzz_faults, tpdo_sync_cycle  # noqa: F401  (register the SDO fuzzing faults, a TPDO variant)
+from encoder_conformance.sim.access import ObjectAccess, situation_codes
+from encoder_conformance.sim.autostart import Autostart
+from encoder_conformance.sim.cam_gate import CamLowLimitGate
+from encoder_conformance.sim.emcy import EmcyProducer
+from encoder_conformance.sim.encoder import EncoderFunction
+from encoder_conformance.sim.faults import FaultSet, assemble
+from encoder_conformance.sim.forced_bits import ForcedBits
+from encoder_conformance.sim.guarding import GuardingHeartbeatExclusion
+from encoder_conformance.sim.heartbeat import HeartbeatProducer
+from encoder_conformance.sim.heartbeat_consumer import HeartbeatConsumer
+from encoder_conformance.sim.hooks import NodeHooks, ReloadEvent
+from encoder_conformance.sim.lss_behaviour import LssBehaviour
+from encoder_conformance.sim.lss_configuration import usable_node_id
+from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.nmt_error_behaviour import CommErrorBehaviour
+from encoder_conformance.sim.nmt_slave import NmtSlave
+from encoder_conformance.sim.nvm import Key, NonVolatileMemory
+from encoder_conformance.sim.object_store import ObjectStore
+from encoder_conformance.sim.pdo_cob_id import PdoCobIdRules
+from encoder_conformance.sim.pdo_layout import FixedTpdoLayout
+from encoder_conformance.sim.pdo_mapping import MappingRules
+from encoder_conformance.sim.scheduler import DeadlineScheduler
+from encoder_conformance.sim.sdo_block import BlockEngine
+from encoder_conformance.sim.sdo_channel import SdoChannel
+from encoder_conformance.sim.sdo_server import SdoServer
+from encoder_conformance.sim.send_repeat import SendRepeatCounters
+from encoder_conformance.sim.shaft import Shaft
+from encoder_conformance.sim.sim_log import EventLog
+from encoder_conformance.sim.store_commands import EncoderMemory, StoreCommands
+from encoder_conformance.sim.sync_counter import SyncCounterRules
+from encoder_conformance.sim.sync_objects import SyncCobIdRules, SyncConsumer, SyncLengthCheck
+from encoder_conformance.sim.sync_producer import SyncProducer
+from encoder_conformance.sim.sync_timeout import SyncTimeoutMonitor
+from encoder_conformance.sim.tpdo import TpdoEngine
+from encoder_conformance.sim.values import ObjectValues
+from encoder_conformance.sim.write_gates import preop_only, scaling_bit_needed
+from encoder_conformance.sim.zeroing import Zeroing
 
 Send = Callable[[int, bytes, bool], None]
 P = TypeVar("P", bound=fx.EffectParams)

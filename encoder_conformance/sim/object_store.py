@@ -7,13 +7,13 @@ from collections.abc import Callable
 import canopen
 from canopen.objectdictionary import ODVariable
 
-from ..cia301 import TPDO_MAPPING
-from ..profile import datatypes
-from ..profile.model import DeviceProfile, EntrySpec, resolve_node_id_expression
-from ..profile.od_builder import build_object_dictionary, initial_value
-from ..profile.quirk_effects import RestoreExcludes
-from .faults import breaks
-from .nvm import Key, NonVolatileMemory
+from encoder_conformance.cia.cia301 import TPDO_MAPPING
+from encoder_conformance.profile import datatypes
+from encoder_conformance.profile.model import DeviceProfile, EntrySpec, resolve_node_id_expression
+from encoder_conformance.profile.od_builder import build_object_dictionary, initial_value
+from encoder_conformance.profile.quirk_effects import RestoreExcludes
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.nvm import Key, NonVolatileMemory
 
 #: persisted_by labels a 1010h sub stores; the profile's label decides (devices differ in the
 #: ranges their subs cover, e.g. FAULHABER's "application" sub covers 2000h..6FFFh)

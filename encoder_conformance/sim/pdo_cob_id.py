@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..cia301 import (
+from encoder_conformance.cia.cia301 import (
     COB_ID_FIXED_WHILE_VALID,
     COB_ID_FRAME_29_BIT,
     COB_ID_INVALID,
@@ -24,11 +24,11 @@ from ..cia301 import (
     SdoAbortCode,
     is_restricted_can_id,
 )
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nmt import NmtState
-from .nvm import Key
-from .sdo_server import SdoAbort
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.sdo_server import SdoAbort
 
 
 class PdoCobIdRules:

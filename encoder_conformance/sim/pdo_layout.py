@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..profile.quirk_effects import FixedTpdoMapping
+from encoder_conformance.profile.quirk_effects import FixedTpdoMapping
 
 Mapping = list[tuple[int, int, int]]  # (index, sub, bits)
 

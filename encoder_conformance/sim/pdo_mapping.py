@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..cia301 import (
+from encoder_conformance.cia.cia301 import (
     COB_ID_INVALID,
     DUMMY_BITS,
     DUMMY_INDICES,
@@ -24,12 +24,12 @@ from ..cia301 import (
     SdoAbortCode,
     mapping_fields,
 )
-from ..profile.model import DeviceProfile
-from ..profile.quirk_effects import MappingChangeWhileValid
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nvm import Key
-from .sdo_server import SdoAbort
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.quirk_effects import MappingChangeWhileValid
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.sdo_server import SdoAbort
 
 
 def is_mapping_object(index: int) -> bool:

@@ -13,9 +13,9 @@ import struct
 from dataclasses import dataclass, field
 from enum import Enum, auto
 
-from ..cia301 import SdoAbortCode, block_crc
-from .faults import breaks
-from .sdo_server import Later, ObjectAccess, SdoAbort, abort_frame
+from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.sdo_server import Later, ObjectAccess, SdoAbort, abort_frame
 
 #: the block size this server asks the client for in a block download (CiA 301: 1..127 segments)
 DOWNLOAD_BLKSIZE = 127

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from .faults import breaks
-from .hooks import NodeHooks
-from .nmt import NmtState, sdo_allowed
-from .sdo_server import SdoServer
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks
+from encoder_conformance.sim.nmt import NmtState, sdo_allowed
+from encoder_conformance.sim.sdo_server import SdoServer
 
 
 class SdoChannel:

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import struct
 
-from ..cia301 import SdoAbortCode
-from .faults import breaks
-from .heartbeat import HeartbeatProducer
-from .hooks import NodeHooks
-from .sdo_channel import SdoChannel
+from encoder_conformance.cia.cia301 import SdoAbortCode
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.heartbeat import HeartbeatProducer
+from encoder_conformance.sim.hooks import NodeHooks
+from encoder_conformance.sim.sdo_channel import SdoChannel
 
 ABORT = 0x80
 #: EMCY error code 8100h (communication, generic: CiA 301 §7.2.7.3.2 table 21), error register bit 4

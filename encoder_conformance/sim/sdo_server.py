@@ -11,8 +11,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from ..cia301 import SdoAbortCode
-from .faults import breaks
+from encoder_conformance.cia.cia301 import SdoAbortCode
+from encoder_conformance.sim.faults import breaks
 
 TOGGLE_NOT_ALTERNATED = SdoAbortCode.TOGGLE_BIT
 COMMAND_INVALID = SdoAbortCode.COMMAND_SPECIFIER

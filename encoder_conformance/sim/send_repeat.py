@@ -16,8 +16,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from ..profile.quirk_effects import PdoSendRepeatCounters
-from .tpdo_config import TpdoConfig
+from encoder_conformance.profile.quirk_effects import PdoSendRepeatCounters
+from encoder_conformance.sim.tpdo_config import TpdoConfig
 
 Read = Callable[[int, int], int | None]
 

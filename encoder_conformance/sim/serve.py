@@ -19,14 +19,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..cia305 import MAX_NODE_ID, UNCONFIGURED_NODE_ID
-from ..profile.loader import load_profile
-from ..profile.model import DeviceProfile
-from ..profile.quirk_effects import SecondNode
-from .control import parse_address, serve_control
-from .faults import FaultSet
-from .host import SimulatorHost
-from .sim_log import configure_logging, log
+from encoder_conformance.cia.cia305 import MAX_NODE_ID, UNCONFIGURED_NODE_ID
+from encoder_conformance.profile.loader import load_profile
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.quirk_effects import SecondNode
+from encoder_conformance.sim.control import parse_address, serve_control
+from encoder_conformance.sim.faults import FaultSet
+from encoder_conformance.sim.host import SimulatorHost
+from encoder_conformance.sim.sim_log import configure_logging, log
 
 
 @dataclass(frozen=True)

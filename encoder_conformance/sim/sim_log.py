@@ -16,9 +16,9 @@ import logging
 import sys
 from collections.abc import Callable
 
-from .hooks import NodeHooks, ReloadEvent
-from .nmt import NmtState
-from .nvm import Key
+from encoder_conformance.sim.hooks import NodeHooks, ReloadEvent
+from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.nvm import Key
 
 LOGGER = "encoder_conformance.sim"
 log = logging.getLogger(LOGGER)

@@ -12,15 +12,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
-from ..profile import quirk_effects as fx
-from ..profile.model import DeviceProfile
-from .faults import breaks
-from .hooks import NodeHooks
-from .nvm import Key, NonVolatileMemory
-from .object_store import SUB_TO_GROUP, ObjectStore
-from .sdo_server import SdoAbort, SdoNoReply
-from .store_variants import ManufacturerStoreObject, ParameterSets
+from encoder_conformance.cia.cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks
+from encoder_conformance.sim.nvm import Key, NonVolatileMemory
+from encoder_conformance.sim.object_store import SUB_TO_GROUP, ObjectStore
+from encoder_conformance.sim.sdo_server import SdoAbort, SdoNoReply
+from encoder_conformance.sim.store_variants import ManufacturerStoreObject, ParameterSets
 
 
 @dataclass(frozen=True)

@@ -18,9 +18,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..profile import quirk_effects as fx
-from .nvm import Key, NonVolatileMemory
-from .object_store import ObjectStore
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.sim.nvm import Key, NonVolatileMemory
+from encoder_conformance.sim.object_store import ObjectStore
 
 
 def set_slot(set_number: int, key: Key) -> Key:

@@ -10,11 +10,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..cia301 import COMMUNICATION_CYCLE_PERIOD, SYNC_COUNTER_OVERFLOW, SYNC_COUNTER_OVERFLOW_VALID, SdoAbortCode
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nvm import Key
-from .sdo_server import SdoAbort
+from encoder_conformance.cia.cia301 import (
+    COMMUNICATION_CYCLE_PERIOD,
+    SYNC_COUNTER_OVERFLOW,
+    SYNC_COUNTER_OVERFLOW_VALID,
+    SdoAbortCode,
+)
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.sdo_server import SdoAbort
 
 
 class SyncCounterRules:

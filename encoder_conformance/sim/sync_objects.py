@@ -19,7 +19,7 @@ from collections.abc import Callable
 
 import can
 
-from ..cia301 import (
+from encoder_conformance.cia.cia301 import (
     COB_ID_FRAME_29_BIT,
     COB_ID_SYNC_GENERATE,
     SYNC_COB_ID,
@@ -29,11 +29,11 @@ from ..cia301 import (
     SdoAbortCode,
     is_restricted_can_id,
 )
-from ..profile import quirk_effects as fx
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nvm import Key
-from .sdo_server import SdoAbort
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.sdo_server import SdoAbort
 
 COMMUNICATION_ERROR_BIT = 0x10  # 1001h bit 4 (CiA 301 §7.5.2, 1001h)
 Read = Callable[[int, int], int | None]

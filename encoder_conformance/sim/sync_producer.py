@@ -12,7 +12,7 @@ import threading
 import time
 from collections.abc import Callable
 
-from ..cia301 import (
+from encoder_conformance.cia.cia301 import (
     COB_ID_FRAME_29_BIT,
     COB_ID_SYNC_GENERATE,
     COMMUNICATION_CYCLE_PERIOD,
@@ -20,11 +20,11 @@ from ..cia301 import (
     SYNC_COB_ID_OBJECT,
     SYNC_COUNTER_OVERFLOW,
 )
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nmt import NmtState
-from .nvm import Key
-from .scheduler import DeadlineScheduler, JobHandle
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.scheduler import DeadlineScheduler, JobHandle
 
 Read = Callable[[int, int], int | None]
 SendSync = Callable[[int, bytes, bool], None]

@@ -15,14 +15,14 @@ import threading
 import time
 from collections.abc import Callable
 
-from ..cia301 import COMMUNICATION_CYCLE_PERIOD, EmcyCode
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nmt import NmtState
-from .nmt_error_behaviour import CommErrorBehaviour, Nmt
-from .nvm import Key
-from .scheduler import DeadlineScheduler, JobHandle
-from .sync_objects import COMMUNICATION_ERROR_BIT, Read
+from encoder_conformance.cia.cia301 import COMMUNICATION_CYCLE_PERIOD, EmcyCode
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.nmt_error_behaviour import CommErrorBehaviour, Nmt
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.scheduler import DeadlineScheduler, JobHandle
+from encoder_conformance.sim.sync_objects import COMMUNICATION_ERROR_BIT, Read
 
 
 class SyncTimeoutMonitor(CommErrorBehaviour):

@@ -17,15 +17,21 @@ import time
 from collections.abc import Callable
 from functools import partial
 
-from ..cia301 import COB_ID_INVALID, COB_ID_NO_RTR, RTR_EVENT, RTR_SYNCHRONOUS, SYNC_COUNTER_OVERFLOW
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nmt import NmtState, pdo_allowed
-from .nvm import Key
-from .pdo_layout import FixedTpdoLayout
-from .scheduler import DeadlineScheduler, JobHandle
-from .send_repeat import SendRepeatCounters, within_sync_limit
-from .tpdo_config import TpdoConfig
+from encoder_conformance.cia.cia301 import (
+    COB_ID_INVALID,
+    COB_ID_NO_RTR,
+    RTR_EVENT,
+    RTR_SYNCHRONOUS,
+    SYNC_COUNTER_OVERFLOW,
+)
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nmt import NmtState, pdo_allowed
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.pdo_layout import FixedTpdoLayout
+from encoder_conformance.sim.scheduler import DeadlineScheduler, JobHandle
+from encoder_conformance.sim.send_repeat import SendRepeatCounters, within_sync_limit
+from encoder_conformance.sim.tpdo_config import TpdoConfig
 
 CHANGE_POLL_S = 0.005
 

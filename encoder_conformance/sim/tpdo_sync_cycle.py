@@ -8,9 +8,9 @@ device the time it takes to process each SYNC: the TPDO that SYNC brings, or the
 
 from __future__ import annotations
 
-from .faults import breaks
-from .scheduler import JobHandle
-from .tpdo import TpdoEngine
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.scheduler import JobHandle
+from encoder_conformance.sim.tpdo import TpdoEngine
 
 CYCLE_S = 0.001  # CANopenNode's mainline period on Linux
 

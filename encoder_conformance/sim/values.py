@@ -9,11 +9,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..profile import datatypes
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nvm import Key
-from .object_store import ObjectStore
+from encoder_conformance.profile import datatypes
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.object_store import ObjectStore
 
 
 class ObjectValues:

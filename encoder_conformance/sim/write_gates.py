@@ -5,12 +5,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..profile.quirk_effects import WritesNeedScalingBit, WritesPreopOnly
-from .faults import FaultSet, assemble, breaks
-from .hooks import NodeHooks
-from .nmt import NmtState
-from .nvm import Key
-from .sdo_server import SdoAbort
+from encoder_conformance.profile.quirk_effects import WritesNeedScalingBit, WritesPreopOnly
+from encoder_conformance.sim.faults import FaultSet, assemble, breaks
+from encoder_conformance.sim.hooks import NodeHooks
+from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.sdo_server import SdoAbort
 
 SCALING_BIT = 0x04  # 6000h bit 2 (CiA 406)
 

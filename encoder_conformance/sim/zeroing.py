@@ -9,10 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..profile.quirk_effects import ZeroingObject
-from .faults import breaks
-from .hooks import NodeHooks, Value
-from .nvm import Key
+from encoder_conformance.profile.quirk_effects import ZeroingObject
+from encoder_conformance.sim.faults import breaks
+from encoder_conformance.sim.hooks import NodeHooks, Value
+from encoder_conformance.sim.nvm import Key
 
 
 class Zeroing:

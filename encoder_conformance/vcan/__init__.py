@@ -40,8 +40,8 @@ Use: ``runtime.up(["vcan0"], directory)`` (tests, ``with`` closes it) gives the 
 programs; from a shell, ``command.py``: ``vcan up vcan0``, ``vcan run -- candump vcan0``, ``vcan down``.
 """
 
-from .build import BuildError, library
-from .runtime import (
+from encoder_conformance.vcan.build import BuildError, library
+from encoder_conformance.vcan.runtime import (
     ENV_DIR,
     HubError,
     Interface,

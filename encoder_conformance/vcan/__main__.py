@@ -3,7 +3,7 @@ runs the hub itself (what ``start_hub`` launches)."""
 
 import sys
 
-from . import command, hub
+from encoder_conformance.vcan import command, hub
 
 if sys.argv[1:2] == ["hub"]:
     sys.exit(hub.main(sys.argv[2:]))

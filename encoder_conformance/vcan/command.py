@@ -23,10 +23,10 @@ import shutil
 import sys
 from pathlib import Path
 
-from ..exit_codes import RunExit
-from .build import BuildError, library
-from .protocol import CAN_MTU, CANFD_MTU
-from .runtime import (
+from encoder_conformance.exit_codes import RunExit
+from encoder_conformance.vcan.build import BuildError, library
+from encoder_conformance.vcan.protocol import CAN_MTU, CANFD_MTU
+from encoder_conformance.vcan.runtime import (
     ENV_DIR,
     MODES,
     HubError,

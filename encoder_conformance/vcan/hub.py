@@ -27,7 +27,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .protocol import (
+from encoder_conformance.vcan.protocol import (
     ACK,
     CAN_MTU,
     CANFD_MTU,

@@ -27,9 +27,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
-from .build import library
-from .hub import HUB_SOCKET, PID_FILE
-from .protocol import CAN_MTU, CANFD_MTU
+from encoder_conformance.vcan.build import library
+from encoder_conformance.vcan.hub import HUB_SOCKET, PID_FILE
+from encoder_conformance.vcan.protocol import CAN_MTU, CANFD_MTU
 
 ENV_DIR = "ENCODER_CONFORMANCE_VCAN_DIR"
 FIRST_IFINDEX = 1000

@@ -10,12 +10,12 @@ Export (``export``): a profile becomes an EDS through ``od_builder.build_object_
 canopen's exporter, so other CANopen tools can drive the simulated twin.
 """
 
-from .draft import profile_draft_from_eds
-from .draft_yaml import write_profile_draft
-from .export import export_eds
-from .importer import EdsImport, objects_from_eds, read_eds
-from .numbers import normalise_node_id_formula, parse_number
-from .repair import CleanedEds, clean_eds
+from encoder_conformance.profile.eds.draft import profile_draft_from_eds
+from encoder_conformance.profile.eds.draft_yaml import write_profile_draft
+from encoder_conformance.profile.eds.export import export_eds
+from encoder_conformance.profile.eds.importer import EdsImport, objects_from_eds, read_eds
+from encoder_conformance.profile.eds.numbers import normalise_node_id_formula, parse_number
+from encoder_conformance.profile.eds.repair import CleanedEds, clean_eds
 
 __all__ = [
     "CleanedEds", "EdsImport", "clean_eds", "export_eds", "normalise_node_id_formula", "objects_from_eds",

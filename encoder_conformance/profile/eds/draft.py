@@ -7,8 +7,8 @@ import re
 from pathlib import Path
 from typing import Any
 
-from .importer import EdsImport, read_eds
-from .numbers import _DYNAMIC_OBJECTS, _LSS_ASSUMED, _TIMING_PLACEHOLDERS, parse_number
+from encoder_conformance.profile.eds.importer import EdsImport, read_eds
+from encoder_conformance.profile.eds.numbers import _DYNAMIC_OBJECTS, _LSS_ASSUMED, _TIMING_PLACEHOLDERS, parse_number
 
 logger = logging.getLogger(__name__)
 

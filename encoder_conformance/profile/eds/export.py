@@ -11,7 +11,7 @@ import canopen
 from canopen.objectdictionary import ODVariable
 from canopen.objectdictionary import eds as canopen_eds
 
-from ..model import DeviceProfile
+from encoder_conformance.profile.model import DeviceProfile
 
 logger = logging.getLogger(__name__)
 
@@ -53,7 +53,7 @@ def _limits_from_allowed(profile: DeviceProfile, od: canopen.ObjectDictionary) -
 
 def export_eds(profile: DeviceProfile, path: Path, node_id: int | None = None) -> Path:
     """Write ``profile`` as an EDS (or a DCF with the twin's values if ``path`` ends in .dcf)."""
-    from ..od_builder import build_object_dictionary
+    from encoder_conformance.profile.od_builder import build_object_dictionary
 
     path = Path(path)
     od = build_object_dictionary(profile, node_id)

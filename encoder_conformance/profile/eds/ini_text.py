@@ -6,7 +6,7 @@ import logging
 import re
 from dataclasses import dataclass, field
 
-from .numbers import (
+from encoder_conformance.profile.eds.numbers import (
     _KEY_ALIASES,
     _KEY_PATTERNS,
     _OBJECT_SECTION,

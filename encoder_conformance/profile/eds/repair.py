@@ -6,7 +6,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 
-from .ini_text import (
+from encoder_conformance.profile.eds.ini_text import (
     CleanedEds,
     _decode,
     _fix_comments,
@@ -15,7 +15,7 @@ from .ini_text import (
     _IniReader,
     _note_number_rewrite,
 )
-from .numbers import (
+from encoder_conformance.profile.eds.numbers import (
     _ACCESS_ALIASES,
     _ARRAY,
     _COMMISSIONING_NUMBERS,

@@ -1,0 +1,1 @@
+"""Configuration a bench brings: the station file and the CAN bus settings (with where each came from)."""

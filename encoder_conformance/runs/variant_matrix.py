@@ -1,0 +1,107 @@
+"""Run the suites against every conformant variant of the twin: a reading the texts allow must never fail.
+
+Each open reading (``readings``) has a variant of the twin that plays it. The variant matrix runs the
+suite modules each reading concerns against its variant, on every profile where it applies (the
+profile has the capabilities the reading needs and no quirk whose documented behaviour the variant
+would break). A conformant variant that fails a test means the suite accepts only one reading: a false
+failure waiting for a real device. Warnings (broken inferred rules) are allowed; failures and errors
+are not, and every run must have judged at least one test (a variant that only skips proves nothing).
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+from encoder_conformance.paths import REPO_ROOT
+from encoder_conformance.profile.loader import load_profile
+from encoder_conformance.readings import OpenReading, all_readings
+from encoder_conformance.runs.fault_matrix import PREFLIGHT, RunResult, run_suite
+
+#: one profile per family, the generic class C3 and the self-test profiles with the optional features
+#: (inhibit time, SYNC start value, block transfer) no shipped device has
+REPRESENTATIVE_PROFILES: tuple[str, ...] = (
+    "wachendorff-wdga-mt",
+    "faulhaber-mc5005",
+    "fraba-posital-awc58-c2-mt",
+    "siko-wx58m-1212-mt",
+    "waycon-sx",
+    "cia406-c3-st",
+    "tests/data/profiles/cia406-full-pdo.yaml",
+    "tests/data/profiles/cia406-block-sdo.yaml",
+)
+#: the class C3 encoder with block transfer: for any other reading it repeats cia406-c3-st, which it is made from
+ONLY_WHERE_NEEDED: frozenset[str] = frozenset({"tests/data/profiles/cia406-block-sdo.yaml"})
+
+
+@dataclass(frozen=True)
+class VariantRun:
+    """One variant against one profile, and what came of it."""
+
+    reading: OpenReading
+    profile: str
+    result: RunResult
+
+    @property
+    def bad(self) -> list[str]:
+        """Tests that failed, errored or broke our own code (the start-up check included)."""
+        return sorted(name for name, outcome in self.result.outcomes.items()
+                      if outcome in ("failed", "error", "internal"))
+
+    @property
+    def judged(self) -> int:
+        """Tests that reached a verdict (passed, failed or errored), the start-up check aside."""
+        return sum(1 for name, outcome in self.result.outcomes.items() if name != PREFLIGHT and outcome != "skipped")
+
+    @property
+    def ok(self) -> bool:
+        return not self.bad and self.judged > 0 and self.result.returncode == 0
+
+
+def _profile_ref(profile: str) -> str:
+    return str(REPO_ROOT / profile) if "/" in profile else profile
+
+
+def applicable(profile: str, readings: list[OpenReading] | None = None) -> list[OpenReading]:
+    """The readings a profile can play: its capabilities cover what each needs, no quirk excludes it."""
+    loaded = load_profile(_profile_ref(profile)).profile
+    capabilities = {name for name, value in loaded.capabilities if value}
+    capabilities |= {f"lss:{service}" for service in loaded.capabilities.lss}
+    return [r for r in (readings or all_readings()) if r.applies_to(capabilities, loaded.effects)]
+
+
+def plan(profiles: tuple[str, ...] = REPRESENTATIVE_PROFILES,
+         readings: list[OpenReading] | None = None) -> list[tuple[OpenReading, str]]:
+    """(reading, profile) for every profile where each reading applies; a profile in ONLY_WHERE_NEEDED only for
+    the readings no other profile of the list can play."""
+    others = [p for p in profiles if p not in ONLY_WHERE_NEEDED]
+    played = {reading.point for profile in others for reading in applicable(profile, readings)}
+    pairs = []
+    for profile in profiles:
+        pairs += [(reading, profile) for reading in applicable(profile, readings)
+                  if profile not in ONLY_WHERE_NEEDED or reading.point not in played]
+    return pairs
+
+
+def run_variants(pairs: list[tuple[OpenReading, str]], workdir: Path, workers: int = 2) -> list[VariantRun]:
+    """Each variant against its modules on its profile, ``workers`` suite sessions at a time."""
+
+    def one(pair: tuple[OpenReading, str]) -> VariantRun:
+        reading, profile = pair
+        folder = workdir / Path(profile).stem
+        folder.mkdir(parents=True, exist_ok=True)
+        return VariantRun(reading, profile, run_suite(profile, reading.variant, folder, targeted=True))
+
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        return list(pool.map(one, pairs))
+
+
+def format_runs(runs: list[VariantRun]) -> str:
+    """Text table: variant, profile, tests judged, what failed."""
+    lines = [f"variant matrix ({len(runs)} runs: each open reading's variant on each profile where it applies)"]
+    for run in runs:
+        verdict = "ok" if run.ok else "FALSE FAILURE" if run.bad else f"NOT JUDGED (exit {run.result.returncode})"
+        lines.append(f"  {run.reading.variant:36s} {Path(run.profile).stem:28s} {run.judged:4d} judged  {verdict}")
+        lines += [f"      {name}" for name in run.bad[:10]]
+    return "\n".join(lines)

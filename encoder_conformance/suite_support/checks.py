@@ -1,0 +1,177 @@
+"""Assertion helpers for the suites: expected, observed, the abort code's name, the last frames."""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.cia.cia301 import ABORT_FOR_SITUATION
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.latency_probe import HostLatency
+from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
+from encoder_conformance.models.timing import interval_stats, schedule_fit
+from encoder_conformance.plugin.evidence import Evidence
+from encoder_conformance.profile.model import HeartbeatTolerance
+from encoder_conformance.profile.quirk_effects import AbortCode, P
+
+
+def expected_aborts(dut: DeviceUnderTest, situation: str, evidence: Evidence) -> set[int]:
+    """CiA's code for the situation, or the codes a documented quirk of the profile names."""
+    for quirk_id, quirk in dut.profile.quirks.items():
+        if isinstance(quirk.params, AbortCode) and quirk.params.situation == situation:
+            evidence.deviation(quirk_id, quirk.title)
+            return set(quirk.params.codes)
+    return {ABORT_FOR_SITUATION[situation]}
+
+
+def abort_family(code: int) -> int:
+    """The family of an abort code: all digits but the last (06090030h, 06090031h, 06090032h: 0609003xh)."""
+    return code & ~0xF
+
+
+def abort_accepted(dut: DeviceUnderTest, response: SdoResponse, expected: set[int]) -> bool:
+    """True for an abort with one of ``expected`` codes, or (``dut.abort_codes == "family"``) of their family;
+    a family match is noted in the test's evidence."""
+    if not response.is_abort or response.abort_code is None:
+        return False
+    if response.abort_code in expected:
+        return True
+    if dut.abort_codes == "family" and abort_family(response.abort_code) in {abort_family(c) for c in expected}:
+        dut.tester_notes.append(f"abort {abort_name(response.abort_code)} accepted by family for "
+                                f"{' or '.join(abort_name(c) for c in sorted(expected))} (--abort-codes family)")
+        return True
+    return False
+
+
+def assert_abort(dut: DeviceUnderTest, response: SdoResponse, expected: set[int], what: str) -> None:
+    """The response must be an abort with one of ``expected`` codes (or their family, by the run's
+    --abort-codes) for the same multiplexer."""
+    wanted = " or ".join(abort_name(code) for code in sorted(expected))
+    if dut.abort_codes == "family":
+        wanted += " (or a code of its family)"
+    if not response.is_abort:
+        raise AssertionError(
+            f"{what}: expected abort {wanted}, observed {response.describe()}\n"
+            f"last frames:\n{format_frames(dut.frames.last(6))}"
+        )
+    if not abort_accepted(dut, response, expected):
+        raise AssertionError(f"{what}: expected abort {wanted}, observed abort {abort_name(response.abort_code or 0)}")
+
+
+def judge_refusal(dut: DeviceUnderTest, response: SdoResponse | None, expected: set[int], tolerated: set[int],
+                  what: str, evidence: Evidence) -> None:
+    """A request CiA 301 says the server must refuse: no answer or no abort fails (the caller's clause); an abort
+    with ``expected`` (CiA's or the manual's code; its family with --abort-codes family) or with a code the CiA
+    conformance test tool accepts (``tolerated``) passes; any other code is an inferred problem (a warning)."""
+    if response is None:
+        raise AssertionError(f"{what}: no SDO response within {dut.sdo_timeout * 1000:.0f} ms (an abort is due)\n"
+                             f"last frames:\n{format_frames(dut.frames.last(8))}")
+    if not response.is_abort:
+        raise AssertionError(f"{what}: accepted ({response.describe()}), expected an abort")
+    if abort_accepted(dut, response, expected):
+        return
+    code = response.abort_code or 0
+    wanted = " or ".join(abort_name(c) for c in sorted(expected))
+    if code in tolerated:
+        evidence.note(f"{what}: abort {abort_name(code)}, accepted as the CiA conformance test tool does "
+                      f"(CiA 301 names {wanted})")
+        return
+    evidence.inferred_problem(f"{what}: abort {abort_name(code)}, expected {wanted}",
+                              "the abort code: CiA 301 table 22 names the code; the conformance test tool accepts "
+                              + (", ".join(abort_name(c) for c in sorted(tolerated)) or "no other"))
+
+
+def check_periodic(timestamps: list[float], period_ms: float, tolerance: HeartbeatTolerance, what: str,
+                   evidence: Evidence, host: HostLatency | None = None, clock: str = "not stated") -> None:
+    """Periodic frames: the long-run period (fitted over all frames) within the tolerance, and the frames
+    on their schedule.
+
+    At most ``tolerance.late_frames`` of the frames may be further than the tolerance from the
+    fitted schedule (a frame delayed by bus arbitration or a busy tester), none by more than half a
+    period. With ``host`` (the tester host's own lateness during the capture), a verdict that would fail
+    is inconclusive (skipped with the figures) where the host explains it: every frame off the schedule
+    came when the host itself ran that late, or the period is off while the host was late throughout.
+    Evidence: the measurements, the host's lateness, and the intervals as a timing measurement (statistics and
+    plot, stamped by ``clock``).
+    """
+    allowed = tolerance.allowed_ms(period_ms)
+    stats = interval_stats(timestamps, period_ms)
+    fit = schedule_fit(timestamps, period_ms)
+    late = fit.off_schedule(allowed)
+    may_be_late = int(tolerance.late_frames * len(timestamps))
+    evidence.measure(f"{what} period fitted over {len(timestamps)} frames", round(fit.fitted_period_ms, 3), "ms",
+                     period_ms - allowed, period_ms + allowed)
+    evidence.measure(f"{what} mean interval", round(stats.mean_ms, 3), "ms")
+    evidence.measure(f"{what} frames off schedule by > {allowed:.1f} ms", len(late), "frames", 0, may_be_late)
+    basis = ("inferred: CiA 301 sets the period, no tolerance; profile timing.heartbeat_tolerance "
+             f"max({tolerance.abs_ms:g} ms, {tolerance.rel:.0%})")
+    evidence.timing(f"{what} interval", stats.intervals_ms, nominal_ms=period_ms, low_ms=period_ms - allowed,
+                    high_ms=period_ms + allowed, clock=clock, basis=basis,
+                    judged=f"the period fitted over all frames, and at most {may_be_late} frame(s) further than the "
+                           "band's half-width from the fitted schedule (one late frame moves two intervals)")
+    evidence.note(f"basis of the tolerance: {basis}")
+    if host is not None:
+        evidence.note(f"tester host during the capture: {host.describe()}")
+    if late and len(late) <= may_be_late:
+        evidence.note(f"{len(late)} frame(s) off the schedule within the allowed share (timing.heartbeat_tolerance."
+                      f"late_frames = {tolerance.late_frames:g}): " + ", ".join(f"#{n}: {o:+.1f} ms" for n, o in late))
+    if any(abs(o) > period_ms / 2 for _, o in late):
+        may_be_late = 0  # a frame half a period off is a missing or extra one, not a late one
+    period_off = abs(fit.fitted_period_ms - period_ms) > allowed
+    if host is not None and (period_off or len(late) > may_be_late):
+        _inconclusive_if_host_explains(timestamps, period_ms, allowed, late, period_off, host, what)
+    assert not period_off, (
+        f"{what}: period {fit.fitted_period_ms:.2f} ms (fitted over {len(timestamps)} frames; mean interval "
+        f"{stats.mean_ms:.2f} ms), expected {period_ms} ms within {allowed:.1f} ms"
+    )
+    assert len(late) <= may_be_late, (
+        f"{what}: {len(late)} of {len(timestamps)} frames further than {allowed:.1f} ms from the {period_ms} ms "
+        f"schedule (at most {may_be_late} may be): " + ", ".join(f"#{n}: {o:+.1f} ms" for n, o in late[:8])
+        + "; intervals: " + ", ".join(f"#{n}: {i:.1f} ms" for n, i in stats.outside(allowed)[:8])
+    )
+
+
+def _inconclusive_if_host_explains(timestamps: list[float], period_ms: float, allowed: float,
+                                   late: list[tuple[int, float]], period_off: bool, host: HostLatency,
+                                   what: str) -> None:
+    """Skip as inconclusive where the tester's host, not the device, explains what would fail."""
+    window = period_ms / 1000
+    unexplained = [(n, o) for n, o in late if host.worst_near(timestamps[n], window) < abs(o) - allowed]
+    if period_off and not host.sustained(allowed):
+        return  # the period itself is off while the host kept time: the device's
+    if unexplained and not period_off:
+        return  # a frame off the schedule while the host was on time: the device's
+    pytest.skip(f"inconclusive: {what} timing cannot be judged, the tester's host was overloaded: "
+                f"{host.describe()}; tolerance {allowed:.1f} ms. Frames off the schedule: "
+                + (", ".join(f"#{n}: {o:+.1f} ms" for n, o in late[:8]) or "none"))
+
+
+def inconclusive_if_host_late(when: list[float], excess_ms: list[float], host: HostLatency, what: str) -> None:
+    """Skip as inconclusive where the tester's host was itself that late at each moment a figure is off."""
+    if all(host.worst_near(t, 0.05) >= ms for t, ms in zip(when, excess_ms, strict=True)):
+        pytest.skip(f"inconclusive: {what} cannot be judged, the tester's host was overloaded at each sample "
+                    f"off the limit: {host.describe()}")
+
+
+def describe_value(value: object) -> str:
+    if isinstance(value, int):
+        return f"{value} (0x{value:X})"
+    return repr(value)
+
+
+def documented_quirk(dut: DeviceUnderTest, effect: type[P], evidence: Evidence, otherwise: str,
+                     needs: tuple[str, ...] = ()) -> P:
+    """The typed params of the profile's quirk with ``effect``, cited in the evidence; skips if there is none.
+
+    ``otherwise`` says what the device does without the quirk (the skip reason); ``needs`` lists
+    params the test cannot do without (e.g. the test_object it may change).
+    """
+    found = dut.profile.quirk_with_effect(effect.effect)
+    if found is None:
+        pytest.skip(f"not applicable: {otherwise} (no quirk {effect.effect})")
+    quirk_id, quirk = found
+    missing = [name for name in needs if getattr(quirk.params, name, None) is None]
+    if missing:
+        pytest.skip(f"not applicable: quirk {quirk_id} names no {', '.join(missing)} the suite may use")
+    evidence.deviation(quirk_id, quirk.title)
+    return quirk.params
