@@ -19,31 +19,29 @@ device, step by step so that the hysteresis history is the device's. What each r
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import pytest
 
 from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.encoder_bench import EncoderBench
 from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.pdo_mapping import MappingCustody, apply_mapping, describe, read_mapping
+from encoder_conformance.dut.nmt_preconditions import return_to_preoperational
+from encoder_conformance.dut.pdo_mapping import MappingCustody, apply_mapping, describe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
+from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.cam import Cam
 from encoder_conformance.models.encoder.position import units_per_rev
-from encoder_conformance.models.encoder.reference import EncoderReference
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.cam import CHANNEL, WINDOW_RULE, CamChannel, Findings, Remapped, cam_names
 from encoder_conformance.suite_support.checks import abort_accepted
-from fixtures.dut import return_to_preoperational
-from fixtures.encoder import EncoderBench
 
 # the position is put by preset (capability preset), so the tests run on a bench without a motor
 pytestmark = [pytest.mark.spec("CiA 406 6300h-6337h (CAM)"), pytest.mark.requires("cam", "preset"),
               pytest.mark.destructive]
 
-CHANNEL = 1  # the tests use CAM channel 1 (sub-index 1 of every CAM object)
-WINDOW_RULE = "CiA 406 6300h-6302h, 6310h-6327h (CAM state, enable, polarity, limits)"
 EDGE_RULE = "the window edges belong to the window (WDGA M §7.5 example: CAM1 0..2048, CAM2 2049..4095)"
 DISABLED_RULE = "a disabled cam's state bit reads 0 (WDGA M §7.5 says only that it cannot change state)"
 SWITCH_ON_RULE = ("with hysteresis an inactive cam switches on at the window edge (CiA 406 names only the "
@@ -51,137 +49,8 @@ SWITCH_ON_RULE = ("with hysteresis an inactive cam switches on at the window edg
 LEAVING_RULE = ("with hysteresis a cam stays on up to the full hysteresis past the edge it leaves by (a band "
                 "centred on the edge would end at half of it)")
 HYSTERESIS_RULE = "CiA 406 6330h-6337h (hysteresis of the switching points), WDGA M §7.5.6"
-ROOM = 1 << 16  # the windows lie within this many units (readable positions on any range)
 MANUAL_EXAMPLE_ENABLE = 0x4A  # M §7.5.2: CAM2 + CAM4 + CAM7
 MANUAL_EXAMPLE_POLARITY = 0x13  # M §7.5.3: CAM1, CAM2, CAM5 inverted
-
-
-def _cams(mask: int) -> str:
-    return ", ".join(f"CAM{n + 1}" for n in range(8) if mask >> n & 1) or "none"
-
-
-@dataclass
-class Findings:
-    """Differences between the device's 6300h and the model: failures, and those that break only an inferred rule."""
-
-    hard: list[str] = field(default_factory=list)
-    inferred: list[tuple[str, str]] = field(default_factory=list)  # (observation, rule)
-    steps: int = 0
-
-    def compare(self, what: str, observed: int, expected: int, inferred: Mapping[int, str] | None = None) -> None:
-        """``inferred``: cam number -> the inferred rule alone deciding that cam's bit at this step."""
-        self.steps += 1
-        diff = observed ^ expected
-        if not diff:
-            return
-        inferred = inferred or {}
-        text = f"{what}: 6300h.{CHANNEL:02X} = {observed:02X}h, expected {expected:02X}h"
-        firm = [n for n in range(8) if diff >> n & 1 and n not in inferred]
-        soft = [n for n in range(8) if diff >> n & 1 and n in inferred]
-        if firm:
-            self.hard.append(f"{text} (differs in {_cams(sum(1 << n for n in firm))})")
-        for n in soft:
-            self.inferred.append((f"{text} (CAM{n + 1} differs)", inferred[n]))
-
-    def report(self, evidence: Evidence, rests_on: tuple[str, str] = ("cia", WINDOW_RULE)) -> None:
-        basis, source = rests_on
-        evidence.rests_on(basis, source)  # type: ignore[arg-type]
-        evidence.note(f"{self.steps} CAM states compared with the reference model")
-        for observation, rule in self.inferred:
-            evidence.inferred_problem(observation, rule)
-        if self.hard:
-            raise AssertionError("CAM state differs from the reference model:\n" + "\n".join(self.hard))
-
-
-@dataclass
-class CamChannel:
-    """CAM channel 1 of the device: settings written in the profile's order, the position put by preset."""
-
-    encoder: EncoderBench
-    count: int  # cams per channel
-    high_first: bool  # quirk cam_low_below_high: a low limit is accepted only below the high limit
-    span: int
-    lowest: int  # the smallest position value
-
-    @property
-    def dut(self) -> DeviceUnderTest:
-        return self.encoder.access.dut
-
-    # -- settings ------------------------------------------------------------------------------
-    def configure(self, cams: Mapping[int, Cam], enable: int, polarity: int = 0) -> EncoderReference:
-        """Write enable, polarity, hysteresis, high limits, then low limits (WDGA M §8.11 order); returns the
-        reference model with the settings read back (checked against those written)."""
-        write = self.encoder.write
-        write(od.CAM_ENABLE, CHANNEL, enable)
-        write(od.CAM_POLARITY, CHANNEL, polarity)
-        for number, cam in cams.items():
-            write(od.cam_limit_objects(number)[2], CHANNEL, cam.hysteresis)
-        limits = (1, 0) if self.high_first else (0, 1)
-        for which in limits:
-            for number, cam in cams.items():
-                write(od.cam_limit_objects(number)[which], CHANNEL, (cam.low, cam.high)[which])
-        reference = self.encoder.reference()
-        channel = reference.settings.cam_channels[CHANNEL - 1]
-        wrong = [f"CAM{n + 1} {channel.cams[n]}, written {cam}" for n, cam in cams.items() if channel.cams[n] != cam]
-        if (channel.enable, channel.polarity) != (enable, polarity):
-            wrong.append(f"enable/polarity {channel.enable:02X}h/{channel.polarity:02X}h, written "
-                         f"{enable:02X}h/{polarity:02X}h")
-        assert not wrong, "CAM settings read back differ from those written: " + "; ".join(wrong)
-        return reference
-
-    def set_registers(self, reference: EncoderReference, enable: int | None = None,
-                      polarity: int | None = None) -> None:
-        """Write 6301h/6302h and take them, read back, into ``reference`` (its hysteresis history kept)."""
-        channel = reference.settings.cam_channels[CHANNEL - 1]
-        if enable is not None:
-            self.encoder.write(od.CAM_ENABLE, CHANNEL, enable)
-            channel = replace(channel, enable=self._read(od.CAM_ENABLE))
-            assert channel.enable == enable, f"6301h.{CHANNEL:02X} reads {channel.enable:02X}h, written {enable:02X}h"
-        if polarity is not None:
-            self.encoder.write(od.CAM_POLARITY, CHANNEL, polarity)
-            channel = replace(channel, polarity=self._read(od.CAM_POLARITY))
-            assert channel.polarity == polarity, (f"6302h.{CHANNEL:02X} reads {channel.polarity:02X}h, "
-                                                  f"written {polarity:02X}h")
-        channels = list(reference.settings.cam_channels)
-        channels[CHANNEL - 1] = channel
-        reference.settings = replace(reference.settings, cam_channels=tuple(channels))
-
-    def _read(self, index: int) -> int:
-        value = self.encoder.access.read_int(index, CHANNEL)
-        assert value is not None, f"{index:04X}h.{CHANNEL:02X} is not in the profile"
-        return value
-
-    # -- position and state --------------------------------------------------------------------
-    def move(self, position: int) -> None:
-        """Put the position at ``position`` by presetting (no rotation: a jump, as the CAM sees it)."""
-        reached = self.encoder.preset(position)
-        assert reached == position, (f"preset {position}: the position reads {reached} (see the preset tests); "
-                                     "the CAM checks need the position where they put it")
-
-    def state(self) -> int:
-        return self._read(od.CAM_STATE)
-
-    def visit(self, reference: EncoderReference, position: int) -> tuple[int, int]:
-        """Move there; (observed, expected) 6300h, the model stepped to the same position."""
-        self.move(position)
-        return self.state(), reference.cam_state(position, CHANNEL)
-
-    # -- windows -------------------------------------------------------------------------------
-    def windows(self, hysteresis: int = 0) -> dict[int, Cam]:
-        """Disjoint windows, one per cam, from the smallest position up to at most ROOM units (within half the
-        range: valid positions on signed devices too), with room for ``hysteresis`` between them."""
-        pitch = min(self.span // 2, ROOM) // (self.count + 2)
-        if pitch < 8:
-            pytest.skip(f"not applicable: a position range of {self.span} leaves no room for {self.count} windows")
-        width = pitch // 2
-        return {n: Cam(self.lowest + pitch * (n + 1), self.lowest + pitch * (n + 1) + width, hysteresis)
-                for n in range(self.count)}
-
-    @staticmethod
-    def outside(cams: Mapping[int, Cam]) -> int:
-        """A position below every window and its hysteresis band."""
-        first = min(cams.values(), key=lambda cam: cam.low)
-        return first.low - first.hysteresis - (first.high - first.low) // 2 - 1
 
 
 @pytest.fixture
@@ -302,12 +171,12 @@ def test_disabled_cam_reads_zero_whatever_polarity(cam_channel: CamChannel, evid
                 values.add(observed >> number & 1)
         changed = [n for n, values in seen.items() if len(values) > 1]
         if changed:
-            findings.hard.append(f"polarity {polarity:02X}h: disabled {_cams(sum(1 << n for n in changed))} changed "
-                                 "state with the position (only enabled cams can change state, WDGA M §7.5.2)")
+            findings.hard.append(f"polarity {polarity:02X}h: disabled {cam_names(sum(1 << n for n in changed))} "
+                                 "changed state with the position (only enabled cams can change state, WDGA M §7.5.2)")
         ones = [n for n, values in seen.items() if values == {1}]
         if ones:
-            evidence.inferred_problem(f"polarity {polarity:02X}h: disabled {_cams(sum(1 << n for n in ones))} read 1",
-                                      DISABLED_RULE)
+            evidence.inferred_problem(
+                f"polarity {polarity:02X}h: disabled {cam_names(sum(1 << n for n in ones))} read 1", DISABLED_RULE)
     findings.report(evidence, ("cia", "CiA 406 6301h (CAM enable), WDGA M §7.5.2"))
 
 
@@ -418,7 +287,7 @@ def test_hysteresis_holds_when_leaving_both_directions(cam_channel: CamChannel, 
 def _raw_write(cam_channel: CamChannel, index: int, value: int) -> sdo_frames.SdoResponse:
     """Write ``value`` without raising on an abort; the old value is put back after the test."""
     encoder = cam_channel.encoder
-    encoder.journal.remember(index, CHANNEL)  # type: ignore[attr-defined]
+    encoder.journal.remember(index, CHANNEL)
     request = sdo_frames.expedited_download_request(index, CHANNEL, encoder.access.encode(index, CHANNEL, value))
     response = cam_channel.dut.sdo_request(request)
     assert response is not None, f"{index:04X}h.{CHANNEL:02X} = {value}: no SDO answer"
@@ -511,12 +380,6 @@ def test_low_limit_before_high_limit_refused(cam_channel: CamChannel, evidence: 
 
 # -- CAM state in a TPDO ----------------------------------------------------------------------------------
 
-@dataclass
-class Remapped:
-    comm: int
-    cob_id: int  # CAN-ID of the TPDO
-
-
 @pytest.fixture
 def cam_tpdo(cam_channel: CamChannel, evidence: Evidence) -> Iterator[Remapped]:
     """A TPDO mapped with 6300h sub 1 alone, sent on every SYNC; afterwards pre-operational and the mapping back
@@ -531,19 +394,20 @@ def cam_tpdo(cam_channel: CamChannel, evidence: Evidence) -> Iterator[Remapped]:
         choice = choose_tpdo(dut, 2, [1])
     except NoUsableTpdo as exc:
         pytest.skip(str(exc))
-    comm, mapping = choice.comm, choice.comm + 0x200
+    tpdo = TpdoUnderTest(dut, journal, choice.comm, choice.transmission_type)
+    comm, mapping = tpdo.comm, tpdo.mapping_index
     entries = [dut.profile.entry(mapping, sub) for sub in (0, 1)] + [dut.profile.entry(comm, 1)]
     if any(e is None or not e.writable for e in entries):
         pytest.skip(f"not applicable: {mapping:04X}h sub 0/1 or {comm:04X}h.01 not writable")
     for note in choice.notes:
         evidence.note(note)
     with MappingCustody(dut, comm):
-        before = read_mapping(dut, comm)
-        journal.write(comm, 2, bytes([1]))  # type: ignore[attr-defined]
+        before = tpdo.mapping()
+        tpdo.configure(trans_type=1)  # sub 2 is writable: the choice asked for it
         apply_mapping(dut, comm, [(od.CAM_STATE, CHANNEL, 8)])
         evidence.note(f"{mapping:04X}h = [63000{CHANNEL}08h] (6300h.{CHANNEL:02X}, 8 bit), {comm:04X}h.02 = 1, "
                       f"mapping before {describe(before)}")
-        yield Remapped(comm, dut.read_uint(comm, 1) & 0x7FF)
+        yield Remapped(comm, tpdo.can_id())
         if dut.usable:
             return_to_preoperational(dut)
 

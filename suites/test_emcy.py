@@ -3,7 +3,7 @@ register bit 0 (1001h), the error-reset EMCY, the NMT states that allow EMCY, an
 RPDOs offers (a SYNC of the wrong length, a heartbeat-consumer time-out). The error history 1003h:
 test_emcy_history.py.
 
-Errors come from a trigger the bench and the device offer (fixtures/emcy.py: the bench's error stimulus, else the
+Errors come from a trigger the bench and the device offer (suite_support/emcy.py: the bench's error stimulus, else the
 bus triggers). A bench run adds entries to the device's error history (1003h) with each error; clearing them needs
 the clear (1003h sub 0 = 0), which only test_emcy_history's clearing test sends. Settings the tests change (1014h,
 1015h, 1019h, 1016h) are put back afterwards (on a SIKO each write of 1014h is stored by the device itself); an error
@@ -30,10 +30,9 @@ from encoder_conformance.cia.cia301 import (
 from encoder_conformance.dut.emcy_trigger import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
+from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import inconclusive_if_host_late
-from fixtures.dut import return_to_preoperational
-from fixtures.nmt_state import start_operational
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.7 (EMCY)"), pytest.mark.requires("emcy")]
 

@@ -16,6 +16,7 @@ import pytest
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.reference_custody import ReferenceCustody
 from encoder_conformance.dut.store_watch import AUTO_STORED
+from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.position import position_limits, units_per_rev, unsigned_in_span
 from encoder_conformance.plugin.options import settings_of
@@ -35,6 +36,13 @@ def _signed_distance(before: int, after: int, span: int) -> int:
     """The shortest way from ``before`` to ``after`` on a range that wraps at ``span``."""
     distance = unsigned_in_span(after - before, span)
     return distance - span if distance > span // 2 else distance
+
+
+def _rotation(encoder):
+    """The shaft drive; skips the test where the bench has none (it needs real rotation)."""
+    if encoder.shaft is None:
+        pytest.skip(f"not available: needs real rotation: {encoder.why_no_shaft}")
+    return encoder.shaft
 
 
 def _allow_preset(encoder) -> None:
@@ -146,7 +154,7 @@ def test_preset_sets_position_and_offset(encoder, evidence, where: str, ccw: boo
 def test_preset_is_kept_while_the_shaft_turns(encoder, evidence):
     """After a preset the position follows the shaft from the preset value (the offset is applied, not a one-off)."""
     _rests_on_preset_clause(encoder, evidence)
-    shaft = encoder.rotation()
+    shaft = _rotation(encoder)
     _allow_preset(encoder)
     settings = encoder.access.settings(functions=False)
     target = settings.shown(settings.span // 2)
@@ -165,7 +173,7 @@ def test_position_wraps_at_the_total_measuring_range(encoder, evidence):
     """Counting up across the end of the range continues at its start (multi-turn wrap at TMR; singleturn at
     one revolution): preset just below the end, turn a few units up, compare with the model."""
     _rests_on_preset_clause(encoder, evidence)
-    shaft = encoder.rotation()
+    shaft = _rotation(encoder)
     _allow_preset(encoder)
     settings = encoder.access.settings(functions=False)
     low, high = settings.limits()
@@ -191,7 +199,7 @@ def test_code_sequence_sets_the_counting_direction(encoder, evidence):
         evidence.rests_on("cia", "CiA 406 6000h bit 0 (code sequence)")
     if encoder.access.dut.profile.entry(objects.operating, 0) is None:
         pytest.skip(f"not applicable: the profile has no operating parameters object {objects.operating:04X}h")
-    shaft = encoder.rotation()
+    shaft = _rotation(encoder)
     for ccw in (False, True):
         _set_code_sequence(encoder, ccw)
         settings = encoder.access.settings(functions=False)
@@ -236,7 +244,7 @@ def test_scaling_sets_units_per_revolution(encoder, evidence):
     evidence.rests_on("cia" if not objects.relocated else "manual",
                       "CiA 406 6000h bit 2, 6001h, 6002h" if not objects.relocated
                       else f"the manual's scaling objects {objects.units_per_rev:04X}h/{objects.total_range:04X}h")
-    shaft = encoder.rotation()
+    shaft = _rotation(encoder)
     access = encoder.access
     if objects.scaling_bit is not None:  # scaling off first: the settings are put back with the bit still set
         operating = access.read_int(objects.operating) or 0
@@ -339,18 +347,18 @@ def _position_tpdos(dut, index: int) -> list[tuple[int, int, int]]:
     return found
 
 
-def _sync_or_timer(dut, comm: int) -> tuple[bytes, bytes | None] | None:
-    """How to make TPDO ``comm`` send with the shaft at rest: (transmission type to write, event timer to write
-    or None); None where neither SYNC nor an event timer can be set."""
+def _sync_or_timer(dut, comm: int) -> tuple[int, int | None] | None:
+    """How to make TPDO ``comm`` send with the shaft at rest: (transmission type to write, event timer in ms to
+    write or None); None where neither SYNC nor an event timer can be set."""
     kind, timer = dut.profile.entry(comm, 2), dut.profile.entry(comm, 5)
     types = dut.profile.capabilities.tpdo_transmission_types
     if kind is not None and kind.writable and 1 in types:
-        return b"\x01", None
+        return 1, None
     current = dut.read_uint(comm, 2)
     if 1 <= current <= 240:
-        return current.to_bytes(1, "little"), None
+        return current, None
     if current in (254, 255) and timer is not None and timer.writable:
-        return current.to_bytes(1, "little"), (20).to_bytes(2, "little")
+        return current, 20
     return None
 
 
@@ -367,17 +375,15 @@ def test_position_in_tpdo_equals_sdo(encoder, dut, settings_journal, back_to_pre
                   if (how := _sync_or_timer(dut, c)) is not None]
     if not candidates:
         pytest.skip("not applicable: no TPDO maps the position object with a SYNC type or a settable event timer")
-    comm, offset, bits, (kind_bytes, timer) = candidates[0]
-    cob_id = dut.read_uint(comm, 1)
+    comm, offset, bits, (kind, timer) = candidates[0]
+    tpdo = TpdoUnderTest(dut, settings_journal, comm, kind)
+    cob_id = tpdo.cob_id()
+    enable = None
     if cob_id & 0x80000000:
-        if not dut.profile.entry(comm, 1).writable:
+        if not tpdo.writable(1):
             pytest.skip(f"not applicable: {comm:04X}h is disabled and its COB-ID is read-only")
-        settings_journal.write(comm, 1, (cob_id & 0x7FFFFFFF).to_bytes(4, "little"))
-    if dut.profile.entry(comm, 2).writable:
-        settings_journal.write(comm, 2, kind_bytes)
-    if timer is not None:
-        settings_journal.write(comm, 5, timer)
-    kind = kind_bytes[0]
+        enable = cob_id & 0x7FFFFFFF
+    tpdo.configure(cob_id=enable, trans_type=kind, event_timer=timer)
     before = encoder.access.position()
     dut.nmt("start")
     mark = dut.frames.mark()
@@ -410,7 +416,7 @@ def test_speed_value_in_measuring_units_per_second(encoder, evidence):
         evidence.rests_on("manual", "the manual's speed unit (quirk speed_scaling_object)")
     else:
         evidence.rests_on("cia", "CiA 406 6030h (speed value)")
-    shaft = encoder.rotation()
+    shaft = _rotation(encoder)
     drive = shaft.drive
     speed = 0.25  # rev/s: inside the 16-bit range at every resolution up to 2^17 units per revolution
     drive.set_speed(speed)
@@ -481,7 +487,7 @@ def test_zeroing_object_zeroes_once_per_rearm(encoder, evidence):
     at 0); writing it again does nothing until the re-arm value was written."""
     params = documented_quirk(encoder.access.dut, fx.ZeroingObject, evidence, "no zeroing object besides 6003h")
     evidence.rests_on("manual", "the manual's zeroing object (quirk zeroing_object)")
-    shaft = encoder.rotation()
+    shaft = _rotation(encoder)
     access = encoder.access
     encoder.preset(0)  # the manual's condition: preset value 0
     index, sub = params.index, params.subindex

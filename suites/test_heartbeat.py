@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.suite_support.periodic import judge_stream
 
 pytestmark = [
     pytest.mark.spec("CiA 301 §7.2.8.3.2.2 (heartbeat protocol)"),
@@ -14,7 +15,7 @@ pytestmark = [
 
 def test_heartbeat_period_within_tolerance(dut, periodic_capture, evidence):
     """Over at least 50 intervals, the heartbeat keeps the 1017h period and schedule within the profile's tolerance."""
-    periodic_capture.judge(periodic_capture.heartbeat, evidence, dut.profile.timing.heartbeat_tolerance)
+    judge_stream(periodic_capture, periodic_capture.heartbeat, evidence, dut.profile.timing.heartbeat_tolerance)
 
 
 def test_heartbeat_frame_format(dut, heartbeat):

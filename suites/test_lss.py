@@ -28,17 +28,16 @@ from encoder_conformance.cia.cia305 import (
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.lss_device import LssDevice, expect_success
 from encoder_conformance.dut.lss_master import LssAddress
-from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import documented_quirk
-from fixtures.lss import (
+from encoder_conformance.dut.lss_steps import (
     SWITCH_DELAY_MS,
     activate,
     cob_ids_not_reset,
-    destructive_if_self_stored,
     manual_excludes,
-    require_service,
     stored_node_id_survives_power_cycle,
 )
+from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.suite_support.checks import documented_quirk
+from encoder_conformance.suite_support.lss import destructive_if_self_stored, require_service
 
 pytestmark = pytest.mark.spec(cia305.CIA305)
 #: the WDGA manual's "new boot-up" after LSS changes (M §8.2.4): open readings lss-node-id-activation and

@@ -10,6 +10,7 @@ from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
 from encoder_conformance.dut.stimulus import pdo_stimulus
+from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
 from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
@@ -112,7 +113,7 @@ def sync_tpdo(dut, settings_journal, evidence):
         if not _made_valid(dut, comm, settings_journal, evidence):
             continue
         if not synchronous:
-            settings_journal.write(comm, 2, b"\x01")
+            TpdoUnderTest(dut, settings_journal, comm, 1).configure(trans_type=1)  # sub 2 writable: see above
             evidence.note(f"{comm:04X}h.02 set to 1 (synchronous, every SYNC) for the test")
         return comm
     return None

@@ -27,7 +27,8 @@ SDO answered or not, and the SYNC TPDO in operational.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
@@ -37,9 +38,11 @@ from hypothesis.control import currently_in_test_context
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule, run_state_machine_as_test
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, STATE_NAMES, NmtCommand, NmtState
+from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver
 from encoder_conformance.dut.sdo_frames import upload_request
+from encoder_conformance.dut.settings_journal import SettingsJournal
 from encoder_conformance.models.nmt import NmtModel, Tracked
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
@@ -240,243 +243,279 @@ def _other_node(dut) -> int:
     return next(n for n in ((dut.node_id + k - 1) % 127 + 1 for k in range(1, 128)) if n not in taken)
 
 
+@dataclass
+class NmtRun:
+    """One test's inputs to its machines (the fixed tour's and each generated sequence's): the device, the settings
+    journal, the values followed, the reset budget, another node-ID, and the steps of each machine run."""
+
+    dut: DeviceUnderTest
+    journal: SettingsJournal
+    found: DeviceValues
+    budget: ResetBudget
+    other: int  # a node-ID nobody on the bench has
+    steps: list[int] = field(default_factory=list)  # steps of each machine run (the tour's first)
+    writes: list[Write | None] = field(init=False)
+    keys: list[tuple[int, int]] = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.writes = list(self.found.writes) or [None]
+        self.keys = sorted(self.found.stored) or [(0x1000, 0)]
+
+
+def _from_run(choices: Callable[[NmtRun], list]) -> st.SearchStrategy:
+    """A value sampled from a list of the machine's run: a module-level machine gets its per-run inputs through
+    ``run`` (the factory given to ``run_state_machine_as_test``), its rules draw them through ``st.runner()``."""
+    return st.runner().flatmap(lambda machine: st.sampled_from(choices(machine.run)))
+
+
+class NmtMachine(RuleBasedStateMachine):
+    """The device against the CiA 301 model of a node, one step at a time (rules), checked after every step
+    (invariants); the fixed tour calls the same rules in a fixed order."""
+
+    def __init__(self, run: NmtRun) -> None:
+        super().__init__()
+        self.run = run
+        self.dut = run.dut
+        self.found = run.found
+        self.model = run.found.model()
+        self.step = 0
+        self.log: list[str] = []
+        self.quiet_since: Mark | None = None  # since when no TPDO may come (not operational, settled)
+        self.settled = self.dut.frames.mark()  # since when every heartbeat must carry the model's state
+        self.checked = self.settled  # the last heartbeat check
+        run.steps.append(0)
+        self._start()
+
+    # -- set-up: pre-operational, values as stored, heartbeat on ------------------------
+    def _start(self) -> None:
+        dut = self.dut
+        dut.nmt("pre-operational")
+        assert dut.responds() or dut.responds(), "no SDO answer after NMT enter pre-operational"
+        for key, tracked in self.model.values.items():
+            if int.from_bytes(dut.read(*key), "little") != tracked.stored:
+                self.run.journal.write(*key, tracked.stored.to_bytes(tracked.size, "little"))
+        beat = next((w for w in self.found.writes if w.key == (0x1017, 0)), None)
+        if beat is not None:
+            self.run.journal.write(0x1017, 0, beat.value.to_bytes(2, "little"))
+            self.model.write(beat.key, beat.value)
+        mark = dut.frames.mark()
+        self._confirm(mark, "set-up: pre-operational")
+        self._say(f"set-up: followed values as stored, heartbeat {self.model.heartbeat_ms} ms", mark)
+
+    def _say(self, text: str, mark: Mark) -> None:
+        self.step += 1
+        self.run.steps[-1] += 1
+        seen = format_frames(self.dut.frames.since(mark)[-8:])
+        line = f"step {self.step}: {text} -> model {STATE_NAMES[self.model.heartbeat_byte]}\n{seen}"
+        self.log.append(line)
+        if currently_in_test_context():
+            note(line)
+
+    def _confirm(self, mark: Mark, why: str) -> None:
+        """Wait for the frame that proves the model's state; from then on TPDOs must stop if not operational."""
+        if self.model.heartbeat_ms:
+            self._expect_heartbeat(mark, self.model.heartbeat_byte, why)
+        else:
+            self._confirm_by_services(why)
+        self.settled = self.dut.frames.mark()
+        if self.model.pdo_allowed:
+            self.quiet_since = None
+        elif self.quiet_since is None:  # just left operational: silent from now on
+            self.quiet_since = self.dut.frames.mark()
+
+    def _heartbeat_wait_s(self) -> float:
+        return HeartbeatObserver(self.dut, self.model.heartbeat_ms).window_s + SLACK_S
+
+    def _expect_heartbeat(self, mark: Mark, state: int | None, why: str) -> None:
+        """A heartbeat after ``mark`` (reporting ``state``, if given) within settle time + 2 periods + slack."""
+        dut = self.dut
+        wait = self._heartbeat_wait_s()
+        if dut.wait_heartbeat(mark, wait, state=state) is None:
+            seen = dut.frames.since(mark, dut.is_heartbeat)[-6:]
+            wanted = f"state {state:02X}h ({STATE_NAMES.get(state)})" if state is not None else "any state"
+            raise AssertionError(f"{why}: no heartbeat with {wanted} within {wait * 1000:.0f} ms (1017h = "
+                                 f"{self.model.heartbeat_ms} ms); heartbeats seen:\n"
+                                 f"{format_frames(seen) or '  none'}")
+
+    def _confirm_by_services(self, why: str) -> None:
+        """Without heartbeat: no SDO answer in stopped, an answer otherwise (polled within the settle time)."""
+        dut = self.dut
+        deadline = time.monotonic() + dut.profile.timing.nmt_settle_ms / 1000 + dut.sdo_timeout + SLACK_S
+        while True:
+            answered = dut.sdo_request(upload_request(0x1000, 0), timeout=dut.sdo_silence_s) is not None
+            if answered == self.model.sdo_answered or time.monotonic() >= deadline:
+                break
+        assert answered == self.model.sdo_answered, (
+            f"{why}: SDO {'answered' if answered else 'not answered'}, the model is "
+            f"{STATE_NAMES[self.model.heartbeat_byte]}")
+
+    # -- rules -----------------------------------------------------------------------
+    @rule(name=st.sampled_from(STATE_COMMANDS), to=st.sampled_from(["node", "all nodes", "other node"]))
+    def state_command(self, name: str, to: str) -> None:
+        dut = self.dut
+        if to == "other node" and name == "stop":
+            name = "start"  # another node on a bench is only ever started or sent back to pre-operational
+        target = {"node": dut.node_id, "all nodes": 0, "other node": self.run.other}[to]
+        before = self.model.state
+        mark = dut.nmt(name, target)
+        self.model.command(COMMAND[name], target)
+        why = f"NMT {name} to {'node ' + str(target) if target else 'all nodes'} from {STATE_NAMES[before]}"
+        if self.model.state is not before or to == "node" or to == "all nodes":
+            self._confirm(mark, why)
+        elif self.model.heartbeat_ms:
+            wrong = {"start": 0x05, "pre-operational": 0x7F}[name]
+            if wrong != int(before):
+                HeartbeatObserver(dut, self.model.heartbeat_ms).expect_not_state(mark, wrong, why)
+        self._say(why, mark)
+
+    @precondition(lambda self: self.run.budget.allows())
+    @rule(name=st.sampled_from(RESETS), to=st.sampled_from(["node", "all nodes"]))
+    def reset(self, name: str, to: str) -> None:
+        dut = self.dut
+        target = dut.node_id if to == "node" else 0
+        began = time.monotonic()
+        mark = dut.nmt(name, target)
+        self.model.command(COMMAND[name], target)
+        boot = dut.wait_bootup(mark)
+        self.run.budget.spend(time.monotonic() - began)
+        why = f"NMT {name} to {'node ' + str(target) if target else 'all nodes'}"
+        assert boot is not None, (f"{why}: no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms\n"
+                                  f"{format_frames(dut.frames.since(mark)[-8:]) or '  no frames'}")
+        self._confirm(mark, f"{why}, after the boot-up")
+        self._say(f"{why} (boot-up seen; values back to stored)", mark)
+
+    @rule(write=_from_run(lambda run: run.writes))
+    def write(self, write: Write | None) -> None:
+        if write is None or not self.model.may_write(write.key):
+            return  # stopped, or a pre-operational-only object outside pre-operational: nothing sent
+        tracked = self.model.values[write.key]
+        mark = self.dut.frames.mark()
+        refused: tuple[int, str] | None = None
+        try:
+            self.run.journal.write(*write.key, write.value.to_bytes(tracked.size, "little"))
+        except SdoAbortedError as exc:  # judged outside the handler: no library exception rides along
+            refused = (exc.code, str(exc))
+        if refused is not None:
+            where = STATE_NAMES[self.model.heartbeat_byte]
+            assert self.model.refusal_allowed(write.key, refused[0]), f"{write} refused in {where}: {refused[1]}"
+            self._say(f"{write}: refused in {where} with 08000022h (present device state), value kept", mark)
+            return
+        self.model.write(write.key, write.value)
+        if write.key == (0x1017, 0) and write.value:
+            self._confirm(mark, f"heartbeat after {write}")
+        self._say(str(write), mark)
+
+    @rule(key=_from_run(lambda run: run.keys))
+    def read(self, key: tuple[int, int]) -> None:
+        dut = self.dut
+        mark = dut.frames.mark()
+        if not self.model.sdo_answered:
+            reply = dut.sdo_request(upload_request(*key), timeout=dut.sdo_silence_s)
+            assert reply is None, f"SDO answered in stopped: {reply.describe()}"
+            self._say(f"read {key[0]:04X}h.{key[1]:02X}: no answer (stopped)", mark)
+            return
+        reply = dut.sdo_request(upload_request(*key), timeout=dut.sdo_timeout + SLACK_S)
+        where = f"read {key[0]:04X}h.{key[1]:02X} in {STATE_NAMES[self.model.heartbeat_byte]}"
+        assert reply is not None, f"{where}: no answer within {dut.sdo_timeout * 1000:.0f} ms"
+        assert not reply.is_abort, f"{where}: {reply.describe()}"
+        if key in self.model.values:
+            tracked = self.model.values[key]
+            value = int.from_bytes(reply.raw[4:4 + tracked.size], "little")
+            assert value == tracked.current, (
+                f"{tracked.label} reads {value}, the model holds {tracked.current} (stored {tracked.stored}; "
+                "a reset brings back the stored value, a state change keeps the value)")
+        self._say(f"read {key[0]:04X}h.{key[1]:02X}", mark)
+
+    @rule()
+    def sync(self) -> None:
+        dut = self.dut
+        mark = dut.send_sync()
+        comm = self.found.sync_tpdo
+        if comm is not None and self.model.pdo_allowed and self._sync_armed(comm):
+            cob_id = self.model.expected((comm, 1)) & 0x7FF
+            pdo = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id,
+                                      dut.pdo_silence_s + SLACK_S, mark)
+            assert pdo is not None, f"no TPDO {cob_id:03X}h on a SYNC in operational ({comm:04X}h type 1, valid)"
+        # outside operational the invariant judges what came, now or after the next step (teardown waits)
+        self._say("SYNC", mark)
+
+    def _sync_armed(self, comm: int) -> bool:
+        return self.model.expected((comm, 2)) == 1 and not self.model.expected((comm, 1)) & COB_ID_INVALID
+
+    # -- the fixed tour's own steps -----------------------------------------------------
+    def change_all(self) -> None:
+        """Every followed value to another value than stored (the SYNC TPDO armed: type 1, valid)."""
+        for write in _changes(self.found, self.model):
+            self.write(write)
+
+    def change_other(self) -> None:
+        """Every followed value to one that is neither stored nor current, where the writes offer one."""
+        for key, tracked in self.model.values.items():
+            other = next((w for w in self.found.writes
+                          if w.key == key and w.value not in (tracked.stored, tracked.current)), None)
+            if other is not None:
+                self.write(other)
+
+    def read_all(self) -> None:
+        keys = self.run.keys
+        for key in keys if self.model.sdo_answered else keys[:1]:  # in stopped one unanswered read will do
+            self.read(key)
+
+    def check(self) -> None:
+        self.heartbeat_shows_the_state()
+        self.no_pdo_outside_operational()
+
+    def teardown(self) -> None:
+        """A TPDO owed to the last step's SYNC would come within the PDO window: wait for it, then judge."""
+        if self.quiet_since is not None and self.dut.usable:
+            self.dut.frames.quiet_period(lambda m: False, self.dut.pdo_silence_s)
+            self.no_pdo_outside_operational()
+
+    # -- after every step ------------------------------------------------------------
+    @invariant()
+    def heartbeat_shows_the_state(self) -> None:
+        """Every heartbeat since the state was confirmed carries its byte; one is waited for only when the
+        last is older than the observer's window (no heartbeat owed since)."""
+        if not self.model.heartbeat_ms:
+            return
+        dut = self.dut
+        beats = dut.frames.since(self.settled, lambda m: dut.is_heartbeat(m) and bool(m.data) and m.data[0] != 0)
+        fresh = dut.frames.since(self.checked, lambda m: dut.is_heartbeat(m) and bool(m.data) and m.data[0] != 0)
+        if not beats or (not fresh and time.monotonic() - self.checked.time > self._heartbeat_wait_s()):
+            mark = dut.frames.mark()
+            self._expect_heartbeat(mark, None, "heartbeat producer running (1017h > 0)")
+            beats += dut.frames.since(mark, lambda m: dut.is_heartbeat(m) and bool(m.data) and m.data[0] != 0)
+        self.checked = dut.frames.mark()
+        wrong = [b for b in beats if b.data[0] != self.model.heartbeat_byte]
+        assert not wrong, (
+            f"heartbeat reports {wrong[0].data[0]:02X}h ({STATE_NAMES.get(wrong[0].data[0], '?')}), the node is "
+            f"{self.model.heartbeat_byte:02X}h ({STATE_NAMES[self.model.heartbeat_byte]}):\n"
+            f"{format_frames(wrong[:4])}")
+
+    @invariant()
+    def no_pdo_outside_operational(self) -> None:
+        if self.quiet_since is None:
+            return
+        pdos = self.dut.frames.since(self.quiet_since, lambda m: self.dut.is_pdo(m) or self._is_tracked_tpdo(m))
+        assert not pdos, (f"{len(pdos)} TPDO(s) in {STATE_NAMES[self.model.heartbeat_byte]}:\n"
+                          f"{format_frames(pdos[:5])}")
+
+    def _is_tracked_tpdo(self, msg) -> bool:
+        comm = self.found.sync_tpdo
+        return comm is not None and msg.is_rx and msg.arbitration_id == self.model.expected((comm, 1)) & 0x7FF
+
+
 def test_nmt_sequences_follow_the_cia301_model(dut, settings_journal, back_to_preoperational, evidence):
     """Any sequence of NMT commands, SDO reads and writes and SYNCs leaves the device in the state, with the
     values and the traffic CiA 301 gives for it (heartbeat byte, SDO and PDO per state, reloads on reset)."""
     evidence.rests_on("cia", "CiA 301 §7.3.2.2 (state diagram, initialisation reloads, services per state), "
                              "§7.2.8.3.1 (NMT addressing), §7.2.8.3.2.2 (heartbeat state byte)")
     found = DeviceValues(dut, evidence)
-    budget = ResetBudget(RESET_BUDGET_S)
-    steps: list[int] = []  # steps of each machine run (the tour's first)
-    other = _other_node(dut)
-    writes = found.writes or [None]
-    keys = sorted(found.stored) or [(0x1000, 0)]
+    run = NmtRun(dut, settings_journal, found, ResetBudget(RESET_BUDGET_S), _other_node(dut))
     evidence.note("followed values: " + (", ".join(f"{t.label} (stored {t.stored})" for t in found.stored.values())
                                          or "none (only the NMT state)"))
-
-    class NmtMachine(RuleBasedStateMachine):
-        def __init__(self) -> None:
-            super().__init__()
-            self.model = found.model()
-            self.step = 0
-            self.log: list[str] = []
-            self.quiet_since: Mark | None = None  # since when no TPDO may come (not operational, settled)
-            self.settled = dut.frames.mark()  # since when every heartbeat must carry the model's state
-            self.checked = self.settled  # the last heartbeat check
-            steps.append(0)
-            self._start()
-
-        # -- set-up: pre-operational, values as stored, heartbeat on ------------------------
-        def _start(self) -> None:
-            dut.nmt("pre-operational")
-            assert dut.responds() or dut.responds(), "no SDO answer after NMT enter pre-operational"
-            for key, tracked in self.model.values.items():
-                if int.from_bytes(dut.read(*key), "little") != tracked.stored:
-                    settings_journal.write(*key, tracked.stored.to_bytes(tracked.size, "little"))
-            beat = next((w for w in found.writes if w.key == (0x1017, 0)), None)
-            if beat is not None:
-                settings_journal.write(0x1017, 0, beat.value.to_bytes(2, "little"))
-                self.model.write(beat.key, beat.value)
-            mark = dut.frames.mark()
-            self._confirm(mark, "set-up: pre-operational")
-            self._say(f"set-up: followed values as stored, heartbeat {self.model.heartbeat_ms} ms", mark)
-
-        def _say(self, text: str, mark: Mark) -> None:
-            self.step += 1
-            steps[-1] += 1
-            seen = format_frames(dut.frames.since(mark)[-8:])
-            line = f"step {self.step}: {text} -> model {STATE_NAMES[self.model.heartbeat_byte]}\n{seen}"
-            self.log.append(line)
-            if currently_in_test_context():
-                note(line)
-
-        def _confirm(self, mark: Mark, why: str) -> None:
-            """Wait for the frame that proves the model's state; from then on TPDOs must stop if not operational."""
-            if self.model.heartbeat_ms:
-                self._expect_heartbeat(mark, self.model.heartbeat_byte, why)
-            else:
-                self._confirm_by_services(why)
-            self.settled = dut.frames.mark()
-            if self.model.pdo_allowed:
-                self.quiet_since = None
-            elif self.quiet_since is None:  # just left operational: silent from now on
-                self.quiet_since = dut.frames.mark()
-
-        def _heartbeat_wait_s(self) -> float:
-            return HeartbeatObserver(dut, self.model.heartbeat_ms).window_s + SLACK_S
-
-        def _expect_heartbeat(self, mark: Mark, state: int | None, why: str) -> None:
-            """A heartbeat after ``mark`` (reporting ``state``, if given) within settle time + 2 periods + slack."""
-            wait = self._heartbeat_wait_s()
-            if dut.wait_heartbeat(mark, wait, state=state) is None:
-                seen = dut.frames.since(mark, dut.is_heartbeat)[-6:]
-                wanted = f"state {state:02X}h ({STATE_NAMES.get(state)})" if state is not None else "any state"
-                raise AssertionError(f"{why}: no heartbeat with {wanted} within {wait * 1000:.0f} ms (1017h = "
-                                     f"{self.model.heartbeat_ms} ms); heartbeats seen:\n"
-                                     f"{format_frames(seen) or '  none'}")
-
-        def _confirm_by_services(self, why: str) -> None:
-            """Without heartbeat: no SDO answer in stopped, an answer otherwise (polled within the settle time)."""
-            deadline = time.monotonic() + dut.profile.timing.nmt_settle_ms / 1000 + dut.sdo_timeout + SLACK_S
-            while True:
-                answered = dut.sdo_request(upload_request(0x1000, 0), timeout=dut.sdo_silence_s) is not None
-                if answered == self.model.sdo_answered or time.monotonic() >= deadline:
-                    break
-            assert answered == self.model.sdo_answered, (
-                f"{why}: SDO {'answered' if answered else 'not answered'}, the model is "
-                f"{STATE_NAMES[self.model.heartbeat_byte]}")
-
-        # -- rules -----------------------------------------------------------------------
-        @rule(name=st.sampled_from(STATE_COMMANDS), to=st.sampled_from(["node", "all nodes", "other node"]))
-        def state_command(self, name: str, to: str) -> None:
-            if to == "other node" and name == "stop":
-                name = "start"  # another node on a bench is only ever started or sent back to pre-operational
-            target = {"node": dut.node_id, "all nodes": 0, "other node": other}[to]
-            before = self.model.state
-            mark = dut.nmt(name, target)
-            self.model.command(COMMAND[name], target)
-            why = f"NMT {name} to {'node ' + str(target) if target else 'all nodes'} from {STATE_NAMES[before]}"
-            if self.model.state is not before or to == "node" or to == "all nodes":
-                self._confirm(mark, why)
-            elif self.model.heartbeat_ms:
-                wrong = {"start": 0x05, "pre-operational": 0x7F}[name]
-                if wrong != int(before):
-                    HeartbeatObserver(dut, self.model.heartbeat_ms).expect_not_state(mark, wrong, why)
-            self._say(why, mark)
-
-        @precondition(lambda self: budget.allows())
-        @rule(name=st.sampled_from(RESETS), to=st.sampled_from(["node", "all nodes"]))
-        def reset(self, name: str, to: str) -> None:
-            target = dut.node_id if to == "node" else 0
-            began = time.monotonic()
-            mark = dut.nmt(name, target)
-            self.model.command(COMMAND[name], target)
-            boot = dut.wait_bootup(mark)
-            budget.spend(time.monotonic() - began)
-            why = f"NMT {name} to {'node ' + str(target) if target else 'all nodes'}"
-            assert boot is not None, (f"{why}: no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms\n"
-                                      f"{format_frames(dut.frames.since(mark)[-8:]) or '  no frames'}")
-            self._confirm(mark, f"{why}, after the boot-up")
-            self._say(f"{why} (boot-up seen; values back to stored)", mark)
-
-        @rule(write=st.sampled_from(writes))
-        def write(self, write: Write | None) -> None:
-            if write is None or not self.model.may_write(write.key):
-                return  # stopped, or a pre-operational-only object outside pre-operational: nothing sent
-            tracked = self.model.values[write.key]
-            mark = dut.frames.mark()
-            refused: tuple[int, str] | None = None
-            try:
-                settings_journal.write(*write.key, write.value.to_bytes(tracked.size, "little"))
-            except SdoAbortedError as exc:  # judged outside the handler: no library exception rides along
-                refused = (exc.code, str(exc))
-            if refused is not None:
-                where = STATE_NAMES[self.model.heartbeat_byte]
-                assert self.model.refusal_allowed(write.key, refused[0]), f"{write} refused in {where}: {refused[1]}"
-                self._say(f"{write}: refused in {where} with 08000022h (present device state), value kept", mark)
-                return
-            self.model.write(write.key, write.value)
-            if write.key == (0x1017, 0) and write.value:
-                self._confirm(mark, f"heartbeat after {write}")
-            self._say(str(write), mark)
-
-        @rule(key=st.sampled_from(keys))
-        def read(self, key: tuple[int, int]) -> None:
-            mark = dut.frames.mark()
-            if not self.model.sdo_answered:
-                reply = dut.sdo_request(upload_request(*key), timeout=dut.sdo_silence_s)
-                assert reply is None, f"SDO answered in stopped: {reply.describe()}"
-                self._say(f"read {key[0]:04X}h.{key[1]:02X}: no answer (stopped)", mark)
-                return
-            reply = dut.sdo_request(upload_request(*key), timeout=dut.sdo_timeout + SLACK_S)
-            where = f"read {key[0]:04X}h.{key[1]:02X} in {STATE_NAMES[self.model.heartbeat_byte]}"
-            assert reply is not None, f"{where}: no answer within {dut.sdo_timeout * 1000:.0f} ms"
-            assert not reply.is_abort, f"{where}: {reply.describe()}"
-            if key in self.model.values:
-                tracked = self.model.values[key]
-                value = int.from_bytes(reply.raw[4:4 + tracked.size], "little")
-                assert value == tracked.current, (
-                    f"{tracked.label} reads {value}, the model holds {tracked.current} (stored {tracked.stored}; "
-                    "a reset brings back the stored value, a state change keeps the value)")
-            self._say(f"read {key[0]:04X}h.{key[1]:02X}", mark)
-
-        @rule()
-        def sync(self) -> None:
-            mark = dut.send_sync()
-            comm = found.sync_tpdo
-            if comm is not None and self.model.pdo_allowed and self._sync_armed(comm):
-                cob_id = self.model.expected((comm, 1)) & 0x7FF
-                pdo = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id,
-                                          dut.pdo_silence_s + SLACK_S, mark)
-                assert pdo is not None, f"no TPDO {cob_id:03X}h on a SYNC in operational ({comm:04X}h type 1, valid)"
-            # outside operational the invariant judges what came, now or after the next step (teardown waits)
-            self._say("SYNC", mark)
-
-        def _sync_armed(self, comm: int) -> bool:
-            return self.model.expected((comm, 2)) == 1 and not self.model.expected((comm, 1)) & COB_ID_INVALID
-
-        # -- the fixed tour's own steps -----------------------------------------------------
-        def change_all(self) -> None:
-            """Every followed value to another value than stored (the SYNC TPDO armed: type 1, valid)."""
-            for write in _changes(found, self.model):
-                self.write(write)
-
-        def change_other(self) -> None:
-            """Every followed value to one that is neither stored nor current, where the writes offer one."""
-            for key, tracked in self.model.values.items():
-                other = next((w for w in found.writes
-                              if w.key == key and w.value not in (tracked.stored, tracked.current)), None)
-                if other is not None:
-                    self.write(other)
-
-        def read_all(self) -> None:
-            for key in keys if self.model.sdo_answered else keys[:1]:  # in stopped one unanswered read will do
-                self.read(key)
-
-        def check(self) -> None:
-            self.heartbeat_shows_the_state()
-            self.no_pdo_outside_operational()
-
-        def teardown(self) -> None:
-            """A TPDO owed to the last step's SYNC would come within the PDO window: wait for it, then judge."""
-            if self.quiet_since is not None and dut.usable:
-                dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
-                self.no_pdo_outside_operational()
-
-        # -- after every step ------------------------------------------------------------
-        @invariant()
-        def heartbeat_shows_the_state(self) -> None:
-            """Every heartbeat since the state was confirmed carries its byte; one is waited for only when the
-            last is older than the observer's window (no heartbeat owed since)."""
-            if not self.model.heartbeat_ms:
-                return
-            beats = dut.frames.since(self.settled, lambda m: dut.is_heartbeat(m) and bool(m.data) and m.data[0] != 0)
-            fresh = dut.frames.since(self.checked, lambda m: dut.is_heartbeat(m) and bool(m.data) and m.data[0] != 0)
-            if not beats or (not fresh and time.monotonic() - self.checked.time > self._heartbeat_wait_s()):
-                mark = dut.frames.mark()
-                self._expect_heartbeat(mark, None, "heartbeat producer running (1017h > 0)")
-                beats += dut.frames.since(mark, lambda m: dut.is_heartbeat(m) and bool(m.data) and m.data[0] != 0)
-            self.checked = dut.frames.mark()
-            wrong = [b for b in beats if b.data[0] != self.model.heartbeat_byte]
-            assert not wrong, (
-                f"heartbeat reports {wrong[0].data[0]:02X}h ({STATE_NAMES.get(wrong[0].data[0], '?')}), the node is "
-                f"{self.model.heartbeat_byte:02X}h ({STATE_NAMES[self.model.heartbeat_byte]}):\n"
-                f"{format_frames(wrong[:4])}")
-
-        @invariant()
-        def no_pdo_outside_operational(self) -> None:
-            if self.quiet_since is None:
-                return
-            pdos = dut.frames.since(self.quiet_since, lambda m: dut.is_pdo(m) or self._is_tracked_tpdo(m))
-            assert not pdos, (f"{len(pdos)} TPDO(s) in {STATE_NAMES[self.model.heartbeat_byte]}:\n"
-                              f"{format_frames(pdos[:5])}")
-
-        def _is_tracked_tpdo(self, msg) -> bool:
-            comm = found.sync_tpdo
-            return comm is not None and msg.is_rx and msg.arbitration_id == self.model.expected((comm, 1)) & 0x7FF
-
     started = time.monotonic()
-    tour = NmtMachine()
+    tour = NmtMachine(run)
     try:
         for method, *args in TOUR:
             getattr(tour, method)(*args)
@@ -485,9 +524,10 @@ def test_nmt_sequences_follow_the_cia301_model(dut, settings_journal, back_to_pr
     except AssertionError as exc:
         raise AssertionError(f"{exc}\nthe fixed tour's steps so far:\n" + "\n".join(tour.log)) from None
     evidence.measure("fixed tour", time.monotonic() - started, "s")
-    budget.left = RESET_BUDGET_S  # the tour's resets are owed in any case; the budget is for the generated ones
-    run_state_machine_as_test(NmtMachine, settings=SETTINGS)
+    run.budget.left = RESET_BUDGET_S  # the tour's resets are owed in any case; the budget is for the generated ones
+    run_state_machine_as_test(lambda: NmtMachine(run), settings=SETTINGS)
     evidence.measure("state-machine run", time.monotonic() - started, "s")
+    steps, budget = run.steps, run.budget
     evidence.note(f"fixed tour: {steps[0]} steps; generated: {len(steps) - 1} sequences, {sum(steps[1:])} steps "
                   f"(set-up and steps that sent something); {budget.done} resets in all, the generated ones within "
-                  f"a {RESET_BUDGET_S:g} s budget; other node-ID {other}")
+                  f"a {RESET_BUDGET_S:g} s budget; other node-ID {run.other}")

@@ -12,11 +12,11 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.nmt_preconditions import start_operational
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
-from fixtures.nmt_state import start_operational
-from fixtures.tpdo import configurable_tpdo as _configurable_tpdo
+from encoder_conformance.suite_support.tpdo import tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]
@@ -24,10 +24,10 @@ pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37
 
 def test_sync_tpdo_sent_on_every_nth_sync(dut, settings_journal, back_to_preoperational, evidence):
     """Transmission type 3: the TPDO follows every third SYNC, so 9 SYNCs give exactly 3 frames."""
-    comm, every = _configurable_tpdo(dut, 2, evidence, settings_journal, [3, *range(2, 241), 1])
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
-    if dut.profile.entry(comm, 2).writable:
-        settings_journal.write(comm, 2, bytes([every]))
+    tpdo = tpdo_under_test(dut, 2, evidence, settings_journal, [3, *range(2, 241), 1])
+    comm, every = tpdo.comm, tpdo.trans_type
+    cob_id = tpdo.can_id()
+    tpdo.configure(trans_type=every)
     start_operational(dut, settings_journal, evidence)
     mark = dut.frames.mark()
     syncs = 3 * every
@@ -49,11 +49,9 @@ def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_
     """Documented quirk: transmission type 255 with event timer 0 switches the TPDO off (no SYNC, no change)."""
     documented_quirk(dut, fx.TransmissionType255Timer0Disables, evidence,
                      "CiA 301 type 255 without timer is event-driven")
-    comm, _ = _configurable_tpdo(dut, 5, evidence, settings_journal, [255])
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
-    if dut.profile.entry(comm, 2).writable:
-        settings_journal.write(comm, 2, b"\xff")
-    settings_journal.write(comm, 5, b"\x00\x00")
+    tpdo = tpdo_under_test(dut, 5, evidence, settings_journal, [255])
+    comm, cob_id = tpdo.comm, tpdo.can_id()
+    tpdo.configure(trans_type=255, event_timer=0)
     start_operational(dut, settings_journal, evidence)
     control = shaft
     if control is None:
@@ -73,12 +71,10 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
     """A TPDO whose event timer is running when the device leaves operational sends nothing more in pre-operational
     or stopped (CiA 301 §7.3.2.2: PDOs only in operational), and sends again after NMT start."""
     evidence.rests_on("cia", "CiA 301 §7.3.2.2 (PDO communication only in operational)")
-    comm, kind = _configurable_tpdo(dut, 5, evidence, settings_journal, [255, 254])
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
-    if dut.profile.entry(comm, 2).writable:
-        settings_journal.write(comm, 2, bytes([kind]))
+    tpdo = tpdo_under_test(dut, 5, evidence, settings_journal, [255, 254])
+    comm, cob_id = tpdo.comm, tpdo.can_id()
     period_s = 0.02
-    settings_journal.write(comm, 5, round(period_s * 1000).to_bytes(2, "little"))
+    tpdo.configure(trans_type=tpdo.trans_type, event_timer=round(period_s * 1000))
 
     def is_this_tpdo(msg) -> bool:
         return msg.is_rx and msg.arbitration_id == cob_id

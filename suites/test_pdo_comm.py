@@ -29,14 +29,14 @@ from encoder_conformance.cia.cia301 import (
 )
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
 from encoder_conformance.dut.sdo_frames import abort_name
 from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
+from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
 from encoder_conformance.suite_support.checks import abort_accepted, expected_aborts
-from fixtures.dut import return_to_preoperational
-from fixtures.nmt_state import start_operational
-from fixtures.tpdo import configurable_tpdo, maps_position
+from encoder_conformance.suite_support.tpdo import tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.37 (TPDO communication parameter)"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]
@@ -87,7 +87,7 @@ def _need_shaft(shaft, what: str) -> None:
         pytest.skip(f"not applicable: {what} needs a turning shaft (the twin, or --shaft-drive)")
 
 
-def _event_tpdo(dut, evidence, settings_journal, shaft) -> tuple[int, int]:
+def _event_tpdo(dut, evidence, settings_journal, shaft) -> TpdoUnderTest:
     """A TPDO of type 254/255 with event timer 0 that maps the position (so a turning shaft is a change of
     its value), set up; skips where the profile has none or a quirk decides its change-driven sending."""
     _need_shaft(shaft, "a change of state")
@@ -98,26 +98,24 @@ def _event_tpdo(dut, evidence, settings_journal, shaft) -> tuple[int, int]:
     if found is not None:
         evidence.deviation(found[0], found[1].title)
         types = [254]
-    comm, kind = configurable_tpdo(dut, 5, evidence, settings_journal, types)
+    tpdo = tpdo_under_test(dut, 5, evidence, settings_journal, types)
+    comm = tpdo.comm
     repeat = dut.profile.quirk_of(fx.PdoSendRepeatCounters)
     if repeat is not None and comm in repeat[1].per_change:
         evidence.deviation(repeat[0], dut.profile.quirks[repeat[0]].title)
         pytest.skip(f"not applicable: {comm:04X}h's change-driven sending is set by a send-repeat counter "
                     f"(quirk {repeat[0]}; test_pdo_repeat checks it)")
-    if not maps_position(dut, comm):
+    if not tpdo.maps_position():
         pytest.skip(f"not applicable: {comm:04X}h maps no position value the shaft could change")
-    if dut.profile.entry(comm, 2).writable:
-        settings_journal.write(comm, 2, bytes([kind]))
-    settings_journal.write(comm, 5, b"\x00\x00")
-    return comm, kind
+    tpdo.configure(trans_type=tpdo.trans_type, event_timer=0)
+    return tpdo
 
 
-def _sync_tpdo(dut, evidence, settings_journal, types: list[int] | None = None) -> tuple[int, int]:
+def _sync_tpdo(dut, evidence, settings_journal, types: list[int] | None = None) -> TpdoUnderTest:
     """A TPDO sent on SYNC (type 1 where it may be written), set up."""
-    comm, kind = configurable_tpdo(dut, 2, evidence, settings_journal, types or SYNC_TYPES)
-    if dut.profile.entry(comm, 2).writable:
-        settings_journal.write(comm, 2, bytes([kind]))
-    return comm, kind
+    tpdo = tpdo_under_test(dut, 2, evidence, settings_journal, types or SYNC_TYPES)
+    tpdo.configure(trans_type=tpdo.trans_type)
+    return tpdo
 
 
 def _judge_code(dut, response, wanted: set[int], what: str, evidence, rests_on: str) -> None:
@@ -159,14 +157,13 @@ def test_invalid_tpdo_sends_nothing(dut, settings_journal, back_to_preoperationa
     """With 18xxh sub 1 bit 31 set the TPDO is not sent on its trigger; with the bit cleared it is sent again."""
     evidence.rests_on("cia", "CiA 301 §7.5.2.37 (COB-ID bit 31: PDO does not exist / is not valid)")
     if trigger == "SYNC":
-        comm, _ = _sync_tpdo(dut, evidence, settings_journal, [1])
+        tpdo = _sync_tpdo(dut, evidence, settings_journal, [1])
     else:
-        comm, kind = configurable_tpdo(dut, 5, evidence, settings_journal, EVENT_TYPES)
-        if dut.profile.entry(comm, 2).writable:
-            settings_journal.write(comm, 2, bytes([kind]))
-        settings_journal.write(comm, 5, (20).to_bytes(2, "little"))
+        tpdo = tpdo_under_test(dut, 5, evidence, settings_journal, EVENT_TYPES)
+        tpdo.configure(trans_type=tpdo.trans_type, event_timer=20)
+    comm = tpdo.comm
     _writable_cob_id(dut, comm)
-    cob = dut.read_uint(comm, 1)
+    cob = tpdo.cob_id()
     cob_id = cob & 0x7FF
 
     def frames(expected: bool = True) -> list[can.Message]:
@@ -274,12 +271,13 @@ def _rtr_tpdo(dut, evidence, settings_journal) -> tuple[int, str]:
         evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
         evidence.rests_on("manual", dut.profile.quirks[found[0]].manual)
         return found[1].polled_tpdos[0].tpdo, "polled"
-    comm, _ = configurable_tpdo(dut, 2, evidence, settings_journal, [253])
-    if not dut.profile.entry(comm, 2).writable:
+    tpdo = tpdo_under_test(dut, 2, evidence, settings_journal, [253])
+    comm = tpdo.comm
+    if not tpdo.writable(2):
         pytest.skip(f"not applicable: {comm:04X}h.02 is fixed")
-    settings_journal.write(comm, 2, bytes([253]))
+    tpdo.configure(trans_type=253)
     evidence.rests_on("cia", "CiA 301 §7.5.2.37 (transmission type 253: sent on RTR only)")
-    if dut.read_uint(comm, 1) & COB_ID_NO_RTR:
+    if tpdo.cob_id() & COB_ID_NO_RTR:
         pytest.skip(f"not applicable: {comm:04X}h.01 bit 30 is set (no RTR allowed) although type 253 is accepted")
     return comm, "type 253"
 
@@ -312,8 +310,8 @@ def test_rtr_answered(dut, settings_journal, back_to_preoperational, evidence):
 def test_rtr_not_answered_without_rtr_bit(dut, settings_journal, back_to_preoperational, evidence):
     """A valid SYNC-driven TPDO whose COB-ID has bit 30 set (no RTR allowed) does not answer a remote frame."""
     evidence.rests_on("cia", "CiA 301 §7.5.2.37 (COB-ID bit 30 = 1: no RTR allowed on this PDO)")
-    comm, _ = _sync_tpdo(dut, evidence, settings_journal)
-    cob = dut.read_uint(comm, 1)
+    tpdo = _sync_tpdo(dut, evidence, settings_journal)
+    comm, cob = tpdo.comm, tpdo.cob_id()
     if not cob & COB_ID_NO_RTR:
         pytest.skip(f"not applicable: {comm:04X}h.01 = {cob:08X}h allows RTR (bit 30 clear)")
     cob_id = cob & 0x7FF
@@ -329,10 +327,11 @@ def test_type_0_sends_on_sync_only_after_change(dut, settings_journal, back_to_p
     """Type 0: no TPDO on SYNCs while the position stands, none when it changes, exactly one on the next SYNC."""
     evidence.rests_on("cia", "CiA 301 §7.5.2.37 (type 0: synchronous, acyclic: after an event, on the next SYNC)")
     _need_shaft(shaft, "type 0 (a change of the mapped value)")
-    comm, _ = _sync_tpdo(dut, evidence, settings_journal, [0])
-    if not maps_position(dut, comm):
+    tpdo = _sync_tpdo(dut, evidence, settings_journal, [0])
+    comm = tpdo.comm
+    if not tpdo.maps_position():
         pytest.skip(f"not applicable: {comm:04X}h maps no position value the shaft could change")
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
+    cob_id = tpdo.can_id()
     _start(dut, settings_journal, evidence)
     _syncs(dut, 1, cob_id)  # whether the first SYNC after start sends is not this test's business
     standing = _syncs(dut, 3, cob_id)
@@ -354,8 +353,8 @@ def test_change_of_state_sends_event_tpdo(dut, settings_journal, back_to_preoper
     """Type 254/255 with event timer 0: the TPDO comes when the position changes and not while it stands."""
     evidence.rests_on("inferred", "CiA 301 §7.5.2.37: 254/255 are event-driven; the event of an encoder's TPDO "
                       "is a change of its position (e.g. WDGA T 8.46); CiA 406 leaves it to the manufacturer")
-    comm, kind = _event_tpdo(dut, evidence, settings_journal, shaft)
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
+    tpdo = _event_tpdo(dut, evidence, settings_journal, shaft)
+    comm, kind, cob_id = tpdo.comm, tpdo.trans_type, tpdo.can_id()
     _start(dut, settings_journal, evidence)
     dut.frames.quiet_period(lambda m: False, _window(dut))  # a TPDO on entering operational is allowed
     standing = dut.frames.quiet_period(_is_tpdo(cob_id), dut.pdo_silence_s)
@@ -384,12 +383,13 @@ def test_sync_start_value(dut, settings_journal, tpdo_while_invalid, back_to_pre
     evidence.rests_on("cia", "CiA 301 v4.2.0 §7.5.2.37 (sub 6: the SYNC whose counter equals it is the first "
                              "received; it may change only while the TPDO is not valid)")
     _sync_counter(dut)
-    comm, _ = configurable_tpdo(dut, 6, evidence, settings_journal, [1])
+    tpdo = tpdo_under_test(dut, 6, evidence, settings_journal, [1])
+    comm = tpdo.comm
     overflow, start = 8, 5
     settings_journal.write(SYNC_COUNTER_OVERFLOW, 0, bytes([overflow]))
-    settings_journal.write(comm, 2, b"\x01")
-    tpdo_while_invalid.write(comm, 6, bytes([start]))
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
+    tpdo.configure(trans_type=1)
+    tpdo.configure_while_invalid(tpdo_while_invalid, sync_start_value=start)
+    cob_id = tpdo.can_id()
     _start(dut, settings_journal, evidence)
     sent = []
     for counter in range(1, overflow + 1):
@@ -509,10 +509,10 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
     although SYNCs arrive and the shaft turns, and is sent again after NMT start."""
     evidence.rests_on("cia", "CiA 301 §7.3.2.2 (PDO communication only in operational)")
     if trigger == "SYNC":
-        comm, _ = _sync_tpdo(dut, evidence, settings_journal, [1])
+        tpdo = _sync_tpdo(dut, evidence, settings_journal, [1])
     else:
-        comm, _ = _event_tpdo(dut, evidence, settings_journal, shaft)
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
+        tpdo = _event_tpdo(dut, evidence, settings_journal, shaft)
+    comm, cob_id = tpdo.comm, tpdo.can_id()
     is_this = _is_tpdo(cob_id)
 
     def stimulate(expected: bool = True) -> list[can.Message]:

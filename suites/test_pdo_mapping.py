@@ -28,6 +28,7 @@ from encoder_conformance.cia.cia301 import (
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.nmt_preconditions import return_to_preoperational
 from encoder_conformance.dut.pdo_mapping import (
     Entry,
     MappingCustody,
@@ -37,11 +38,11 @@ from encoder_conformance.dut.pdo_mapping import (
     read_mapping,
 )
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
+from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import assert_abort, documented_quirk, expected_aborts
-from fixtures.dut import return_to_preoperational
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.38 (TPDO mapping)"), pytest.mark.requires("tpdos")]
 
@@ -196,13 +197,13 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
     if shaft is not None:
         shaft.turn_by(0.37)  # a position other than 0, which a shifted entry's zeros would match
     evidence.rests_on("cia", "CiA 301 §7.5.2.38 (procedure), §7.2.2 (a PDO carries the mapped objects in order)")
+    sent = TpdoUnderTest(dut, settings_journal, tpdo.comm, choice.transmission_type)
     with MappingCustody(dut, tpdo.comm):
-        if dut.profile.entry(tpdo.comm, 2).writable:
-            settings_journal.write(tpdo.comm, 2, bytes([choice.transmission_type]))
+        sent.configure(trans_type=sent.trans_type)
         apply_mapping(dut, tpdo.comm, plan)
         assert read_mapping(dut, tpdo.comm) == plan, f"{tpdo.mapping:04X}h does not read back {describe(plan)}"
         evidence.note(f"{tpdo.mapping:04X}h = {describe(plan)}, {tpdo.comm:04X}h.02 = {choice.transmission_type}")
-        cob_id = dut.read_uint(tpdo.comm, 1) & 0x7FF
+        cob_id = sent.can_id()
         try:
             before = [dut.read(i, s)[: b // 8] for i, s, b in plan]
             dut.nmt("start")
@@ -396,11 +397,11 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
     if shaft is not None:
         shaft.turn_by(0.37)  # a position other than 0, which a dummy's zeros would match
     evidence.rests_on("cia", "CiA 301 §7.4.7.1 (dummy mapping), §7.5.2.38")
+    sent = TpdoUnderTest(dut, settings_journal, tpdo.comm, choice.transmission_type)
     with MappingCustody(dut, tpdo.comm):
-        if dut.profile.entry(tpdo.comm, 2).writable:
-            settings_journal.write(tpdo.comm, 2, bytes([choice.transmission_type]))
+        sent.configure(trans_type=sent.trans_type)
         apply_mapping(dut, tpdo.comm, plan)
-        cob_id = dut.read_uint(tpdo.comm, 1) & 0x7FF
+        cob_id = sent.can_id()
         try:
             expected = dut.read(target[0], target[1])[: target[2] // 8]
             dut.nmt("start")

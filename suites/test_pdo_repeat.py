@@ -11,6 +11,7 @@ import pytest
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid
 from encoder_conformance.dut.frames import Mark, format_frames
+from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
 
@@ -105,7 +106,7 @@ def test_send_repeat_counter_limits_sync_tpdo(
     comm, counter = _counter_spec(params.sync_limit, "tpdo2")
     limit = min(2, params.counter_max)
     cob_id = _valid_cob_id(dut, comm, settings_journal)
-    settings_journal.write(comm, 2, b"\x01")
+    TpdoUnderTest(dut, settings_journal, comm, 1).configure(trans_type=1)
     settings_journal.write(counter, 0, bytes([limit]))
     _start(dut, request)
     for step in ("still shaft", "after a position change"):

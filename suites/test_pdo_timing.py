@@ -20,8 +20,10 @@ from encoder_conformance.cia.cia301 import SYNC_COB_ID
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
+from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.suite_support.checks import inconclusive_if_host_late
-from fixtures.tpdo import configurable_tpdo, mapped_bytes_of, maps_position
+from encoder_conformance.suite_support.periodic import judge_stream
+from encoder_conformance.suite_support.tpdo import tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]
@@ -37,17 +39,16 @@ POSITION = 0x6004  # CiA 406 position value
 
 def test_event_timer_period_within_tolerance(dut, periodic_capture, evidence):
     """Transmission type 255 with event timer T: the TPDO comes every T ms (>= 50 intervals, profile tolerance)."""
-    periodic_capture.judge(periodic_capture.event_timer, evidence, dut.profile.timing.heartbeat_tolerance)
+    judge_stream(periodic_capture, periodic_capture.event_timer, evidence, dut.profile.timing.heartbeat_tolerance)
 
 
 def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, twin_lateness, evidence):
     """Transmission type 1: each of 50 SYNCs, 10 ms apart, is answered by one TPDO (CiA 301), within the profile's
     pdo_response_max_ms of the SYNC (inferred: CiA 301 gives no bound). Latency: the TPDO's timestamp minus its
     SYNC's, both from the frame log."""
-    comm, _ = configurable_tpdo(dut, 2, evidence, settings_journal, [1])
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
-    if dut.profile.entry(comm, 2).writable:
-        settings_journal.write(comm, 2, b"\x01")
+    tpdo = tpdo_under_test(dut, 2, evidence, settings_journal, [1])
+    comm, cob_id = tpdo.comm, tpdo.can_id()
+    tpdo.configure(trans_type=1)
     limit = dut.profile.timing.pdo_response_max_ms
 
     def is_tpdo(msg: can.Message) -> bool:
@@ -93,35 +94,35 @@ def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, twi
             "profile timing.pdo_response_max_ms (CiA 301 gives no SYNC-to-TPDO bound)")
 
 
-def _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft, inhibit_ms: int) -> tuple[int, int]:
-    """(comm, COB-ID) of a change-driven TPDO (254/255, event timer 0) with inhibit time ``inhibit_ms``; skips
+def _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft,
+                    inhibit_ms: int) -> tuple[TpdoUnderTest, int]:
+    """A change-driven TPDO (254/255, event timer 0) with inhibit time ``inhibit_ms``, and its COB-ID; skips
     where the profile has no such TPDO or the bench cannot turn the shaft."""
     evidence.rests_on("cia", INHIBIT_CLAUSE)
-    comm, kind = configurable_tpdo(dut, 3, evidence, settings_journal, [254, 255])
+    tpdo = tpdo_under_test(dut, 3, evidence, settings_journal, [254, 255])
+    comm, kind = tpdo.comm, tpdo.trans_type
     if shaft is None:
         pytest.skip("not available: no shaft drive (--shaft-drive) to change the position inside the inhibit time")
-    if not dut.profile.capabilities.encoder or not maps_position(dut, comm):
+    if not dut.profile.capabilities.encoder or not tpdo.maps_position():
         pytest.skip(f"not applicable: {comm:04X}h maps no position value a turning shaft could change (the changes "
                     "inside the inhibit time come from the shaft)")
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
-    if dut.profile.entry(comm, 2).writable:
-        settings_journal.write(comm, 2, bytes([kind]))
+    cob_id = tpdo.can_id()
     timer = dut.profile.entry(comm, 5)
-    if timer is not None and timer.writable:
-        settings_journal.write(comm, 5, b"\x00\x00")
-    elif timer is not None and dut.read_uint(comm, 5):
+    tpdo.configure(trans_type=kind, event_timer=0 if timer is not None and timer.writable else None)
+    if timer is not None and not timer.writable and dut.read_uint(comm, 5):
         raise NoUsableTpdo(f"not applicable: {comm:04X}h.05 (event timer) is read-only and not 0", [])
-    tpdo_while_invalid.write(comm, 3, (inhibit_ms * 10).to_bytes(2, "little"))
+    tpdo.configure_while_invalid(tpdo_while_invalid, inhibit_time=inhibit_ms * 10)
     evidence.note(f"{comm:04X}h: type {kind}, event timer 0, inhibit time {inhibit_ms} ms "
                   f"(sub 3 = {inhibit_ms * 10} x 100 us); TPDO on {cob_id:03X}h")
-    return comm, cob_id
+    return tpdo, cob_id
 
 
 def test_inhibit_time_spaces_tpdos(dut, settings_journal, tpdo_while_invalid, back_to_preoperational, shaft,
                                    twin_lateness, evidence):
     """A change-driven TPDO with inhibit time 20 ms, the position changed right after each frame (inside every
     inhibit time): no two frames closer than 20 ms (>= 50 intervals; tolerance for the tester's clock)."""
-    comm, cob_id = _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft, INHIBIT_MS)
+    tpdo, cob_id = _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft, INHIBIT_MS)
+    comm = tpdo.comm
     tolerance = dut.profile.timing.heartbeat_tolerance.allowed_ms(INHIBIT_MS)
 
     def is_tpdo(msg: can.Message) -> bool:
@@ -173,8 +174,9 @@ def test_inhibit_time_delays_events_not_drops(dut, settings_journal, tpdo_while_
     """A position change inside the inhibit time (50 ms) of a change-driven TPDO is sent when the time is over,
     not dropped: after the shaft stops, the last TPDO carries the position 6004h reads, within inhibit time +
     pdo_response_max_ms of the previous frame."""
-    comm, cob_id = _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft, HOLD_INHIBIT_MS)
-    where = mapped_bytes_of(dut, comm, POSITION)
+    tpdo, cob_id = _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft, HOLD_INHIBIT_MS)
+    comm = tpdo.comm
+    where = tpdo.mapped_bytes_of(POSITION)
     if where is None:
         pytest.skip(f"not applicable: {comm:04X}h does not map the position value {POSITION:04X}h on byte bounds")
     window = (HOLD_INHIBIT_MS + dut.profile.timing.pdo_response_max_ms) / 1000 + dut.pdo_silence_s

@@ -30,7 +30,7 @@ from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
 from encoder_conformance.suite_support.checks import abort_accepted
-from fixtures.tpdo import configurable_tpdo
+from encoder_conformance.suite_support.tpdo import tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 v4.2.0 §7.5.2.5 object 1005h (COB-ID SYNC)"),
               pytest.mark.requires("sync_consumer"), pytest.mark.usefixtures("no_error_left")]
@@ -168,12 +168,12 @@ def test_sync_taken_on_its_cob_id(dut, sync_cob_id, settings_journal, back_to_pr
     domain = declared_domain(dut.profile, SYNC_COB_ID_OBJECT, 0)
     if domain is not None and other not in domain:
         pytest.skip(f"not applicable: the profile declares 1005h in {domain}, without {other:08X}h")
-    comm, kind = configurable_tpdo(dut, 2, evidence, settings_journal, [1, *range(2, 241)])
-    if kind != 1:
-        pytest.skip(f"not applicable: {comm:04X}h is sent on every {kind}th SYNC only (fixed), not on each")
-    if dut.profile.entry(comm, 2).writable:
-        settings_journal.write(comm, 2, b"\x01")
-    tpdo = dut.read_uint(comm, 1) & 0x7FF
+    chosen = tpdo_under_test(dut, 2, evidence, settings_journal, [1, *range(2, 241)])
+    if chosen.trans_type != 1:
+        pytest.skip(f"not applicable: {chosen.comm:04X}h is sent on every {chosen.trans_type}th SYNC only (fixed), "
+                    "not on each")
+    chosen.configure(trans_type=1)
+    tpdo = chosen.can_id()
     old = sync_cob_id & 0x7FF
     settings_journal.write(SYNC_COB_ID_OBJECT, 0, other.to_bytes(4, "little"))
     dut.nmt("start")

@@ -4,8 +4,14 @@ modules of a readable size. These are the rules a newcomer can rely on when find
 from __future__ import annotations
 
 import ast
+import builtins
+import importlib
+import inspect
+import io
 import re
+import tokenize
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
@@ -191,3 +197,147 @@ def test_cia_numbers_are_defined_once():
                 if CIA_LITERALS.search(code) and '"""' not in code:
                     spelled.append(f"{path.relative_to(REPO)}:{number}: {line.strip()}")
     assert spelled == []
+
+
+#: COB-ID function code bases (CiA 301 §7.3.5: TPDO1-4, SDO response/request, NMT error control) and the LSS
+#: COB-IDs (CiA 305): written as a hex literal only in encoder_conformance/cia/, imported everywhere else
+COB_ID_LITERALS = {0x180, 0x280, 0x380, 0x480, 0x580, 0x600, 0x700, 0x7E4, 0x7E5}
+#: the folders the COB-ID literal rule covers; suites/ and fixtures/ still spell some (test_emcy, test_nmt,
+#: test_heartbeat, test_lss, test_pdo_comm, test_sdo_fuzz): add them here once those are gone
+COB_ID_FOLDERS = [LIBRARY]
+#: a constant named as a CiA number (an abort byte, a COB-ID or its base) is defined in cia/ only
+CIA_CONSTANT_NAME = re.compile(r"^_?[A-Z0-9_]*(ABORT|_BASE|COB_ID)[A-Z0-9_]*$")
+
+
+def _outside_cia(folders: list[Path]) -> list[Path]:
+    return [path for folder in folders for path in sorted(folder.rglob("*.py"))
+            if not path.relative_to(REPO).as_posix().startswith("encoder_conformance/cia/")]
+
+
+def _hex_literals(path: Path) -> list[tuple[int, str]]:
+    """(line, literal) of every hexadecimal number in the code (not in strings or comments)."""
+    tokens = tokenize.generate_tokens(io.StringIO(path.read_text(encoding="utf-8")).readline)
+    return [(t.start[0], t.string) for t in tokens
+            if t.type == tokenize.NUMBER and t.string.lower().startswith("0x")]
+
+
+def test_the_literal_finder_sees_code_only(tmp_path):
+    """A literal in code counts; the same digits in a string, a docstring or a comment do not."""
+    module = tmp_path / "m.py"
+    module.write_text('"""0x580 in a docstring"""\nA = 0x580 + 1  # 0x700\nB = "0x600"\nC = 0X7e5\n', encoding="utf-8")
+    assert _hex_literals(module) == [(2, "0x580"), (4, "0X7e5")]
+
+
+def test_cob_id_bases_are_not_spelled_outside_cia():
+    """580h, 600h, 700h, 180h-480h, 7E4h/7E5h are named in cia/cia301.py and cia/cia305.py (SDO_RESPONSE_BASE,
+    SDO_REQUEST_BASE, HEARTBEAT_BASE, TPDO_BASES, the LSS COB-IDs) and imported where a COB-ID is meant."""
+    spelled = [f"{path.relative_to(REPO)}:{line}: {literal}" for path in _outside_cia(COB_ID_FOLDERS)
+               for line, literal in _hex_literals(path) if int(literal, 16) in COB_ID_LITERALS]
+    assert spelled == []
+
+
+def test_cia_constants_and_the_nmt_table_are_defined_once():
+    """No module outside cia/ gives a CiA number a name of its own (``ABORT = 0x80``, ``EMCY_BASE = 0x80``) or
+    writes out where the NMT commands lead (cia301.NMT_COMMAND_TARGET)."""
+    found = []
+    for path in _outside_cia([LIBRARY, REPO / "suites", REPO / "fixtures"]):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Assign | ast.AnnAssign) and isinstance(node.value, ast.Constant) \
+                    and isinstance(node.value.value, int) and not isinstance(node.value.value, bool):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                found += [f"{path.relative_to(REPO)}:{node.lineno}: {t.id}" for t in targets
+                          if isinstance(t, ast.Name) and CIA_CONSTANT_NAME.match(t.id)]
+            if isinstance(node, ast.Dict) and node.keys and all(
+                    isinstance(k, ast.Attribute) and isinstance(k.value, ast.Name) and k.value.id == "NmtCommand"
+                    and isinstance(v, ast.Attribute) and isinstance(v.value, ast.Name) and v.value.id == "NmtState"
+                    for k, v in zip(node.keys, node.values, strict=True)):
+                found.append(f"{path.relative_to(REPO)}:{node.lineno}: an NmtCommand -> NmtState table")
+    assert found == []
+
+
+def _library_modules() -> dict[str, ModuleType]:
+    """Every module of the library, imported (not the ``__main__`` entry points, which run a command)."""
+    names = sorted(_module_name(p) for p in LIBRARY.rglob("*.py") if p.stem != "__main__")
+    return {name: importlib.import_module(name) for name in names}
+
+
+def _exception_classes() -> dict[str, type[BaseException]]:
+    """Every exception class the library defines, by qualified name; classes defined inside functions (which
+    inspection of a module does not reach) are found with ast and judged by their bases."""
+    found: dict[str, type[BaseException]] = {}
+    for name, module in _library_modules().items():
+        path = Path(module.__file__ or "")
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.ClassDef):
+                continue
+            cls = getattr(module, node.name, None)
+            if not (inspect.isclass(cls) and cls.__module__ == name and cls.__qualname__ == node.name):
+                # nested (in a function): stand in with a class built from its bases as the module names them
+                bases = tuple(b for b in (_resolve(module, base) for base in node.bases) if inspect.isclass(b))
+                cls = type(node.name, bases, {}) if bases else None
+            if inspect.isclass(cls) and issubclass(cls, BaseException):
+                found[f"{name}.{node.name}"] = cls
+    return found
+
+
+def _resolve(module: ModuleType, expression: ast.expr) -> object:
+    if isinstance(expression, ast.Name):
+        return vars(module).get(expression.id, getattr(builtins, expression.id, None))
+    if isinstance(expression, ast.Attribute):
+        owner = _resolve(module, expression.value)
+        return getattr(owner, expression.attr, None)
+    return None
+
+
+def test_every_exception_class_is_in_the_one_tree():
+    """Every exception class of the library derives from errors.EncoderConformanceError (RunInterrupted, by design
+    a KeyboardInterrupt, aside) and is defined in errors.py, unless it also needs a base of another library
+    (dut/device.py's SdoAborted, also canopen's SdoAbortedError)."""
+    from encoder_conformance.errors import EncoderConformanceError, RunInterrupted
+
+    classes = _exception_classes()
+    assert "encoder_conformance.errors.UsageError" in classes  # the finder works
+    outside = [name for name, cls in classes.items()
+               if cls is not RunInterrupted and not issubclass(cls, EncoderConformanceError)]
+    assert outside == []
+    elsewhere = [name for name, cls in classes.items() if not name.startswith("encoder_conformance.errors.")
+                 and not any(b.__module__.partition(".")[0] not in ("encoder_conformance", "builtins")
+                             for b in cls.__mro__)]
+    assert elsewhere == []
+
+
+def test_the_error_picture_names_every_class():
+    """errors.py's docstring draws the tree: it names every exception class of the library, and no other."""
+    from encoder_conformance import errors
+
+    drawn = set(re.findall(r"\+-- (\w+)", errors.__doc__ or ""))
+    defined = {name.rpartition(".")[2] for name in _exception_classes()}
+    assert defined - drawn == set()
+    assert {name for name in drawn - defined if not hasattr(builtins, name)} == set()
+
+
+def test_hooks_live_in_the_plugin_and_fixture_modules_hold_fixtures():
+    """No pytest hook in conftest.py, fixtures/ or suites/ (the plugin's hooks.py is the hub); a fixture module
+    defines fixtures and private helpers only (device-handling classes live in dut/ or suite_support/)."""
+    misplaced = []
+    for path in [REPO / "conftest.py", *(REPO / "fixtures").glob("*.py"), *(REPO / "suites").glob("*.py")]:
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in tree.body:
+            name = getattr(node, "name", "")
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and name.startswith("pytest_"):
+                misplaced.append(f"{path.relative_to(REPO)}: hook {name}")
+            if path.parent.name != "fixtures" or name.startswith("_"):
+                continue
+            fixture = isinstance(node, ast.FunctionDef) and any(
+                "fixture" in ast.unparse(decorator) for decorator in node.decorator_list)
+            if isinstance(node, ast.ClassDef | ast.FunctionDef) and not fixture:
+                misplaced.append(f"{path.relative_to(REPO)}: {name} is not a fixture")
+    assert misplaced == []
+
+
+def test_suites_and_fixtures_do_not_import_fixture_modules():
+    """Suites get their helpers from the package (dut/, suite_support/), which works wherever it is installed."""
+    offenders = [str(path.relative_to(REPO)) for folder in ("suites", "fixtures")
+                 for path in (REPO / folder).glob("*.py")
+                 if any(i == "fixtures" or i.startswith("fixtures.") for i in _imports(path))]
+    assert offenders == []

@@ -466,3 +466,107 @@ def test_device_profile_round_trip(ref, tmp_path):
     except ProfileError as exc:
         pytest.skip(f"profile does not load (being edited?): {exc}")
     assert_round_trip(profile, tmp_path / f"{profile.id}.eds")
+
+
+STORAGE_EDS = """\
+[DeviceInfo]
+VendorName=Test
+ProductName=Storage groups
+[MandatoryObjects]
+SupportedObjects=3
+1=0x1000
+2=0x1001
+3=0x1018
+[OptionalObjects]
+SupportedObjects=4
+1=0x1010
+2=0x1017
+3=0x2000
+4=0x2001
+[ManufacturerObjects]
+SupportedObjects=0
+[1000]
+ParameterName=Device type
+ObjectType=0x7
+DataType=0x0007
+AccessType=ro
+DefaultValue=0x00020196
+[1001]
+ParameterName=Error register
+ObjectType=0x7
+DataType=0x0005
+AccessType=ro
+DefaultValue=0
+[1010]
+ParameterName=Store parameters
+ObjectType=0x8
+SubNumber=3
+[1010sub0]
+ParameterName=Highest sub-index supported
+ObjectType=0x7
+DataType=0x0005
+AccessType=ro
+DefaultValue=2
+[1010sub1]
+ParameterName=Save all parameters
+ObjectType=0x7
+DataType=0x0007
+AccessType=rw
+DefaultValue=1
+[1010sub2]
+ParameterName=Save communication parameters
+ObjectType=0x7
+DataType=0x0007
+AccessType=rw
+DefaultValue=1
+[1017]
+ParameterName=Producer heartbeat time
+ObjectType=0x7
+;StorageLocation=PERSIST_COMM
+DataType=0x0006
+AccessType=rw
+DefaultValue=0
+[1018]
+ParameterName=Identity
+ObjectType=0x9
+SubNumber=2
+[1018sub0]
+ParameterName=Highest sub-index supported
+ObjectType=0x7
+DataType=0x0005
+AccessType=ro
+DefaultValue=1
+[1018sub1]
+ParameterName=Vendor-ID
+ObjectType=0x7
+DataType=0x0007
+AccessType=ro
+DefaultValue=0x1234
+[2000]
+ParameterName=Scratch value
+ObjectType=0x7
+;StorageLocation=RAM
+DataType=0x0007
+AccessType=rw
+DefaultValue=0
+[2001]
+ParameterName=Counter kept by the firmware
+ObjectType=0x7
+;StorageLocation=PERSIST_TEST
+DataType=0x0007
+AccessType=rw
+DefaultValue=0
+"""
+
+
+def test_storage_location_comments_give_the_storage_groups(tmp_path):
+    """`;StorageLocation=` (CANopenEditor's convention): RAM is volatile, PERSIST_COMM stored by 1010h sub 2, a
+    firmware's own group is a todo; without the comment the CiA 301 range guess stays (2001h here is guessed)."""
+    eds = tmp_path / "storage.eds"
+    eds.write_text(STORAGE_EDS, encoding="utf-8")
+    draft, todos = profile_draft_from_eds(eds, "storage")
+    objects = draft["objects"]
+    assert objects[0x1017]["persisted_by"] == "store_comm"
+    assert objects[0x2000]["persisted_by"] == "volatile"
+    assert any("StorageLocation=PERSIST_TEST (2001h)" in todo for todo in todos)
+    assert objects[0x2001]["persisted_by"] == "store_all"  # not named: the CiA 301 group guess, with its todo

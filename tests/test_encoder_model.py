@@ -1,4 +1,4 @@
-"""Property tests of the encoder reference model (encoder_conformance/encoder_model) against its own invariants.
+"""Property tests of the encoder reference model (encoder_conformance/models/encoder) against its own invariants.
 
 Each test states a property the CiA 406 encoder function must have (or a documented consequence of
 the model's rules) and checks it over generated settings; none of them re-implements the model's

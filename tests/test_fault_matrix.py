@@ -11,7 +11,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.runs.fault_matrix import REPO_ROOT, format_matrix, run_matrix, run_until_caught
+from encoder_conformance.runs.fault_matrix import CONTENT_ROOT, format_matrix, run_matrix, run_until_caught
 from encoder_conformance.sim.fault_catalogue import FAULTS, faults_for
 
 MAIN_PROFILE = "wachendorff-wdga-mt"
@@ -35,7 +35,7 @@ COMPLEMENT_PROFILES = [
 
 def _effects(profile: str) -> frozenset[str]:
     """Quirk effects of a profile id or of a profile file relative to the repository."""
-    return load_profile(str(REPO_ROOT / profile) if "/" in profile else profile).profile.effects
+    return load_profile(str(CONTENT_ROOT / profile) if "/" in profile else profile).profile.effects
 
 
 def _functions(result, outcome: str) -> set[str]:

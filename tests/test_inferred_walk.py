@@ -18,12 +18,15 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
+from encoder_conformance import suite_support
+from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
 
 PROFILE = "wachendorff-wdga-mt"
+#: the suites' helpers beside their modules (a basis chosen there counts as the suites')
+SUITE_SUPPORT_DIR = Path(suite_support.__file__).parent
 #: faults whose tests need what the WDGA lacks (a writable 1019h)
 PROFILE_OF = {"sync_length_unchecked": "tests/data/profiles/cia406-full-pdo.yaml"}
 #: tests that may rest on inferred but assert nothing there: what breaks only an inferred rule is noted or
@@ -35,7 +38,8 @@ NO_INFERRED_ASSERTION = {
 }
 #: the places that take a verdict's basis from data at run time, and the test the walk covers through each
 DYNAMIC_BASIS = {
-    "test_cam::Findings": "CAM checks: the inferred cams are recorded problems (walked by cam_edge_off_by_one)",
+    "cam::Findings": "CAM checks (suite_support/cam.py): the inferred cams are recorded problems (walked by "
+                     "cam_edge_off_by_one)",
     "test_emcy::_bus_trigger": "test_emcy::test_emcy_on_sync_length",
 }
 
@@ -45,11 +49,11 @@ def _run(fault: str, strict: bool, workdir: Path) -> dict[str, str]:
     folder = workdir / f"{fault}-{'strict' if strict else 'default'}"
     profile = PROFILE_OF.get(fault, PROFILE)
     command = [*(str(SUITES_DIR / f"{m}.py") for m in TARGET_MODULES[fault]), "-q", "-p", "no:cacheprovider",
-               "--device-profile", str(REPO_ROOT / profile) if "/" in profile else profile,
+               "--device-profile", str(CONTENT_ROOT / profile) if "/" in profile else profile,
                "--report-dir", str(folder), "--tb=no", "--history", "off", "--sim-fault", fault,
                *([STRICT_OPTION] if strict else [])]
     env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
-    result = run_pytest(command, REPO_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
+    result = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
     junit = folder / "junit.xml"
     assert junit.exists(), result.output[-3000:]
     outcomes = {}
@@ -118,9 +122,9 @@ def _declares(node: ast.AST, tops: dict[str, ast.AST], seen: tuple[str, ...] = (
 
 def _declaring_tests() -> tuple[set[str], set[str]]:
     """(tests resting on a literal "inferred", directly or through a helper of their module; the top-level
-    functions and classes that pass a basis taken from data at run time)."""
+    functions and classes, of the suites and of suite_support/, that pass a basis taken from data at run time)."""
     tests, dynamic = set(), set()
-    for path in sorted(SUITES_DIR.glob("test_*.py")):
+    for path in [*sorted(SUITES_DIR.glob("test_*.py")), *sorted(SUITE_SUPPORT_DIR.glob("*.py"))]:
         tree = ast.parse(path.read_text(encoding="utf-8"))
         tops: dict[str, ast.AST] = {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef | ast.ClassDef)}
         for name, node in tops.items():

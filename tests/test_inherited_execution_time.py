@@ -8,7 +8,7 @@ that failed (the preset read back as the frozen old position).
 
 from __future__ import annotations
 
-from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
+from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.runs.suite_runner import run_pytest
 
 PROFILE = "siko-wx58m-1212-mt"
@@ -19,6 +19,6 @@ ORDER = ("test_preset_sets_position_and_offset[zero-ccw]", "test_preset_is_kept_
 def test_preset_right_after_a_put_back_of_the_code_sequence(tmp_path):
     command = [*(f"{MODULE}::{name}" for name in ORDER), "-q", "-p", "no:cacheprovider", "--tb=line",
                "--device-profile", PROFILE, "--report-dir", str(tmp_path), "--history", "off"]
-    completed = run_pytest(command, REPO_ROOT, tmp_path / "pytest-output.txt", timeout=300)
+    completed = run_pytest(command, CONTENT_ROOT, tmp_path / "pytest-output.txt", timeout=300)
     assert completed.returncode == 0, completed.output[-3000:]
     assert "2 passed" in completed.output, completed.output[-3000:]

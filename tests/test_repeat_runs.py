@@ -6,7 +6,7 @@ import subprocess
 import sys
 from collections import Counter
 
-from encoder_conformance.paths import REPO_ROOT
+from encoder_conformance.paths import CONTENT_ROOT
 from encoder_conformance.runs.fault_matrix import RunResult
 from encoder_conformance.runs.repeat import RepeatedRuns, _failure_messages, _measurements
 
@@ -44,6 +44,6 @@ def test_a_test_failing_once_is_failing_and_an_inconclusive_skip_only_unstable()
 def test_repeat_command_runs_twice_in_parallel():
     completed = subprocess.run([sys.executable, "-m", "encoder_conformance", "repeat", "--profile", "waycon-sx",
                                 "--runs", "2", "-k", "test_heartbeat_frame_format"],
-                               cwd=REPO_ROOT, capture_output=True, text=True, timeout=300)
+                               cwd=CONTENT_ROOT, capture_output=True, text=True, timeout=300)
     assert completed.returncode == 0, completed.stdout + completed.stderr
     assert "2 runs: return codes {0: 2}" in completed.stdout

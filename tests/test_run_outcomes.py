@@ -23,7 +23,7 @@ import pytest
 from encoder_conformance.dut import startup_frames
 from encoder_conformance.errors import BusLostError, DutLostError
 from encoder_conformance.exit_codes import RunExit
-from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
+from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.plugin.outcomes import is_device_finding
 from encoder_conformance.run_summary import INTERNAL_ERROR_TEXT, RunSummary, TestResult
 from encoder_conformance.runs.suite_runner import run_pytest
@@ -45,7 +45,7 @@ def _suite(module: str, folder: Path, *extra: str) -> tuple[int, RunSummary, str
     command = [str(SUITES_DIR / f"{module}.py"), "-q", "-p", "no:cacheprovider", "--device-profile", PROFILE,
                "--report-dir", str(folder), "--history", "off", *extra]
     env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
-    result = run_pytest(command, REPO_ROOT, folder / "pytest-output.txt", timeout=300, env=env)
+    result = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=300, env=env)
     return result.returncode, RunSummary.read(folder), result.output
 
 
@@ -57,7 +57,7 @@ def _with_plugin(module: str, folder: Path, plugin_dir: Path, *extra: str) -> tu
     command = [sys.executable, "-m", "pytest", str(SUITES_DIR / f"{module}.py"), "-q", "-p", "no:cacheprovider",
                "-p", "inject_internal_error", "--device-profile", PROFILE, "--report-dir", str(folder),
                "--history", "off", *extra]
-    done = subprocess.run(command, cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=300)
+    done = subprocess.run(command, cwd=CONTENT_ROOT, env=env, capture_output=True, text=True, timeout=300)
     return done.returncode, RunSummary.read(folder), done.stdout + done.stderr
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
+from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import TARGET_MODULES
 
@@ -52,7 +52,7 @@ def _run(folder: Path, variant: str | None, shuffled: bool) -> dict[str, str]:
                "--report-dir", str(folder), "--history", "off"]
     command += ["--sim-fault", variant] if variant else []
     command += ["--shuffle", SEED] if shuffled else []
-    completed = run_pytest(command, REPO_ROOT, folder / "pytest-output.txt", timeout=600)
+    completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600)
     junit = folder / "junit.xml"
     assert junit.exists(), completed.output[-4000:]
     return _outcomes(junit)

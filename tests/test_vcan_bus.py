@@ -521,3 +521,4 @@ def test_throughput_and_latency(bench, tmp_path, capsys):
               f"cangen done after {sent:.2f} s); round trip Python <-> Python: median {median_us} us, "
               f"p99 {p99_us} us")
     assert median_us < 20_000
+

@@ -1,7 +1,8 @@
 """CiA 301 vocabulary: the numbers the standard defines, named once for the simulator and the tester.
 
-Only facts of the CiA 301 text live here (NMT commands and states, store/restore signatures and
-objects, COB-ID bits, the communication object ranges); nothing about a particular device.
+Only facts of the CiA 301 text live here (NMT commands, states and where the commands lead, store/restore
+signatures and objects, the pre-defined connection set's COB-IDs, COB-ID bits, SDO command specifiers, the
+communication object ranges); nothing about a particular device.
 """
 
 from __future__ import annotations
@@ -24,8 +25,22 @@ STORE_SUB_OF_GROUP = {"store_all": 1, "store_comm": 2, "store_app": 3, "store_ma
 #: the communication profile area: what NMT reset communication reloads (CiA 301 §7.3.2.2.3)
 COMMUNICATION_AREA = range(0x1000, 0x2000)
 
-SYNC_COB_ID = 0x080  # the pre-defined connection set's SYNC (CiA 301 §7.3.5, 1005h default)
-SDO_REQUEST_BASE = 0x600  # + node-id: client -> server (CiA 301 §7.3.5)
+#: The pre-defined connection set (CiA 301 §7.3.5): the CAN-ID of each communication object, the function code's
+#: base + the node-ID for a node's own objects; NMT, SYNC and TIME are broadcasts without a node-ID.
+NMT_COB_ID = 0x000  # NMT node control, master -> all nodes (CiA 301 §7.2.8.3.1)
+SYNC_COB_ID = 0x080  # SYNC (1005h default)
+EMCY_BASE = 0x080  # + node-id: the default EMCY COB-ID (1014h default)
+TIME_COB_ID = 0x100  # TIME (1012h default)
+TPDO1_BASE, TPDO2_BASE, TPDO3_BASE, TPDO4_BASE = 0x180, 0x280, 0x380, 0x480  # + node-id (1800h..1803h sub 1)
+TPDO_BASES = (TPDO1_BASE, TPDO2_BASE, TPDO3_BASE, TPDO4_BASE)
+RPDO1_BASE, RPDO2_BASE, RPDO3_BASE, RPDO4_BASE = 0x200, 0x300, 0x400, 0x500  # + node-id (1400h..1403h sub 1)
+RPDO_BASES = (RPDO1_BASE, RPDO2_BASE, RPDO3_BASE, RPDO4_BASE)
+SDO_RESPONSE_BASE = 0x580  # + node-id: default SDO server -> client
+SDO_REQUEST_BASE = 0x600  # + node-id: default SDO client -> server
+HEARTBEAT_BASE = 0x700  # + node-id: NMT error control (boot-up, heartbeat, node guarding)
+HEARTBEAT_IDS = range(HEARTBEAT_BASE + 1, HEARTBEAT_BASE + 128)  # its CAN-IDs: node-IDs 1..127
+#: the function code bases a node sends on in the pre-defined connection set (EMCY, TPDO1-4, SDO, error control)
+NODE_TRANSMIT_BASES = (EMCY_BASE, *TPDO_BASES, SDO_RESPONSE_BASE, HEARTBEAT_BASE)
 COB_ID_INVALID = 0x80000000  # bit 31 of a PDO/SYNC/EMCY COB-ID: the object does not exist / is not valid
 COB_ID_NO_RTR = 0x40000000  # bit 30 of a TPDO COB-ID: no RTR allowed on this PDO (CiA 301 §7.5.2.37)
 COB_ID_FRAME_29_BIT = 0x20000000  # bit 29 of a PDO COB-ID: 29-bit (extended) CAN-ID
@@ -48,7 +63,6 @@ ERROR_REGISTER_GENERIC = 0x01  # 1001h bit 0: set whenever any error is present
 ERROR_HISTORY = 0x1003  # sub 0 the count (writing 0 clears, other values refused 06090030h), sub 1 the newest
 EMCY_COB_ID = 0x1014
 EMCY_INHIBIT_TIME = 0x1015
-EMCY_BASE = 0x080  # + node-id: the default EMCY COB-ID (CiA 301 §7.3.5 pre-defined connection set)
 HEARTBEAT_CONSUMER = 0x1016  # sub n: bits 16-23 producer node-id, bits 0-15 time in ms
 
 
@@ -65,6 +79,8 @@ TPDO_COMMUNICATION = range(0x1800, 0x1A00)
 TPDO_MAPPING = range(0x1A00, 0x1C00)
 RPDO_COMMUNICATION = range(0x1400, 0x1600)
 RPDO_MAPPING = range(0x1600, 0x1800)
+#: a PDO's mapping object lies 200h above its communication object (1400h -> 1600h, 1800h -> 1A00h)
+PDO_MAPPING_OFFSET = 0x200
 
 
 class NmtCommand(IntEnum):
@@ -96,11 +112,15 @@ NMT_COMMAND_NAMES = {
     "reset-communication": NmtCommand.RESET_COMMUNICATION,
 }
 STATE_NAMES = {0x00: "boot-up", 0x04: "stopped", 0x05: "operational", 0x7F: "pre-operational"}
+#: where the state-changing commands lead (CiA 301 §7.3.2.2); the resets lead through initialisation and boot-up
+NMT_COMMAND_TARGET: dict[NmtCommand, NmtState] = {
+    NmtCommand.START: NmtState.OPERATIONAL,
+    NmtCommand.STOP: NmtState.STOPPED,
+    NmtCommand.ENTER_PRE_OPERATIONAL: NmtState.PRE_OPERATIONAL,
+}
 #: the command that brings a node into a state it reported by heartbeat
 COMMAND_FOR_STATE: dict[int, str] = {
-    NmtState.OPERATIONAL: "start",
-    NmtState.STOPPED: "stop",
-    NmtState.PRE_OPERATIONAL: "pre-operational",
+    NMT_COMMAND_TARGET[command]: name for name, command in NMT_COMMAND_NAMES.items() if command in NMT_COMMAND_TARGET
 }
 
 
@@ -121,6 +141,45 @@ RTR_SYNCHRONOUS = 252
 RTR_EVENT = 253
 EVENT_MANUFACTURER = 254
 EVENT_PROFILE = 255
+
+
+class SdoClientCommand(IntEnum):
+    """SDO client command specifiers, ccs: bits 7-5 of a request's byte 0 (CiA 301 §7.2.4.3); 7 is reserved."""
+
+    DOWNLOAD_SEGMENT = 0
+    INITIATE_DOWNLOAD = 1
+    INITIATE_UPLOAD = 2
+    UPLOAD_SEGMENT = 3
+    ABORT = 4
+    BLOCK_UPLOAD = 5
+    BLOCK_DOWNLOAD = 6
+
+
+class SdoServerCommand(IntEnum):
+    """SDO server command specifiers, scs: bits 7-5 of a response's byte 0 (CiA 301 §7.2.4.3)."""
+
+    UPLOAD_SEGMENT = 0
+    DOWNLOAD_SEGMENT = 1
+    INITIATE_UPLOAD = 2
+    INITIATE_DOWNLOAD = 3
+    ABORT = 4
+    BLOCK_DOWNLOAD = 5
+    BLOCK_UPLOAD = 6
+
+
+#: byte 0 of an abort transfer frame, from either side (cs 4, the other bits 0: CiA 301 §7.2.4.3.17)
+SDO_ABORT = 0x80
+#: the client command -> the server command of its answer (an abort aside): download segment -> download segment
+#: response, initiate download -> its response, initiate upload -> its response, upload segment -> upload segment
+#: response, block upload / block download -> theirs
+SDO_ANSWER: dict[int, int] = {
+    SdoClientCommand.DOWNLOAD_SEGMENT: SdoServerCommand.DOWNLOAD_SEGMENT,
+    SdoClientCommand.INITIATE_DOWNLOAD: SdoServerCommand.INITIATE_DOWNLOAD,
+    SdoClientCommand.INITIATE_UPLOAD: SdoServerCommand.INITIATE_UPLOAD,
+    SdoClientCommand.UPLOAD_SEGMENT: SdoServerCommand.UPLOAD_SEGMENT,
+    SdoClientCommand.BLOCK_UPLOAD: SdoServerCommand.BLOCK_UPLOAD,
+    SdoClientCommand.BLOCK_DOWNLOAD: SdoServerCommand.BLOCK_DOWNLOAD,
+}
 
 
 class SdoAbortCode(IntEnum):
@@ -199,5 +258,5 @@ def mapping_fields(word: int) -> tuple[int, int, int]:
 def pdo_mapping_of(communication_index: int) -> int | None:
     """The mapping object of a PDO communication object (1800h -> 1A00h, 1400h -> 1600h)."""
     if communication_index in TPDO_COMMUNICATION or communication_index in RPDO_COMMUNICATION:
-        return communication_index + 0x200
+        return communication_index + PDO_MAPPING_OFFSET
     return None

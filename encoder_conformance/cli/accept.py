@@ -12,7 +12,9 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
+from encoder_conformance.cli.usage import command_arguments
 from encoder_conformance.exit_codes import RunExit
+from encoder_conformance.plugin import option_table
 from encoder_conformance.run_summary import RunSummary
 
 BusArguments = Callable[..., None]
@@ -36,19 +38,8 @@ def _pytest_argv(args: argparse.Namespace) -> list[str]:
 
     # --assert=plain: the suites' assertions carry their own messages, and rewriting ~120 modules costs ~2 s
     # where no bytecode cache is written (PYTHONDONTWRITEBYTECODE)
-    argv = [*pytest_args(), "--device-profile", args.profile, KIND_OPTION, KIND, "-p", "no:cacheprovider",
-            "--assert=plain"]
-    for option in ("can_interface", "can_channel", "can_bitrate", "node_id", "report_dir", "station", "label_serial",
-                   "shaft_drive", "sim_profile", "history"):
-        value = getattr(args, option)
-        if value is not None:
-            argv += [f"--{option.replace('_', '-')}", str(value)]
-    if args.strict:
-        argv.append("--strict-inferred")
-    for fault in args.sim_fault:
-        argv += ["--sim-fault", fault]
-    if args.trace:
-        argv += ["--bus-trace", args.trace]  # pytest's own --trace is its debugger
+    argv = [*pytest_args(), KIND_OPTION, KIND, "-p", "no:cacheprovider", "--assert=plain",
+            *option_table.pytest_argv("accept", vars(args))]
     if not args.verbose:
         argv += ["-p", "no:terminal"]
     return argv
@@ -89,7 +80,6 @@ def _cmd_accept(args: argparse.Namespace, extra: list[str]) -> int:
         from encoder_conformance.runs.stations import run_stations
 
         return run_stations(args.command, args.station, args.argv, args.report_dir)
-    args.station = args.station[0] if args.station else None
     import pytest
 
     catcher = _SummaryCatcher()
@@ -110,29 +100,6 @@ def add_accept_parser(sub: argparse._SubParsersAction, bus_arguments: BusArgumen
                     "and why) against a device in delivery state: is it the product bought, and does it basically "
                     "work. One verdict per area and overall PASS / FAIL / PASS WITH WARNINGS; exit code 0 pass, "
                     "1 fail, 69 could not test, 70 not restored.")
-    accept.add_argument("--profile", required=True, help="the device profile bought (id or file)")
-    bus_arguments(accept)
-    accept.add_argument("--station", action="append", default=[], metavar="FILE",
-                        help="station file (TOML or YAML): CAN adapter, node-id, operator, motor plug-in, where "
-                             "reports and the history go. Give it several times to accept one device per station in "
-                             "parallel")
-    accept.add_argument("--history", metavar="PATH",
-                        help="the history database the acceptance is appended to (default: the station's history, "
-                             "else $ENCODER_CONFORMANCE_HISTORY, else reports/history.sqlite); 'off' records nothing")
-    accept.add_argument("--label-serial", type=int, metavar="NUMBER",
-                        help="the serial number on the device's label: checked against what the device reports "
-                             "(1018h sub 4, else 650Bh) and recorded in the history (default: none; on the simulator "
-                             "the twin's own)")
-    accept.add_argument("--report-dir", help="where to write the report (default <station reports or reports>/"
-                                             "<timestamp>-<profile>)")
-    accept.add_argument("--shaft-drive", metavar="MODULE:FACTORY[=ARGUMENT]",
-                        help="bench only: motor plug-in that turns the shaft (see run --help; or the station's)")
-    accept.add_argument("--sim-fault", action="append", default=[], help="simulator fault (see 'faults')")
-    accept.add_argument("--sim-profile", help="simulator only: the twin plays this profile instead (a delivery of "
-                                              "another product)")
-    accept.add_argument("--strict", action="store_true",
-                        help="fail also on rules we only inferred (default: they give PASS WITH WARNINGS)")
-    accept.add_argument("--trace", choices=("failed", "all", "none"),
-                        help="which tests keep their bus trace (ASC and candump log): failed (default), all, none")
+    command_arguments(accept, "accept", bus_arguments)  # plugin/option_table.py: the rows 'accept' takes
     accept.add_argument("--verbose", action="store_true", help="show pytest's own output too")
     accept.set_defaults(func=_cmd_accept)

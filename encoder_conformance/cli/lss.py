@@ -1,4 +1,4 @@
-"""The ``lss`` command's arguments: ``scan``, ``set-node-id``, ``set-bitrate`` (the work is in lss_command.py).
+"""The ``lss`` command's arguments: ``scan``, ``set-node-id``, ``set-bitrate`` (the work is in lss_actions.py).
 
 Light on purpose: the command line builds every parser at start-up, so this imports neither python-can
 nor canopen until an ``lss`` command runs.

@@ -15,27 +15,20 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
 from encoder_conformance.cia.cia305 import ADDRESS_PARTS, BIT_TIMING_TABLE_0, UNCONFIGURED_NODE_ID, LssCommand, LssState
 from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.dut import connection
 from encoder_conformance.dut.frames import FrameLog, Mark
 from encoder_conformance.dut.lss_find import FULL_RANGE, error_text, find_revision, scan_unconfigured
 from encoder_conformance.dut.lss_master import LssAddress, LssAnswer, LssMaster
-from encoder_conformance.errors import BusSetupError, DutLostError
+from encoder_conformance.errors import BusSetupError, DutLostError, LssStop
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.model import DeviceProfile
 
 REFUSED = RunExit.NON_CONFORMANT  # 1: the device answered with an error code
 NO_ANSWER = RunExit.COULD_NOT_TEST  # 69: no device answered (or no bus)
 BOOT_WAIT_S = 2.0  # an unconfigured device boots with its new node-ID when it leaves configuration state
-
-
-class LssStop(Exception):
-    """An expected end of the command: ``str(exc)`` for the user, ``code`` the exit code."""
-
-    def __init__(self, text: str, code: int) -> None:
-        super().__init__(text)
-        self.code = code
 
 
 @dataclass(frozen=True)
@@ -224,7 +217,7 @@ def _activation(master: LssMaster, mark: Mark, before: int | None, node_id: int)
         was = f" (it is node {before} until then)" if before is not None else ""
         return (f"node-ID {node_id} becomes active after NMT reset communication{was}, or a power cycle on "
                 "legacy devices")
-    booted = master.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == 0x700 + node_id
+    booted = master.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == HEARTBEAT_BASE + node_id
                                     and bytes(m.data) == b"\x00", BOOT_WAIT_S, mark)
     if booted:
         return f"the device was unconfigured: it booted as node {node_id}"

@@ -1,5 +1,5 @@
 """Command line: ``encoder-conformance run | accept | restore | lss | sim | sim-control | profile | faults |
-fault-matrix | readings | variant-matrix | vcan``.
+fault-matrix | readings | variant-matrix | vcan | firmware-ci``.
 
 Exit codes of ``run``, ``restore`` and ``lss`` follow exit_codes.RunExit; a usage error (bad option,
 unreadable profile) is 4 for every command.
@@ -14,6 +14,7 @@ from pathlib import Path
 
 from encoder_conformance.cli import usage as usage
 from encoder_conformance.cli.accept import add_accept_parser
+from encoder_conformance.cli.firmware_ci import add_firmware_ci_parser
 from encoder_conformance.cli.history import add_history_parser
 from encoder_conformance.cli.lss import add_lss_parser
 from encoder_conformance.cli.readings import add_readings_parsers
@@ -34,9 +35,19 @@ def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
     usage.check_output_file("--nvm", args.nvm)
     try:
         plan = plan_nodes(args.profile, args.node_id, args.copies, args.unconfigured)
-        return serve(plan, args.listen, args.control, args.fault, args.nvm, args.ready_line)
+        can_bus = _sim_can_bus(args)
+        return serve(plan, args.listen, args.control, args.fault, args.nvm, args.ready_line, can_bus)
     except ValueError as exc:  # a combination of options, or a port that cannot be had
         raise UsageError(str(exc)) from None
+
+
+def _sim_can_bus(args: argparse.Namespace) -> tuple[str, str] | None:
+    """``sim --can-interface I --can-channel C``: both or neither (a served twin sits on one bus)."""
+    if (args.can_interface is None) != (args.can_channel is None):
+        given = "--can-interface" if args.can_interface is not None else "--can-channel"
+        raise UsageError(f"sim {given}: give --can-interface and --can-channel together (e.g. socketcan vcan0), "
+                         "or neither to serve python-can-remote on --listen")
+    return None if args.can_interface is None else (args.can_interface, args.can_channel)
 
 
 def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
@@ -107,14 +118,16 @@ def _cmd_profile_effects(args: argparse.Namespace, extra: list[str]) -> int:
 
 
 def _cmd_profile_list(args: argparse.Namespace, extra: list[str]) -> int:
-    from encoder_conformance.profile.loader import iter_profile_ids, load_profile
+    from encoder_conformance.profile.loader import iter_own_profiles, iter_profile_ids, load_profile
 
-    for ref in iter_profile_ids():
+    own = list(iter_own_profiles(Path.cwd()))
+    for ref in [*iter_profile_ids(), *own]:
         try:
             title = load_profile(ref.path).profile.title
         except ProfileError as exc:
             title = f"INVALID: {exc.problems[0]}"
-        print(f"{ref.id:40s} {'(abstract) ' if ref.abstract else ''}{title}")
+        where = f"(./{ref.path.relative_to(Path.cwd())}) " if ref in own else ""
+        print(f"{ref.id:40s} {where}{'(abstract) ' if ref.abstract else ''}{title}")
     return 0
 
 
@@ -240,6 +253,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_lss_parser(sub, _Parser, _bus_arguments)
     add_history_parser(sub, _Parser)
     add_accept_parser(sub, _bus_arguments)
+    add_firmware_ci_parser(sub)
 
     sim_control = sub.add_parser("sim-control", help="switch a served simulator's power (a bench power switch)")
     sim_control.add_argument("--control", required=True, type=host_port,
@@ -247,10 +261,14 @@ def build_parser() -> argparse.ArgumentParser:
     sim_control.add_argument("action", choices=["power-off", "power-on", "power-cycle"])
     sim_control.set_defaults(func=_cmd_sim_control)
 
-    sim = sub.add_parser("sim", help="serve simulated devices on a python-can-remote endpoint")
+    sim = sub.add_parser("sim", help="serve simulated devices on a python-can-remote endpoint or a CAN bus")
     sim.add_argument("--profile", action="append", required=True, help="profile id or file (repeat for more nodes)")
     sim.add_argument("--listen", default="127.0.0.1:54701", type=host_port,
                      help="HOST:PORT for python-can-remote clients (default 127.0.0.1:54701; port 0: any free one)")
+    sim.add_argument("--can-interface", default=None, metavar="INTERFACE",
+                     help="sit on this python-can interface instead of serving --listen, e.g. socketcan (with "
+                          "--can-channel vcan0: a kernel vcan or `encoder-conformance vcan up`)")
+    sim.add_argument("--can-channel", default=None, metavar="CHANNEL", help="the channel of --can-interface")
     sim.add_argument("--control", default=None, type=host_port,
                      help="HOST:PORT for the control channel (power cycle ...; default: none)")
     sim.add_argument("--node-id", type=node_id_type, action="append", default=[], metavar="1..127",
@@ -273,7 +291,8 @@ def build_parser() -> argparse.ArgumentParser:
     validate.add_argument("--todo", action="store_true",
                           help="also list each profile's unconfirmed assumptions (todo:), numbered")
     validate.set_defaults(func=_cmd_profile_validate)
-    listing = psub.add_parser("list", help="the profiles in device_profiles/")
+    listing = psub.add_parser("list", help="the shipped profiles, then your own in the current folder and its "
+                                               "device_profiles/ (with their paths)")
     listing.set_defaults(func=_cmd_profile_list)
     effects = psub.add_parser("effects", help="the quirk effects and their parameters (a markdown table)")
     effects.set_defaults(func=_cmd_profile_effects)
@@ -333,7 +352,7 @@ def main(argv: list[str] | None = None) -> int:
     catch_early()  # a Ctrl-C during start-up must end the run, also where the interpreter drops the exception
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)
-    if extra and args.command not in ("run", "vcan"):
+    if extra and args.command not in ("run", "vcan", "firmware-ci"):
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     args.argv = list(sys.argv[1:] if argv is None else argv)  # as given: what parallel stations pass on
     try:

@@ -1,5 +1,5 @@
 """Usage errors of the command line: one line on stderr naming the option or file and the fix, exit code 4;
-the argument types and the bus options the commands share.
+the argument types, the bus options the commands share and the option table's rows as arguments.
 
 Every command checks what it was given before it starts any work (a fault name, a profile id, a port),
 so that a typo costs no time and shows no traceback. The checks raise ``UsageError``; ``cli.main`` prints
@@ -14,13 +14,14 @@ from __future__ import annotations
 import argparse
 import difflib
 import sys
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from encoder_conformance.cia.cia305 import MAX_NODE_ID
 from encoder_conformance.errors import ProfileError, UsageError
 from encoder_conformance.exit_codes import RunExit
+from encoder_conformance.plugin import option_table
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -62,22 +63,47 @@ def host_port(text: str) -> str:
                                          "free one)")
     return text
 
+
+#: how the command line converts each kind of value of the option table (pytest takes plain numbers)
+_TYPES: dict[option_table.Kind, Callable[[str], object] | None] = {
+    "text": None, "int": int, "float": float, "bitrate": bitrate, "node-id": node_id_arg}
+
+
+def table_argument(parser: argparse.ArgumentParser, option: option_table.Option,
+                   command: option_table.Command | None = None) -> None:
+    """One option of the table (plugin/option_table.py) as an argument of ``command``'s parser: its command-line
+    name, the help pytest shows too; given nowhere, it is not passed on (None, or an empty list)."""
+    kwargs: dict[str, Any] = {"help": option.help_text}
+    if option.action == "store_true":
+        kwargs["action"] = "store_true"
+    else:
+        kwargs.update(type=_TYPES[option.kind], metavar=option.metavar, choices=option.choices)
+    if option.action == "append" or option.several:
+        kwargs.update(action="append", default=[])
+    if command is not None and command in option.required_by:
+        kwargs["required"] = True
+    elif option.command_default is not None:
+        kwargs["default"] = option.command_default
+    parser.add_argument(option.cli_name, **{key: value for key, value in kwargs.items() if value is not None})
+
+
+def command_arguments(parser: argparse.ArgumentParser, command: option_table.Command,
+                      bus: Callable[..., None] | None = None) -> None:
+    """Every option of the table that ``command`` takes, in table order; the bus options through ``bus`` (default
+    bus_arguments) where the first of them comes."""
+    skipped = {*option_table.BUS_OPTIONS, option_table.NODE_ID_OPTION}
+    for option in option_table.options_of(command):
+        if option.name == option_table.BUS_OPTIONS[0]:
+            (bus or bus_arguments)(parser)
+        if option.name not in skipped:
+            table_argument(parser, option, command)
+
+
 def bus_arguments(parser: argparse.ArgumentParser, node_id: bool = True) -> None:
-    """--can-interface/-channel/-bitrate (and --node-id): the same meaning in every command that opens a bus."""
-    parser.add_argument("--can-interface", metavar="NAME",
-                        help="python-can interface: pcan, kvaser, socketcan, ixxat, slcan, remote, virtual ... "
-                             "(default: the station file's, else python-can's configuration: CAN_INTERFACE, "
-                             "~/can.conf; for 'run' with none anywhere: the profile's built-in simulator)")
-    parser.add_argument("--can-channel", metavar="CHANNEL",
-                        help="the adapter's channel: PCAN_USBBUS1, can0, ws://HOST:PORT/ ... (default: the station "
-                             "file's, else python-can's configuration)")
-    parser.add_argument("--can-bitrate", type=bitrate, metavar="BIT/S",
-                        help="bit rate in bit/s, e.g. 250000 or 250k (default: the station file's, else python-can's "
-                             "configuration)")
-    if node_id:
-        parser.add_argument("--node-id", type=node_id_arg, metavar="1..127",
-                            help="the device's node-ID (default: the station file's, else the profile's delivery "
-                                 "node-ID)")
+    """--can-interface/-channel/-bitrate (and --node-id): the same meaning in every command that opens a bus, and
+    the same help as the pytest options (plugin/option_table.py)."""
+    for name in (*option_table.BUS_OPTIONS, option_table.NODE_ID_OPTION) if node_id else option_table.BUS_OPTIONS:
+        table_argument(parser, option_table.option(name))
 
 
 def check_profile(option: str, name: str) -> None:

@@ -34,6 +34,8 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from encoder_conformance.errors import StationError
+
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -68,10 +70,6 @@ class Station(_Strict):
         paths = {key: folder / value for key in ("reports", "history")
                  if (value := getattr(self, key)) is not None and not value.is_absolute()}
         return self.model_copy(update=paths)
-
-
-class StationError(Exception):
-    """The station file is missing or invalid; the message names file, key and fix."""
 
 
 def _parse(path: Path) -> Any:

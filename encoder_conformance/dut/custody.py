@@ -44,15 +44,7 @@ from encoder_conformance.dut.snapshot import (
 )
 from encoder_conformance.dut.store_watch import StoreWatch
 from encoder_conformance.dut.write_plan import plan_writes
-from encoder_conformance.errors import BusLostError, DutLostError
-
-
-class PreflightError(Exception):
-    """The run cannot start: one line saying what failed and what to check."""
-
-
-class IdentityMismatch(PreflightError):
-    """The node answers but is plainly another product than the profile's (a verdict about the device)."""
+from encoder_conformance.errors import BusLostError, DutLostError, IdentityMismatch, PreflightError
 
 
 @dataclass

@@ -19,10 +19,19 @@ import can
 import canopen
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
-from encoder_conformance.cia.cia301 import NMT_COMMAND_NAMES, SDO_REQUEST_BASE, SYNC_COB_ID
+from encoder_conformance.cia.cia301 import (
+    HEARTBEAT_BASE,
+    NMT_COB_ID,
+    NMT_COMMAND_NAMES,
+    NODE_TRANSMIT_BASES,
+    SDO_REQUEST_BASE,
+    SDO_RESPONSE_BASE,
+    SYNC_COB_ID,
+    TPDO_BASES,
+)
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import FrameLog, Mark, format_frames
-from encoder_conformance.errors import BusLostError, DutLostError, RunInterrupted
+from encoder_conformance.errors import BusLostError, DutLostError, EncoderConformanceError, RunInterrupted
 from encoder_conformance.models.encoder.freeze import FreezeRule
 from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import SilentUntilBusTraffic
@@ -54,8 +63,9 @@ LOST_AFTER_PROBES = 2
 LAST_SENT = 6
 
 
-class SdoAborted(SdoAbortedError):
-    """canopen's SdoAbortedError as the dut layer raises it (``except SdoAbortedError`` still catches it).
+class SdoAborted(SdoAbortedError, EncoderConformanceError):
+    """canopen's SdoAbortedError as the dut layer raises it (``except SdoAbortedError`` still catches it), and a
+    member of the library's exception tree (``errors.py`` draws it; defined here, as errors.py imports no canopen).
 
     canopen's own ``__eq__`` reads ``other.code`` of whatever it is compared with: hypothesis, comparing the
     failures it found with the exceptions in their context, crashed with AttributeError (issue 26). This one is
@@ -253,7 +263,7 @@ class DeviceUnderTest:
         if check_alive:
             self._check_alive()
         mark = self.frames.mark()
-        self.network.send_message(0x600 + self.node_id, request)
+        self.network.send_message(SDO_REQUEST_BASE + self.node_id, request)
         wait = self.sdo_timeout if timeout is None else timeout
         earlier: list[bytes] = []  # the requests before this one, read from the log only for a reply that does not fit
 
@@ -284,7 +294,7 @@ class DeviceUnderTest:
         return not msg.is_rx and msg.arbitration_id == SDO_REQUEST_BASE + self.node_id
 
     def _is_sdo_response(self, msg: can.Message) -> bool:
-        return msg.is_rx and msg.arbitration_id == 0x580 + self.node_id and not msg.is_remote_frame
+        return msg.is_rx and msg.arbitration_id == SDO_RESPONSE_BASE + self.node_id and not msg.is_remote_frame
 
     def expect_abort(self, request: bytes) -> sdo_frames.SdoResponse:
         """Send a request that must be refused; returns the abort response (asserts one came)."""
@@ -317,11 +327,11 @@ class DeviceUnderTest:
         mark = self.frames.mark()
         target = self.node_id if node_id is None else node_id
         self._check_alive()
-        self.network.send_message(0x000, bytes([NMT_COMMAND_NAMES[command], target]))
+        self.network.send_message(NMT_COB_ID, bytes([NMT_COMMAND_NAMES[command], target]))
         return mark
 
     def is_heartbeat(self, msg: can.Message) -> bool:
-        return msg.is_rx and msg.arbitration_id == 0x700 + self.node_id and not msg.is_remote_frame
+        return msg.is_rx and msg.arbitration_id == HEARTBEAT_BASE + self.node_id and not msg.is_remote_frame
 
     def wait_bootup(self, after: Mark, timeout: float | None = None) -> can.Message | None:
         limit = timeout if timeout is not None else self.profile.timing.bootup_max_ms / 1000
@@ -355,11 +365,10 @@ class DeviceUnderTest:
         return self.frames.quiet_period(lambda m: m.is_rx and m.arbitration_id in own, duration, after)
 
     def _own_cob_ids(self) -> set[int]:
-        base = {0x80, 0x180, 0x280, 0x380, 0x480, 0x580, 0x700}
-        return {b + self.node_id for b in base}
+        return {b + self.node_id for b in NODE_TRANSMIT_BASES}
 
     def is_pdo(self, msg: can.Message) -> bool:
-        return msg.is_rx and msg.arbitration_id in {b + self.node_id for b in (0x180, 0x280, 0x380, 0x480)}
+        return msg.is_rx and msg.arbitration_id in {b + self.node_id for b in TPDO_BASES}
 
     # -- helpers for state-changing tests ------------------------------------------------
     def reset_node_and_wait(self) -> can.Message:
@@ -368,8 +377,9 @@ class DeviceUnderTest:
         boot = self.wait_bootup(mark)
         if boot is None:
             raise AssertionError(
-                f"no boot-up (70{self.node_id:X}h... [1] 00) within {self.profile.timing.bootup_max_ms:.0f} ms "
-                f"after reset node\nlast frames:\n{format_frames(self.frames.last(10))}"
+                f"no boot-up ({HEARTBEAT_BASE + self.node_id:03X}h... [1] 00) within "
+                f"{self.profile.timing.bootup_max_ms:.0f} ms after reset node\n"
+                f"last frames:\n{format_frames(self.frames.last(10))}"
             )
         return boot
 
@@ -380,5 +390,5 @@ def wake_if_silent(dut: DeviceUnderTest) -> str | None:
     found = dut.profile.quirk_of(SilentUntilBusTraffic)
     if found is None:
         return None
-    dut.send(0x80, b"")
+    dut.send(SYNC_COB_ID, b"")
     return found[0]

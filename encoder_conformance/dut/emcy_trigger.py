@@ -26,6 +26,7 @@ from encoder_conformance.cia.cia301 import (
     COB_ID_INVALID,
     EMCY_BASE,
     EMCY_COB_ID,
+    HEARTBEAT_BASE,
     HEARTBEAT_CONSUMER,
     SYNC_COB_ID,
     SYNC_COB_ID_OBJECT,
@@ -181,7 +182,7 @@ class HeartbeatTimeout(EmcyTrigger):
         return None
 
     def fire(self) -> Mark:
-        return self._dut.send(0x700 + self.producer, bytes([NmtState.OPERATIONAL]))
+        return self._dut.send(HEARTBEAT_BASE + self.producer, bytes([NmtState.OPERATIONAL]))
 
     def window_s(self) -> float:
         return HEARTBEAT_TIMEOUT_MS / 1000 + super().window_s()

@@ -2,7 +2,7 @@
 
 Values are decoded with the profile's data type of each entry (SIGNED types negative), so the
 settings read here are the same inputs the reference model gets from the twin's object store
-(``encoder_model.settings.read_settings``).
+(``models.encoder.settings.read_settings``).
 """
 
 from __future__ import annotations

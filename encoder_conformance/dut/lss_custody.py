@@ -25,7 +25,13 @@ from dataclasses import dataclass
 
 import can
 
-from encoder_conformance.cia.cia301 import NMT_COMMAND_NAMES
+from encoder_conformance.cia.cia301 import (
+    HEARTBEAT_BASE,
+    NMT_COB_ID,
+    NMT_COMMAND_NAMES,
+    SDO_REQUEST_BASE,
+    SDO_RESPONSE_BASE,
+)
 from encoder_conformance.cia.cia305 import UNCONFIGURED_NODE_ID, LssState
 from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
 from encoder_conformance.dut.frames import Mark
@@ -76,9 +82,9 @@ class LssCustody:
     def answers_at(self, node_id: int, timeout: float | None = None) -> bool:
         """Does a node answer an SDO read of 1000h at ``node_id`` (within the SDO answer window)?"""
         mark = self.dut.frames.mark()
-        self.dut.network.send_message(0x600 + node_id, upload_request(0x1000, 0))
+        self.dut.network.send_message(SDO_REQUEST_BASE + node_id, upload_request(0x1000, 0))
         wait = self.dut.sdo_timeout if timeout is None else timeout
-        return self.dut.frames.wait_for(lambda m: _from(m, 0x580 + node_id), wait, mark) is not None
+        return self.dut.frames.wait_for(lambda m: _from(m, SDO_RESPONSE_BASE + node_id), wait, mark) is not None
 
     def _others(self) -> list[int]:
         return sorted(set(self.candidates) - {self.target, UNCONFIGURED_NODE_ID})
@@ -124,15 +130,15 @@ class LssCustody:
     def _nmt(self, command: str, node_id: int) -> Mark:
         """An NMT command to ``node_id``, also while the run is stopping (custody may always talk)."""
         mark = self.dut.frames.mark()
-        self.dut.network.send_message(0x000, bytes([NMT_COMMAND_NAMES[command], node_id]))
+        self.dut.network.send_message(NMT_COB_ID, bytes([NMT_COMMAND_NAMES[command], node_id]))
         return mark
 
     def _wait_bootup(self, node_ids: Iterable[int], after: Mark) -> int | None:
         """The node-ID of the first boot-up at one of ``node_ids`` within the profile's boot-up time."""
-        cob_ids = {0x700 + n for n in node_ids}
+        cob_ids = {HEARTBEAT_BASE + n for n in node_ids}
         boot = self.dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id in cob_ids and bytes(m.data) == b"\x00",
                                         self.dut.profile.timing.bootup_max_ms / 1000, after)
-        return None if boot is None else boot.arbitration_id - 0x700
+        return None if boot is None else boot.arbitration_id - HEARTBEAT_BASE
 
     def _cycle(self) -> Mark:
         assert self.power_cycle is not None

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import can
 
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE, SDO_REQUEST_BASE, SDO_RESPONSE_BASE
 from encoder_conformance.cia.cia305 import (
     BIT_TIMING_TABLE_0,
     FASTSCAN_RESET_BIT,
@@ -117,13 +118,13 @@ class LssDevice:
     def answers_at(self, node_id: int, timeout: float | None = None) -> bool:
         """Does a node answer an SDO read of 1000h at ``node_id``?"""
         mark = self.dut.frames.mark()
-        self.dut.network.send_message(0x600 + node_id, upload_request(0x1000, 0))
+        self.dut.network.send_message(SDO_REQUEST_BASE + node_id, upload_request(0x1000, 0))
         wait = self.dut.sdo_timeout if timeout is None else timeout
-        return self.dut.frames.wait_for(lambda m: _from(m, 0x580 + node_id), wait, mark) is not None
+        return self.dut.frames.wait_for(lambda m: _from(m, SDO_RESPONSE_BASE + node_id), wait, mark) is not None
 
     def wait_bootup_at(self, node_id: int, after: Mark, timeout: float | None = None) -> can.Message | None:
         limit = self.dut.profile.timing.bootup_max_ms / 1000 if timeout is None else timeout
-        return self.dut.frames.wait_for(lambda m: _from(m, 0x700 + node_id) and bytes(m.data) == b"\x00",
+        return self.dut.frames.wait_for(lambda m: _from(m, HEARTBEAT_BASE + node_id) and bytes(m.data) == b"\x00",
                                         limit, after)
 
     def reset_communication(self, node_id: int) -> Mark:

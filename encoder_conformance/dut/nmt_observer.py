@@ -11,12 +11,14 @@ import time
 from collections.abc import Callable
 from typing import Protocol
 
-from encoder_conformance.cia.cia301 import NMT_COMMAND_NAMES, STATE_NAMES
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE, NMT_COMMAND_NAMES, NMT_COMMAND_TARGET, STATE_NAMES
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.sdo_frames import upload_request
 
-COMMAND_TARGET = {"start": 0x05, "stop": 0x04, "pre-operational": 0x7F}
+#: the state each state-changing command leads to, by the suites' names for the commands
+COMMAND_TARGET = {name: int(NMT_COMMAND_TARGET[command]) for name, command in NMT_COMMAND_NAMES.items()
+                  if command in NMT_COMMAND_TARGET}
 ENTER = {"pre-operational": "pre-operational", "operational": "start", "stopped": "stop"}
 
 
@@ -66,7 +68,7 @@ class HeartbeatObserver(_Commands):
 
     def expect_state(self, after: Mark, state: int, why: str) -> None:
         if self.dut.wait_heartbeat(after, self.window_s, state=state) is None:
-            seen = self.dut.frames.since(after, lambda m: m.arbitration_id == 0x700 + self.dut.node_id)
+            seen = self.dut.frames.since(after, lambda m: m.arbitration_id == HEARTBEAT_BASE + self.dut.node_id)
             raise AssertionError(
                 f"{why}: expected heartbeat state {state:02X}h ({STATE_NAMES.get(state)}) within "
                 f"{self.window_s * 1000:.0f} ms; heartbeats seen:\n{format_frames(seen[-6:]) or '  none'}"

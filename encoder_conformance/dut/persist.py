@@ -13,16 +13,13 @@ from dataclasses import dataclass
 from encoder_conformance.cia.cia301 import SAVE, STORE_PARAMETERS, STORE_SUB_OF_GROUP
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.errors import CannotPersist
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.model import DeviceProfile
 
 __all__ = ["SAVE", "STORE_SUB", "CannotPersist", "StoreCommand", "persist_entry", "store_commands_for"]
 
 STORE_SUB = STORE_SUB_OF_GROUP  # persisted_by -> the 1010h sub-index CiA 301 gives that group
-
-
-class CannotPersist(Exception):
-    """The profile gives no way to store this entry that a test may use."""
 
 
 @dataclass(frozen=True)

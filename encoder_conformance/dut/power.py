@@ -12,12 +12,10 @@ import threading
 from collections.abc import Callable
 from typing import Protocol
 
+from encoder_conformance.errors import PowerSwitchError
+
 COMMAND_TIMEOUT_S = 30.0
 HOW_TO_CONFIGURE = "--power-off-cmd/--power-on-cmd, --power-manual, or a station file with 'power:'"
-
-
-class PowerSwitchError(Exception):
-    """The switch could not do what it was asked (the message names the command and its output)."""
 
 
 class PowerSwitch(Protocol):

@@ -12,9 +12,9 @@ import threading
 
 import can
 
-from encoder_conformance.cia.cia301 import NmtCommand
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE, SDO_REQUEST_BASE, NmtCommand, SdoClientCommand
 
-_DOWNLOADS = {1, 6}  # SDO client command specifiers: initiate download, block download
+_DOWNLOADS = {SdoClientCommand.INITIATE_DOWNLOAD, SdoClientCommand.BLOCK_DOWNLOAD}  # what starts a download
 
 
 class RestartWatch(can.Listener):
@@ -38,13 +38,13 @@ class RestartWatch(can.Listener):
         data = bytes(msg.data)
         node = self._node_id
         with self._lock:
-            if msg.arbitration_id == 0x600 + node and data and data[0] >> 5 in _DOWNLOADS:
+            if msg.arbitration_id == SDO_REQUEST_BASE + node and data and data[0] >> 5 in _DOWNLOADS:
                 self._shows_stored = False
             elif msg.arbitration_id == 0 and len(data) == 2 and data[1] in (0, node):
                 if data[0] == NmtCommand.RESET_COMMUNICATION:
                     self._communication_reset = True
                 elif data[0] == NmtCommand.RESET_NODE:
                     self._communication_reset = False
-            elif msg.arbitration_id == 0x700 + node and data == b"\x00":
+            elif msg.arbitration_id == HEARTBEAT_BASE + node and data == b"\x00":
                 self._shows_stored = not self._communication_reset
                 self._communication_reset = False

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import can
 
-from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
+from encoder_conformance.cia.cia301 import SDO_ABORT, SDO_RESPONSE_BASE, SdoAbortCode, block_crc
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name, expedited_download_request, upload_request
@@ -87,14 +87,14 @@ class SdoProtocolClient:
 
     def abort(self, index: int, sub: int, code: int = SdoAbortCode.GENERAL_ERROR) -> Mark:
         """Abort SDO transfer from the client (unconfirmed: no answer is due); a mark before it."""
-        return self.dut.send_sdo(struct.pack("<BHBI", 0x80, index, sub, code))
+        return self.dut.send_sdo(struct.pack("<BHBI", SDO_ABORT, index, sub, code))
 
     def silent_after(self, mark: Mark) -> list[bytes]:
         """The SDO responses within the SDO silence window after ``mark`` (none are due)."""
         return [bytes(m.data) for m in self.dut.frames.quiet_period(self.is_response, self.dut.sdo_silence_s, mark)]
 
     def is_response(self, msg: can.Message) -> bool:
-        return msg.is_rx and msg.arbitration_id == 0x580 + self.dut.node_id and not msg.is_remote_frame
+        return msg.is_rx and msg.arbitration_id == SDO_RESPONSE_BASE + self.dut.node_id and not msg.is_remote_frame
 
     # -- whole transfers ---------------------------------------------------------------------
     def upload(self, index: int, sub: int) -> Transfer:
@@ -262,7 +262,7 @@ class SdoProtocolClient:
                                    f"{self.dut.sdo_timeout * 1000:.0f} ms")
             return None
         result.responses += seen
-        if seen[-1][0] == 0x80 and len(seen) == 1:  # an abort (sequence number 0 is no segment)
+        if seen[-1][0] == SDO_ABORT and len(seen) == 1:  # an abort (sequence number 0 is no segment)
             result.abort = SdoResponse(seen[-1])
             return None
         return seen

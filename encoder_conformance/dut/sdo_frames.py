@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 from canopen.sdo.exceptions import SdoAbortedError
 
+from encoder_conformance.cia.cia301 import SDO_ABORT, SDO_ANSWER, SdoClientCommand, SdoServerCommand
+
 
 def upload_request(index: int, sub: int) -> bytes:
     return struct.pack("<BHB4x", 0x40, index, sub)
@@ -23,12 +25,11 @@ def expedited_download_request(index: int, sub: int, data: bytes) -> bytes:
     return struct.pack("<BHB", command, index, sub) + data.ljust(4, b"\x00")
 
 
-ABORT_SCS = 4
-# client command specifier -> the server command specifier of its answer (CiA 301 §7.2.4.3): download
-# segment -> download segment response, initiate download -> its response, initiate upload -> its
-# response, upload segment -> upload segment response, block upload / block download initiate -> theirs
-ANSWER_SCS = {0: 1, 1: 3, 2: 2, 3: 0, 5: 6, 6: 5}
-ECHOES_MULTIPLEXER = {1, 2, 5, 6}  # initiate requests: the answer (also an abort) repeats index and sub-index
+ABORT_SCS = SdoServerCommand.ABORT
+ANSWER_SCS = SDO_ANSWER  # client command specifier -> the server command specifier of its answer
+BLOCK_CCS = (SdoClientCommand.BLOCK_UPLOAD, SdoClientCommand.BLOCK_DOWNLOAD)
+#: initiate requests: the answer (also an abort) repeats index and sub-index
+ECHOES_MULTIPLEXER = {SdoClientCommand.INITIATE_DOWNLOAD, SdoClientCommand.INITIATE_UPLOAD, *BLOCK_CCS}
 
 
 def answers(request: bytes, reply: bytes) -> bool:
@@ -44,7 +45,7 @@ def answers(request: bytes, reply: bytes) -> bool:
     if scs not in (ANSWER_SCS[ccs], ABORT_SCS):
         return False
     if ccs in ECHOES_MULTIPLEXER and len(request) >= 4 and len(reply) >= 4:
-        return reply[1:4] == request[1:4] or (scs == ABORT_SCS and ccs in (5, 6))
+        return reply[1:4] == request[1:4] or (scs == ABORT_SCS and ccs in BLOCK_CCS)
     return True
 
 
@@ -66,7 +67,7 @@ class SdoResponse:
 
     @property
     def is_abort(self) -> bool:
-        return self.raw[0] == 0x80
+        return self.raw[0] == SDO_ABORT
 
     @property
     def index(self) -> int:

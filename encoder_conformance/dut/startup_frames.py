@@ -12,14 +12,21 @@ from dataclasses import dataclass, field
 
 import can
 
-from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE
+from encoder_conformance.cia.cia301 import (
+    SDO_ANSWER,
+    SDO_REQUEST_BASE,
+    SDO_RESPONSE_BASE,
+    SdoClientCommand,
+    SdoServerCommand,
+)
 
-SDO_RESPONSE_BASE = 0x580
 #: CiA 301 v4.2.0 clauses a start-up reply can break
 DLC_CLAUSE = "CiA 301 v4.2.0 §7.2.4.3.1 (SDO: every SDO frame has a DLC of 8)"
-MUX_CLAUSES = {
-    1: "CiA 301 v4.2.0 §7.2.4.3.3 (SDO download initiate: the response carries the request's multiplexer m)",
-    2: "CiA 301 v4.2.0 §7.2.4.3.6 (SDO upload initiate: the response carries the request's multiplexer m)",
+MUX_CLAUSES: dict[int, str] = {
+    SdoClientCommand.INITIATE_DOWNLOAD:
+        "CiA 301 v4.2.0 §7.2.4.3.3 (SDO download initiate: the response carries the request's multiplexer m)",
+    SdoClientCommand.INITIATE_UPLOAD:
+        "CiA 301 v4.2.0 §7.2.4.3.6 (SDO upload initiate: the response carries the request's multiplexer m)",
 }
 ABORT_CLAUSE = "CiA 301 v4.2.0 §7.2.4.3.17 (abort SDO transfer: m is the multiplexer of the transfer aborted)"
 SHOWN = 4  # broken replies named in the verdict
@@ -70,9 +77,9 @@ def judge(frames: list[can.Message], node_id: int) -> StartupFrames:
         if request is None or len(request) < 4:
             continue
         ccs, scs = request[0] >> 5, data[0] >> 5
-        initiate_reply = (ccs, scs) in ((1, 3), (2, 2))
-        if (initiate_reply or scs == 4) and ccs in MUX_CLAUSES and data[1:4] != request[1:4]:
-            clause = ABORT_CLAUSE if scs == 4 else MUX_CLAUSES[ccs]
+        initiate_reply = ccs in MUX_CLAUSES and scs == SDO_ANSWER[ccs]
+        if (initiate_reply or scs == SdoServerCommand.ABORT) and ccs in MUX_CLAUSES and data[1:4] != request[1:4]:
+            clause = ABORT_CLAUSE if scs == SdoServerCommand.ABORT else MUX_CLAUSES[ccs]
             asked = f"{request[2]:02X}{request[1]:02X}h.{request[3]:02X}"
             got = f"{data[2]:02X}{data[1]:02X}h.{data[3]:02X}"
             found.broken.append((f"request {_hex(request)} ({asked}) answered {_hex(data)}: multiplexer {got}", clause))

@@ -14,7 +14,12 @@ from collections import Counter
 
 import can
 
-from encoder_conformance.cia.cia301 import RESTORE_DEFAULT_PARAMETERS, STORE_PARAMETERS
+from encoder_conformance.cia.cia301 import (
+    RESTORE_DEFAULT_PARAMETERS,
+    SDO_REQUEST_BASE,
+    STORE_PARAMETERS,
+    SdoClientCommand,
+)
 from encoder_conformance.cia.cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
 from encoder_conformance.cia.cia305 import LssCommand
 from encoder_conformance.profile.model import DeviceProfile
@@ -25,7 +30,7 @@ from encoder_conformance.profile.quirk_effects import (
 )
 
 #: SDO client command specifiers that start a download (CiA 301 §7.2.4.3): initiate, block initiate
-_DOWNLOAD_INITIATE = {1, 6}
+_DOWNLOAD_INITIATE = {SdoClientCommand.INITIATE_DOWNLOAD, SdoClientCommand.BLOCK_DOWNLOAD}
 #: how the counts name writes to entries the device stores by itself
 AUTO_STORED = "writes the device stores by itself"
 
@@ -44,7 +49,7 @@ class StoreWatch(can.Listener):
     """Counts store/restore commands and self-storing writes the tester sends to one node."""
 
     def __init__(self, profile: DeviceProfile, node_id: int) -> None:
-        self._request_id = 0x600 + node_id
+        self._request_id = SDO_REQUEST_BASE + node_id
         self._commands = store_command_objects(profile)
         self._auto = frozenset((i, s) for i, s, _, e in profile.iter_entries() if e.persisted_by == "auto")
         self._lss_stores = _lss_stores(profile)

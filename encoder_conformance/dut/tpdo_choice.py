@@ -8,18 +8,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, cob_id_valid
 from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.errors import NoUsableTpdo
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
-
-
-class NoUsableTpdo(Exception):
-    """No TPDO of the profile can be used for the test; the message says why (a skip reason)."""
-
-    def __init__(self, reason: str, deviations: list[tuple[str, str]]) -> None:
-        super().__init__(reason)
-        self.deviations = deviations
 
 
 @dataclass
@@ -60,7 +53,8 @@ def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int]) -> Tpdo
         entry, kind, cob = (dut.profile.entry(comm, s) for s in (sub, 2, 1))
         if entry is None or kind is None or cob is None or not entry.writable:
             continue
-        if dut.profile.entry(comm + 0x200, 0) is not None and dut.read_uint(comm + 0x200, 0) == 0:
+        mapping = comm + PDO_MAPPING_OFFSET
+        if dut.profile.entry(mapping, 0) is not None and dut.read_uint(mapping, 0) == 0:
             continue  # nothing mapped
         accepted = declared_domain(dut.profile, comm, 2)  # the profile's types within the entry's own limits
         candidates = ([t for t in usable_types if accepted is None or t in accepted] if kind.writable

@@ -10,7 +10,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from encoder_conformance.cia.cia301 import COB_ID_INVALID, RPDO_COMMUNICATION, TPDO_COMMUNICATION, pdo_mapping_of
+from encoder_conformance.cia.cia301 import (
+    COB_ID_INVALID,
+    PDO_MAPPING_OFFSET,
+    RPDO_COMMUNICATION,
+    TPDO_COMMUNICATION,
+    pdo_mapping_of,
+)
 from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import WritesNeedScalingBit
 
@@ -78,8 +84,8 @@ def _pdo_communication_indices(keys: list[Key]) -> list[int]:
     for index, _ in keys:
         if index in TPDO_COMMUNICATION or index in RPDO_COMMUNICATION:
             comms.add(index)
-        elif index - 0x200 in TPDO_COMMUNICATION or index - 0x200 in RPDO_COMMUNICATION:
-            comms.add(index - 0x200)
+        elif index - PDO_MAPPING_OFFSET in TPDO_COMMUNICATION or index - PDO_MAPPING_OFFSET in RPDO_COMMUNICATION:
+            comms.add(index - PDO_MAPPING_OFFSET)
     return sorted(comms)
 
 

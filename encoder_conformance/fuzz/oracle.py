@@ -20,12 +20,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from itertools import pairwise
 
+from encoder_conformance.cia.cia301 import SDO_ABORT, SdoClientCommand
 from encoder_conformance.dut.sdo_frames import ABORT_SCS, ANSWER_SCS, answers
 from encoder_conformance.fuzz.strategies import Request
 
-ABORT = 0x80
-SEGMENT_CCS = (0, 3)
-INITIATE_CCS = (1, 2)
+ABORT = SDO_ABORT
+SEGMENT_CCS = (SdoClientCommand.DOWNLOAD_SEGMENT, SdoClientCommand.UPLOAD_SEGMENT)
+INITIATE_CCS = (SdoClientCommand.INITIATE_DOWNLOAD, SdoClientCommand.INITIATE_UPLOAD)
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import can
 
-from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE, SdoAbortCode
+from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE, SDO_RESPONSE_BASE, SdoAbortCode
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.fuzz.attribution import attribute
@@ -107,7 +107,7 @@ class FuzzRunner:
         return (client_abort((mux.index, mux.sub), CLOSING_ABORT_CODE),)
 
     def _is_sdo(self, msg: can.Message) -> bool:
-        expected = 0x580 if msg.is_rx else SDO_REQUEST_BASE
+        expected = SDO_RESPONSE_BASE if msg.is_rx else SDO_REQUEST_BASE
         return not msg.is_remote_frame and msg.arbitration_id == expected + self.dut.node_id
 
     def _is_sdo_or_watched(self, msg: can.Message) -> bool:

@@ -23,13 +23,14 @@ from functools import cache
 
 from hypothesis import strategies as st
 
+from encoder_conformance.cia.cia301 import SDO_ABORT
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.model import DeviceProfile
 
 Mux = tuple[int, int]
 #: CiA 301 §7.4.1 index areas in which no object can be writable: data types and the reserved area
 RESERVED_AREAS = ((0x0000, 0x0FFF), (0xC000, 0xFFFF))
-CLIENT_ABORT = 0x80
+CLIENT_ABORT = SDO_ABORT
 
 
 @dataclass(frozen=True)

@@ -18,12 +18,13 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
-from encoder_conformance.paths import REPO_ROOT
+from encoder_conformance.errors import HistoryError
+from encoder_conformance.paths import default_reports_dir
 from encoder_conformance.run_summary import RunSummary, TestResult
 
 SCHEMA_VERSION = 1
 ENV_VAR = "ENCODER_CONFORMANCE_HISTORY"
-DEFAULT_PATH = REPO_ROOT / "reports" / "history.sqlite"
+DEFAULT_PATH = default_reports_dir() / "history.sqlite"
 BUSY_TIMEOUT_S = 10.0  # a parallel run's write takes milliseconds; this only bounds a stuck writer
 OFF = "off"  # --history off: this run is not recorded (the fault matrix's throw-away runs)
 
@@ -73,10 +74,6 @@ CREATE TABLE IF NOT EXISTS results (
     PRIMARY KEY (run_id, nodeid)
 );
 """
-
-
-class HistoryError(Exception):
-    """The history database cannot be used (unreadable, not a database, newer schema, locked too long)."""
 
 
 def history_path(given: str | os.PathLike[str] | None = None, station_history: Path | None = None) -> Path:

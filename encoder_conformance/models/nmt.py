@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 from encoder_conformance.cia.cia301 import (
     COMMUNICATION_AREA,
+    NMT_COMMAND_TARGET,
     RPDO_COMMUNICATION,
     RPDO_MAPPING,
     TPDO_COMMUNICATION,
@@ -36,11 +37,7 @@ from encoder_conformance.cia.cia301 import (
 __all__ = ["NmtModel", "Tracked"]
 
 #: where the state-changing commands lead (§7.3.2.2)
-COMMAND_TARGET = {
-    NmtCommand.START: NmtState.OPERATIONAL,
-    NmtCommand.STOP: NmtState.STOPPED,
-    NmtCommand.ENTER_PRE_OPERATIONAL: NmtState.PRE_OPERATIONAL,
-}
+COMMAND_TARGET = NMT_COMMAND_TARGET
 #: the init event of each reset, as quirk ``bits_forced_at_init`` names it
 RESET_EVENT = {NmtCommand.RESET_NODE: "nmt_81h", NmtCommand.RESET_COMMUNICATION: "nmt_82h"}
 HEARTBEAT_TIME = (0x1017, 0)

@@ -35,7 +35,7 @@ import pytest
 from encoder_conformance.paths import SUITES_DIR
 
 KIND = "accept"
-KIND_OPTION = "--run-kind"  # declared by run_record.add_option
+KIND_OPTION = "--run-kind"  # a row of plugin/option_table.py
 
 #: heartbeat intervals an acceptance captures (a full run: the profile's timing.heartbeat_intervals)
 ACCEPT_HEARTBEAT_INTERVALS = 10

@@ -21,7 +21,19 @@ from pathlib import Path
 import can
 import pytest
 
+from encoder_conformance.dut.frames import FrameLog, Mark
+
 _UNSETTLED = pytest.StashKey[dict[int, "BusTrace"]]()
+#: the run's frame log (set by the bus_trace fixture) and where each test's set-up starts in it
+FRAME_LOG = pytest.StashKey[FrameLog]()
+SET_UP_FROM = pytest.StashKey[Mark]()
+
+
+def mark_set_up_start(item: pytest.Item) -> None:
+    """Where the test's set-up starts in the frame log: the frames its fixtures send before the trace opens
+    (session fixtures such as the periodic capture, the start-up check of the first test) belong in its trace."""
+    frames = item.config.stash.get(FRAME_LOG, None)
+    item.stash[SET_UP_FROM] = frames.mark() if frames is not None else Mark(0, 0.0)
 
 
 class _AscWriter(can.ASCWriter):

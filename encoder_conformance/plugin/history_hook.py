@@ -12,17 +12,11 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.history.certificate import write_certificate
-from encoder_conformance.history.db import ENV_VAR, OFF, HistoryError, history_path, note_certificate, record_run
+from encoder_conformance.history.db import OFF, HistoryError, history_path, note_certificate, record_run
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.plugin.run_record import summary_of
 
-OPTION = "--history"
-
-
-def add_option(group) -> None:  # noqa: ANN001 - pytest's OptionGroup
-    group.addoption(OPTION, default=None, metavar="PATH",
-                    help=f"the history database this run is appended to (SQLite; default: the station file's "
-                         f"history, else ${ENV_VAR}, else reports/history.sqlite); '{OFF}' records nothing")
+OPTION = "--history"  # declared in option_table.py
 
 
 def _db_path(config: pytest.Config) -> Path | None:

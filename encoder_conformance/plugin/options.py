@@ -1,4 +1,5 @@
-"""Command-line options of the suite and their validation (errors name the option and the fix)."""
+"""The suite's pytest options (declared in option_table.py) and their validation (errors name the option and the
+fix)."""
 
 from __future__ import annotations
 
@@ -12,13 +13,10 @@ from encoder_conformance.config.bus import BusConfig, resolve_bus_config
 from encoder_conformance.config.station import Station, StationError, StationPower, load_station
 from encoder_conformance.dut.actuator import ShaftDrivePlugin
 from encoder_conformance.paths import DEFAULT_PROFILE
-from encoder_conformance.plugin import verdicts
+from encoder_conformance.plugin import option_table
+from encoder_conformance.plugin.option_table import PROFILE_ENV, TRACE_OPTION
 from encoder_conformance.profile.loader import LoadedProfile, load_profile
 from encoder_conformance.sim.fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS  # faults and conformant variants
-
-PROFILE_ENV = "ENCODER_CONFORMANCE_PROFILE"
-TRACE_OPTION = "--bus-trace"
-TRACE_POLICIES = ("failed", "all", "none")
 
 
 @dataclass(frozen=True)
@@ -54,72 +52,8 @@ SETTINGS = pytest.StashKey[RunSettings]()
 
 
 def add_options(parser: pytest.Parser) -> None:
-    group = parser.getgroup("encoder-conformance", "CANopen encoder conformance")
-    group.addoption("--device-profile", default=None,
-                    help=f"device profile id or YAML file. Environment variable: {PROFILE_ENV}. "
-                         f"Default: {DEFAULT_PROFILE}")
-    group.addoption("--can-interface", default=None,
-                    help="python-can interface (pcan, kvaser, socketcan, ixxat, slcan, remote ...). "
-                         "Default: python-can's configuration (CAN_INTERFACE, ~/can.conf); "
-                         "none configured = the built-in simulator")
-    group.addoption("--can-channel", default=None, help="python-can channel (PCAN_USBBUS1, can0, ws://...)")
-    group.addoption("--can-bitrate", default=None, type=int, help="bit rate in bit/s")
-    group.addoption("--node-id", default=None, type=int, help="node-id of the device (1..127). "
-                    "Default: the profile's delivery node-id")
-    group.addoption("--allow-destructive", action="store_true", default=False,
-                    help="allow tests that change what the device remembers (store, restore, node-id). "
-                         "Always allowed on the simulator")
-    group.addoption("--sim-fault", action="append", default=[],
-                    help="simulator only: inject a named fault (encoder-conformance faults lists them)")
-    group.addoption("--sim-profile", default=None,
-                    help="simulator only: the profile the twin plays (default: the --device-profile). "
-                         "Checking a twin with another device's profile shows how a wrong profile fails")
-    group.addoption("--sim-inprocess", action="store_true", default=False,
-                    help="simulator only: run it in the test process on the virtual interface "
-                         "(faster start, less accurate timing)")
-    group.addoption("--station", default=None,
-                    help="station file (TOML, or YAML): the bench's CAN adapter, node-id, power switch, operator, "
-                         "motor plug-in, report and history locations; command-line options override it")
-    group.addoption("--power-off-cmd", default=None,
-                    help="shell command that switches the device off (with --power-on-cmd): the power-cycle "
-                         "tests run on the bench instead of skipping")
-    group.addoption("--power-on-cmd", default=None, help="shell command that switches the device on")
-    group.addoption("--power-manual", action="store_true", default=False,
-                    help="ask the operator at the terminal to switch the power off and on")
-    group.addoption("--power-off-time", default=None, type=float,
-                    help="seconds the power stays off in a power cycle (default 1.0, 0 on the simulator)")
-    group.addoption("--shaft-drive", default=None, metavar="MODULE:FACTORY[=ARGUMENT]",
-                    help="bench only: a plug-in that turns the encoder's shaft (a motor): FACTORY(config) returns an "
-                         "object with turn_by(revolutions) and set_speed(revolutions_per_second); config.argument is "
-                         "the text after '='. Without it the tests that need rotation skip on a bench")
-    group.addoption("--label-serial", default=None, type=int, metavar="NUMBER",
-                    help="the serial number printed on the device's label (decimal): the identity tests check that the "
-                         "device reports it (1018h sub 4, else 650Bh), and the history finds a device that reports "
-                         "none by it. On the built-in simulator: the twin's own (profile simulator.serial_number)")
-    group.addoption("--delivery-state", action="store_true", default=False,
-                    help="the device is in its delivery state (never configured): check factory defaults "
-                         "as found, without restoring defaults first (no --allow-destructive needed)")
-    group.addoption("--report-dir", default=None,
-                    help="directory for report.html, junit.xml, traces (and allure-results with --allure) "
-                         "(default reports/<timestamp>-<profile>/ when the suites run)")
-    verdicts.add_option(group)
-    group.addoption("--abort-codes", choices=("exact", "family"), default="exact",
-                    help="how SDO abort codes are judged: 'exact' (default) the code CiA 301 or the manual names for "
-                         "the situation; 'family' any code that differs only in its last digit (06090031h for "
-                         "06090030h), as the CiA conformance test tool accepts")
-    group.addoption("--budget", default=1.0, type=float, metavar="SECONDS",
-                    help="wall-clock time each property test (hypothesis sequences against the device) may spend "
-                         "generating examples (default 1 s; raise it for long bench runs)")
-    group.addoption("--fuzz-budget", default=None, type=float, metavar="SECONDS",
-                    help="wall-clock time each SDO fuzz test may spend sending examples; once spent, it stops "
-                         "(default: no limit, the hypothesis profile's example count decides; set it on a bench)")
-    group.addoption(TRACE_OPTION, choices=TRACE_POLICIES, default="failed",
-                    help="which tests keep their bus trace (traces/<test>.asc and .log, candump format): 'failed' "
-                         "(default: failed, error and warning tests), 'all', or 'none' (pytest's own --trace is its "
-                         "debugger; `encoder-conformance run --trace` sets this)")
-    group.addoption("--allure", action="store_true", default=False,
-                    help="also write allure-pytest results (allure-results/ in the report folder; render with "
-                         "`npx allure generate`). Off by default: about 3,400 files and 3 s of a 14 s WDGA run")
+    """The suite's pytest options: every row of the option table (plugin/option_table.py)."""
+    option_table.add_pytest_options(parser)
 
 
 def configure(config: pytest.Config) -> None:

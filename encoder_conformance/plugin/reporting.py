@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
+from encoder_conformance.paths import SUITES_DIR, default_reports_dir
 from encoder_conformance.plugin import bus_trace
 from encoder_conformance.plugin.allure_writer import BackgroundWriter, write_in_background
 from encoder_conformance.plugin.evidence import EVIDENCE
@@ -45,7 +45,7 @@ def configure_outputs(config: pytest.Config) -> None:
     given = config.getoption("--report-dir")
     stamp = time.strftime("%Y%m%d-%H%M%S")
     station_reports = settings.station.reports if settings.station is not None else None
-    parent = station_reports or REPO_ROOT / "reports"
+    parent = station_reports or default_reports_dir()
     folder = Path(given) if given else parent / f"{stamp}-{settings.loaded.profile.id}"
     try:
         folder.mkdir(parents=True, exist_ok=True)

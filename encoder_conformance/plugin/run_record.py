@@ -22,11 +22,6 @@ KIND_OPTION = acceptance.KIND_OPTION
 MESSAGE_LIMIT = 1500  # characters of a failure kept in the summary (the HTML report has it all)
 
 
-def add_option(group) -> None:  # noqa: ANN001 - pytest's OptionGroup
-    group.addoption(KIND_OPTION, default="run", choices=["run", "accept"],
-                    help="what kind of run the history records (set by `encoder-conformance accept`)")
-
-
 def summary_of(config: pytest.Config) -> RunSummary | None:
     return config.stash.get(SUMMARY, None)
 

@@ -14,13 +14,7 @@ from itertools import groupby
 
 import pytest
 
-OPTION = "--shuffle"
-
-
-def add_option(group: pytest.OptionGroup) -> None:
-    group.addoption(OPTION, type=int, default=None, metavar="SEED",
-                    help="run the suite modules and the tests inside each in a random order drawn from SEED "
-                         "(the same SEED gives the same order): shows tests that inherit a state")
+OPTION = "--shuffle"  # declared in option_table.py
 
 
 def shuffle(config: pytest.Config, items: list[pytest.Item]) -> None:

@@ -44,12 +44,6 @@ class VerdictTally:
 TALLY = pytest.StashKey[VerdictTally]()
 
 
-def add_option(group) -> None:  # noqa: ANN001 - pytest's OptionGroup
-    group.addoption(STRICT_OPTION, action="store_true", default=False,
-                    help="judge rules we only inferred (a manual's silence, an example) as failures; by default "
-                         "a device that breaks only such rules passes with a warning")
-
-
 def strict(config: pytest.Config) -> bool:
     return bool(config.getoption(STRICT_OPTION, default=False))
 

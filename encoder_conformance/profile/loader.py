@@ -244,6 +244,22 @@ def iter_profile_ids(dirs: list[Path] | None = None) -> Iterator[ProfileRef]:
             yield ProfileRef(path.stem, path, bool(isinstance(data, dict) and data.get("abstract")))
 
 
+def iter_own_profiles(folder: Path) -> Iterator[ProfileRef]:
+    """The user's own profiles in ``folder`` and its device_profiles/: YAML files with a ``schema_version`` and
+    an ``id`` (other YAML files are not profiles), the shipped folder left out."""
+    shipped = DEFAULT_PROFILE_DIR.resolve()
+    for directory in (folder, folder / "device_profiles"):
+        if not directory.is_dir() or directory.resolve() == shipped:
+            continue
+        for path in sorted(directory.glob("*.yaml")):
+            try:
+                data = yaml.safe_load(path.read_text(encoding="utf-8"))
+            except (OSError, yaml.YAMLError):
+                continue
+            if isinstance(data, dict) and "schema_version" in data and "id" in data:
+                yield ProfileRef(path.stem, path, bool(data.get("abstract")))
+
+
 def _resolve_raw(path: Path, seen: tuple[Path, ...]) -> tuple[dict[str, Any], tuple[Path, ...], list[str]]:
     """Raw merged data of ``path`` with its extends chain, plus the chain and texts."""
     path = path.resolve()

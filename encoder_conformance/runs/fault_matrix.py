@@ -18,7 +18,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from encoder_conformance.paths import REPO_ROOT, SUITES_DIR
+from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
@@ -94,7 +94,7 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     if select:
         command += ["-k", select]
     env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
-    completed = run_pytest(command, REPO_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
+    completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
     junit = folder / "junit.xml"
     outcomes = _parse_junit(junit) if junit.exists() else {}
     preflight = _preflight_outcome(folder)

@@ -31,7 +31,7 @@ from typing import Any, TypeAlias
 from encoder_conformance.config.station import load_station
 from encoder_conformance.errors import UsageError
 from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit, interrupted_by
-from encoder_conformance.paths import REPO_ROOT
+from encoder_conformance.paths import default_reports_dir
 from encoder_conformance.run_summary import RunSummary
 
 STOP_BOUND_S = 120.0  # a restore after Ctrl-C takes seconds; a run that needs longer is stuck
@@ -137,7 +137,7 @@ def run_stations(command: str, station_files: Sequence[str], argv: Sequence[str]
     """Check one device per station in parallel; print the combined table; return the worst exit code.
     ``argv`` is the command line as given (from the sub-command on)."""
     stamp = time.strftime("%Y%m%d-%H%M%S")
-    parent = Path(report_parent) if report_parent else REPO_ROOT / "reports" / f"{stamp}-stations"
+    parent = Path(report_parent) if report_parent else default_reports_dir() / f"{stamp}-stations"
     arguments = list(argv[argv.index(command) + 1:]) if command in argv else list(argv)
     runs = plan_stations(station_files, parent)
     ended: queue.Queue[StationRun] = queue.Queue()

@@ -14,7 +14,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-from encoder_conformance.paths import REPO_ROOT
+from encoder_conformance.paths import CONTENT_ROOT
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.readings import OpenReading, all_readings
 from encoder_conformance.runs.fault_matrix import PREFLIGHT, RunResult, run_suite
@@ -60,7 +60,7 @@ class VariantRun:
 
 
 def _profile_ref(profile: str) -> str:
-    return str(REPO_ROOT / profile) if "/" in profile else profile
+    return str(CONTENT_ROOT / profile) if "/" in profile else profile
 
 
 def applicable(profile: str, readings: list[OpenReading] | None = None) -> list[OpenReading]:

@@ -1,7 +1,7 @@
 """The measuring function of a simulated encoder: its objects in, the reference model's values out.
 
 Every value (position, CAM state, work-area state, speed, preset offset) is computed by
-``encoder_model`` from the settings in the twin's object store, read the way the suites read them
+``models.encoder`` from the settings in the twin's object store, read the way the suites read them
 from a device. What stays here is the twin's own part: the shaft, the preset offset (6509h, or
 internal on devices without it) kept in NVM whenever the preset object is stored (by a store
 command, or by itself where it is persisted_by auto), SIKO's position freeze while a write executes

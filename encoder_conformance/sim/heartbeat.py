@@ -8,6 +8,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
 from encoder_conformance.sim.faults import breaks
 from encoder_conformance.sim.hooks import NodeHooks, Value
 from encoder_conformance.sim.nmt import NmtState
@@ -69,7 +70,7 @@ class HeartbeatProducer:
         state = self._state()
         if state is None or state is NmtState.INITIALISING:
             return
-        self._send(0x700 + self._node_id(), self.payload(state))
+        self._send(HEARTBEAT_BASE + self._node_id(), self.payload(state))
 
 
 @breaks(HeartbeatProducer, "heartbeat_slow_20pct")

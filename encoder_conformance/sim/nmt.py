@@ -2,17 +2,13 @@
 
 from __future__ import annotations
 
-from encoder_conformance.cia.cia301 import NmtCommand, NmtState
+from encoder_conformance.cia.cia301 import NMT_COMMAND_TARGET, NmtCommand, NmtState
 
 __all__ = ["TARGET", "NmtCommand", "NmtState", "emcy_allowed", "pdo_allowed", "sdo_allowed"]
 
 
 #: Target state of the state-changing commands (resets are handled by the node).
-TARGET = {
-    NmtCommand.START: NmtState.OPERATIONAL,
-    NmtCommand.STOP: NmtState.STOPPED,
-    NmtCommand.ENTER_PRE_OPERATIONAL: NmtState.PRE_OPERATIONAL,
-}
+TARGET = NMT_COMMAND_TARGET
 
 
 def sdo_allowed(state: NmtState) -> bool:

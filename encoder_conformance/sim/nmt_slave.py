@@ -12,7 +12,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 
-from encoder_conformance.cia.cia301 import COMMUNICATION_AREA
+from encoder_conformance.cia.cia301 import COMMUNICATION_AREA, HEARTBEAT_BASE
 from encoder_conformance.cia.cia305 import UNCONFIGURED_NODE_ID
 from encoder_conformance.sim.faults import breaks
 from encoder_conformance.sim.hooks import NodeHooks, ReloadEvent
@@ -177,7 +177,7 @@ class NmtSlave:
             if self.state is not NmtState.INITIALISING:
                 return
             if self.sends_bootup(power_on):
-                self._send(0x700 + self.node_id, b"\x00")
+                self._send(HEARTBEAT_BASE + self.node_id, b"\x00")
             self.enter(NmtState.PRE_OPERATIONAL)
             for listener in self._hooks.booted:
                 listener()

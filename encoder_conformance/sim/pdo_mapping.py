@@ -18,6 +18,7 @@ from encoder_conformance.cia.cia301 import (
     COB_ID_INVALID,
     DUMMY_BITS,
     DUMMY_INDICES,
+    PDO_MAPPING_OFFSET,
     PDO_MAX_BITS,
     RPDO_MAPPING,
     TPDO_MAPPING,
@@ -55,7 +56,7 @@ class MappingRules:
         index, sub = key
         if not is_mapping_object(index) or not isinstance(value, int):
             return
-        if self.pdo_valid(index - 0x200):
+        if self.pdo_valid(index - PDO_MAPPING_OFFSET):
             raise SdoAbort(SdoAbortCode.VALUE_INVALID)
         if sub == 0:
             if value:

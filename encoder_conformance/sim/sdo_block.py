@@ -13,7 +13,7 @@ import struct
 from dataclasses import dataclass, field
 from enum import Enum, auto
 
-from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
+from encoder_conformance.cia.cia301 import SDO_ABORT, SdoAbortCode, block_crc
 from encoder_conformance.sim.faults import breaks
 from encoder_conformance.sim.sdo_server import Later, ObjectAccess, SdoAbort, abort_frame
 
@@ -65,7 +65,7 @@ class BlockEngine:
         block = self._block
         index, sub = (block.index, block.sub) if block else struct.unpack_from("<HB", request, 1)
         try:
-            if request[0] == 0x80:  # abort from the client (a segment cannot carry sequence number 0)
+            if request[0] == SDO_ABORT:  # abort from the client (a segment cannot carry sequence number 0)
                 self._block = None
                 return []
             if block is None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from encoder_conformance.cia.cia301 import SDO_ABORT, SDO_RESPONSE_BASE
 from encoder_conformance.sim.faults import breaks
 from encoder_conformance.sim.hooks import NodeHooks
 from encoder_conformance.sim.nmt import NmtState, sdo_allowed
@@ -49,7 +50,7 @@ class SdoChannel:
         for frame in frames:
             response = self.answer(frame)
             if response is not None:
-                self._send(0x580 + self._node_id(), response)
+                self._send(SDO_RESPONSE_BASE + self._node_id(), response)
 
 
 @breaks(SdoChannel, "no_sdo_response")
@@ -76,6 +77,6 @@ class AbortWithoutMultiplexer(SdoChannel):
     """Abort frames carry index 0000h sub 00, as canopen's own client sends them (issue #377)."""
 
     def answer(self, response: bytes) -> bytes | None:
-        if response[0] == 0x80:
+        if response[0] == SDO_ABORT:
             response = response[:1] + bytes(3) + response[4:]
         return super().answer(response)

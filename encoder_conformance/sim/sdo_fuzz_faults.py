@@ -10,16 +10,15 @@ from __future__ import annotations
 
 import struct
 
-from encoder_conformance.cia.cia301 import SdoAbortCode
+from encoder_conformance.cia.cia301 import EMCY_BASE, SDO_ABORT, SDO_RESPONSE_BASE, SdoAbortCode
 from encoder_conformance.sim.faults import breaks
 from encoder_conformance.sim.heartbeat import HeartbeatProducer
 from encoder_conformance.sim.hooks import NodeHooks
 from encoder_conformance.sim.sdo_channel import SdoChannel
 
-ABORT = 0x80
+ABORT = SDO_ABORT
 #: EMCY error code 8100h (communication, generic: CiA 301 §7.2.7.3.2 table 21), error register bit 4
 EMCY_COMMUNICATION = struct.pack("<HB5x", 0x8100, 0x11)
-EMCY_BASE = 0x80
 RESERVED_CCS = 7  # client command specifier 7: reserved (CiA 301 §7.2.4.3.17 05040001h)
 
 
@@ -47,7 +46,7 @@ class DoubleAbort(SdoChannel):
 
     def answer(self, response: bytes) -> bytes | None:
         if response[0] == ABORT:
-            self._send(0x580 + self._node_id(), response)
+            self._send(SDO_RESPONSE_BASE + self._node_id(), response)
         return super().answer(response)
 
 
@@ -57,7 +56,7 @@ class AnswersShortFrames(SdoChannel):
 
     def on_request(self, request: bytes) -> None:
         if len(request) < 8 and self.serves(request):
-            self._send(0x580 + self._node_id(), request.ljust(8, b"\x00"))
+            self._send(SDO_RESPONSE_BASE + self._node_id(), request.ljust(8, b"\x00"))
             return
         super().on_request(request)
 
@@ -69,7 +68,7 @@ class AnswersClientAbort(SdoChannel):
     def on_request(self, request: bytes) -> None:
         super().on_request(request)
         if len(request) == 8 and request[0] >> 5 == 4 and self.serves(request):
-            self._send(0x580 + self._node_id(), request)
+            self._send(SDO_RESPONSE_BASE + self._node_id(), request)
 
 
 @breaks(SdoChannel, "crashes_on_interleaved_initiate")

@@ -11,25 +11,16 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from encoder_conformance.cia.cia301 import SdoAbortCode
+from encoder_conformance.cia.cia301 import SDO_ABORT, SdoAbortCode, SdoClientCommand
+from encoder_conformance.errors import SdoAbort, SdoNoReply
 from encoder_conformance.sim.faults import breaks
 
 TOGGLE_NOT_ALTERNATED = SdoAbortCode.TOGGLE_BIT
 COMMAND_INVALID = SdoAbortCode.COMMAND_SPECIFIER
 GENERAL_ERROR = SdoAbortCode.GENERAL_ERROR
-BLOCK_COMMANDS = (5, 6)  # client command specifiers of block upload and block download
-
-
-class SdoAbort(Exception):
-    """Raised by an ObjectAccess to make the server answer with an abort frame."""
-
-    def __init__(self, code: int) -> None:
-        super().__init__(f"SDO abort 0x{code:08X}")
-        self.code = code
-
-
-class SdoNoReply(Exception):
-    """Raised by an ObjectAccess when the device sends no response at all (e.g. it reboots)."""
+BLOCK_COMMANDS = (SdoClientCommand.BLOCK_UPLOAD, SdoClientCommand.BLOCK_DOWNLOAD)
+INITIATE_COMMANDS = (SdoClientCommand.INITIATE_DOWNLOAD, SdoClientCommand.INITIATE_UPLOAD)
+SEGMENT_COMMANDS = (SdoClientCommand.DOWNLOAD_SEGMENT, SdoClientCommand.UPLOAD_SEGMENT)
 
 
 class ObjectAccess(Protocol):
@@ -65,7 +56,7 @@ class _Transfer:
 
 
 def abort_frame(index: int, sub: int, code: int) -> bytes:
-    return struct.pack("<BHBI", 0x80, index, sub, code)
+    return struct.pack("<BHBI", SDO_ABORT, index, sub, code)
 
 
 class SdoServer:
@@ -111,18 +102,18 @@ class SdoServer:
         ccs = request[0] >> 5
         index, sub = struct.unpack_from("<HB", request, 1)
         self._last_multiplexer = (self._transfer.index, self._transfer.sub) if self._transfer else None
-        if ccs in (1, 2) and self._transfer is not None and not self.serves_while_open():
+        if ccs in INITIATE_COMMANDS and self._transfer is not None and not self.serves_while_open():
             return None
         try:
-            if ccs == 1:
+            if ccs == SdoClientCommand.INITIATE_DOWNLOAD:
                 return self._initiate_download(request, index, sub)
-            if ccs == 0:
+            if ccs == SdoClientCommand.DOWNLOAD_SEGMENT:
                 return self._download_segment(request)
-            if ccs == 2:
+            if ccs == SdoClientCommand.INITIATE_UPLOAD:
                 return self._initiate_upload(index, sub)
-            if ccs == 3:
+            if ccs == SdoClientCommand.UPLOAD_SEGMENT:
                 return self._upload_segment(request)
-            if ccs == 4:  # abort from the client: forget the transfer, no response
+            if ccs == SdoClientCommand.ABORT:  # abort from the client: forget the transfer, no response
                 self.client_aborted()
                 return None
             raise SdoAbort(COMMAND_INVALID)  # block transfer (5, 6) and reserved (7)
@@ -130,7 +121,7 @@ class SdoServer:
             self._transfer = None
             return None
         except SdoAbort as abort:
-            if ccs in (0, 3) and self._last_multiplexer is not None:
+            if ccs in SEGMENT_COMMANDS and self._last_multiplexer is not None:
                 index, sub = self._last_multiplexer
             self._transfer = None
             return abort_frame(index, sub, abort.code)

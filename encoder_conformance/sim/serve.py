@@ -1,4 +1,5 @@
-"""Run simulated nodes as a process: serve the bus (python-can-remote) and the control channel.
+"""Run simulated nodes as a process: serve the bus (python-can-remote, or sit on a CAN bus such as a vcan) and
+the control channel.
 
 ``plan_nodes`` says which nodes the bus gets: one per profile, or N copies of one profile that differ
 by serial number (base, base+1, ...) and have consecutive node-IDs, or wait unconfigured (node-ID 255)
@@ -18,6 +19,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+
+import can
 
 from encoder_conformance.cia.cia305 import MAX_NODE_ID, UNCONFIGURED_NODE_ID
 from encoder_conformance.profile.loader import load_profile
@@ -81,18 +84,27 @@ def serve(
     faults: list[str],
     nvm: Path | None,
     ready_line: bool,
+    can_bus: tuple[str, str] | None = None,
 ) -> int:
     """Start the host, add the planned nodes, print the endpoints, run until signalled.
 
-    ValueError: a port could not be taken (the message names the option and the fix; a usage error)."""
+    ``can_bus`` (interface, channel): put the nodes on that CAN bus (e.g. socketcan on a vcan, the user-space
+    one too) instead of serving a python-can-remote endpoint, as a firmware simulator would sit on it.
+
+    ValueError: a port could not be taken, or the CAN bus not opened (the message names the option and the
+    fix; a usage error)."""
     # Timing: the default 5 ms GIL switch interval delays the scheduler thread by up to 5 ms when
     # the receive/remote threads are busy; 0.5 ms keeps heartbeat jitter well below the CI
     # tolerance (reference/python-stack-measured.md §6: p99 4.9 ms -> 1.8 ms).
     sys.setswitchinterval(0.0005)
     configure_logging()
-    host = SimulatorHost(channel=f"sim-{time.monotonic_ns()}")
+    host = _open_host(can_bus)
     try:  # the ports first: a port in use is one line, before any node has powered on
-        can_host, can_port = _bind("--listen", listen, lambda address: host.serve_remote(*address))
+        if can_bus is None:
+            can_host, can_port = _bind("--listen", listen, lambda address: host.serve_remote(*address))
+            can_url = f"ws://{can_host}:{can_port}/"
+        else:
+            can_url = f"{can_bus[0]}:{can_bus[1]}"
         control_address = (_bind("--control", control, lambda address: serve_control(host, address))
                            if control else None)
     except ValueError:
@@ -106,7 +118,6 @@ def serve(
         host.add_node(node.profile, node.node_id, nvm_path, FaultSet(faults), serial_number=node.serial_number,
                       booted=True)
     host.add_siblings()  # second_node quirk: the redundant interface's other node
-    can_url = f"ws://{can_host}:{can_port}/"
     info = {
         "can": can_url,
         "control": control_address,
@@ -119,13 +130,15 @@ def serve(
         print("READY " + json.dumps(info), flush=True)
     else:
         print(f"simulating {_describe(host)} on {info['can']}")
-        print(f"connect with: --can-interface remote --can-channel {info['can']}")
+        connect = (f"--can-interface remote --can-channel {can_url}" if can_bus is None else
+                   f"--can-interface {can_bus[0]} --can-channel {can_bus[1]}")
+        print(f"connect with: {connect}")
         if control_address:
             print(f"control channel on {control_address[0]}:{control_address[1]}")
         print("Ctrl-C stops the simulator.", flush=True)
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    if ready_line:  # started by a tester (sim_process): stop when it is gone (its end of our stdin closes)
+    if ready_line:  # started by a tester (sim/process.py): stop when it is gone (its end of our stdin closes)
         threading.Thread(target=_stop_at_end_of_input, args=(stop,), name="parent-watch", daemon=True).start()
     try:
         while not stop.wait(1.0):
@@ -138,6 +151,20 @@ def serve(
     sys.stderr.flush()
     # the web-socket server's threads make the interpreter's own shutdown take ~0.1 s, every run's end
     os._exit(0)
+
+
+def _open_host(can_bus: tuple[str, str] | None) -> SimulatorHost:
+    """The host on a private virtual channel (served to testers through python-can-remote), or on a CAN bus."""
+    if can_bus is None:
+        return SimulatorHost(channel=f"sim-{time.monotonic_ns()}")
+    interface, channel = can_bus
+    try:
+        return SimulatorHost(channel=channel, interface=interface)
+    except (OSError, ValueError, ImportError, can.CanError) as exc:
+        hint = (" (no vcan here? start the user-space bus: eval \"$(encoder-conformance vcan up)\")"
+                if interface == "socketcan" else "")
+        raise ValueError(f"--can-interface {interface} --can-channel {channel}: cannot open the bus: {exc}{hint}") \
+            from None
 
 
 def _stop_at_end_of_input(stop: threading.Event) -> None:

@@ -6,7 +6,7 @@ changes, the boot-up, what was written to or removed from the non-volatile memor
 defaults / LSS store), LSS configuration. Warnings and errors of any module (a behaviour that failed
 on a frame, a dropped python-can-remote client) come out at their own level.
 
-The ``sim`` process writes it to stderr, which the launcher (sim_process.py) sends to the file. In a
+The ``sim`` process writes it to stderr, which the launcher (sim/process.py) sends to the file. In a
 test process (the in-process twin) nothing is configured, so the INFO lines are not even formatted.
 """
 

@@ -18,8 +18,10 @@ from collections.abc import Callable
 from functools import partial
 
 from encoder_conformance.cia.cia301 import (
+    COB_ID_FRAME_29_BIT,
     COB_ID_INVALID,
     COB_ID_NO_RTR,
+    PDO_MAPPING_OFFSET,
     RTR_EVENT,
     RTR_SYNCHRONOUS,
     SYNC_COUNTER_OVERFLOW,
@@ -99,7 +101,7 @@ class TpdoEngine:
                 continue
             config = TpdoConfig(
                 number=comm - 0x1800 + 1,
-                cob_id=cob_id & 0x1FFFFFFF if cob_id & 0x20000000 else cob_id & 0x7FF,
+                cob_id=cob_id & 0x1FFFFFFF if cob_id & COB_ID_FRAME_29_BIT else cob_id & 0x7FF,
                 valid=self.is_valid(cob_id),
                 transmission_type=self._read(comm, 2) or 0,
                 inhibit_100us=self._read(comm, 3) or 0,
@@ -144,7 +146,7 @@ class TpdoEngine:
     def _mapping(self, comm: int) -> list[tuple[int, int, int]]:
         if self._layout is not None and comm in self._layout.mapping:
             return list(self._layout.mapping[comm])
-        mapping = comm + 0x200
+        mapping = comm + PDO_MAPPING_OFFSET
         entries = []
         for sub in range(1, (self._read(mapping, 0) or 0) + 1):
             word = self._read(mapping, sub) or 0

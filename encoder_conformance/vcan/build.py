@@ -18,14 +18,12 @@ import sys
 import tempfile
 from pathlib import Path
 
+from encoder_conformance.errors import BuildError
+
 SOURCE = Path(__file__).with_name("preload.c")
 FLAGS = ["-shared", "-fPIC", "-O2", "-Wall", "-U_FORTIFY_SOURCE"]
 LIBS = ["-ldl", "-lpthread"]
 COMPILERS = ("cc", "gcc", "clang")
-
-
-class BuildError(RuntimeError):
-    """The preload library cannot be built here; the message says why and what to do."""
 
 
 def compiler() -> list[str]:

@@ -27,6 +27,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from encoder_conformance.errors import HubStop
 from encoder_conformance.vcan.protocol import (
     ACK,
     CAN_MTU,
@@ -55,10 +56,6 @@ DEFAULT_RCVBUF = 212992
 UNIX_PER_CAN_SKB = 766 / 446
 BURST = 64  # messages read from one member before the others get their turn
 MAX_MESSAGE = 8192  # the largest control message: 44 + 512 filters of 8 + 1 bytes
-
-
-class _Stop(Exception):
-    """SIGTERM or SIGINT: leave the loop and clean up."""
 
 
 @dataclass(eq=False)
@@ -123,7 +120,7 @@ class Hub:
         self.selector.close()
 
     def serve(self, timeout: float | None = None) -> None:
-        """Relay until ``_Stop`` (or, with ``timeout``, until that long passed without traffic)."""
+        """Relay until ``HubStop`` (or, with ``timeout``, until that long passed without traffic)."""
         while True:
             events = self.selector.select(timeout)
             if not events and timeout is not None:
@@ -261,7 +258,7 @@ class Hub:
 
 
 def _stop(signum: int, frame: object) -> None:
-    raise _Stop
+    raise HubStop
 
 
 def _raise_file_limit() -> None:
@@ -295,7 +292,7 @@ def main(argv: list[str]) -> int:
     os.close(devnull)
     try:
         hub.serve()
-    except _Stop:
+    except HubStop:
         pass
     finally:
         hub.close()

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
+from encoder_conformance.errors import HubError
 from encoder_conformance.vcan.build import library
 from encoder_conformance.vcan.hub import HUB_SOCKET, PID_FILE
 from encoder_conformance.vcan.protocol import CAN_MTU, CANFD_MTU
@@ -36,10 +37,6 @@ FIRST_IFINDEX = 1000
 IF_NAMESIZE = 16
 LOG_FILE = "hub.log"
 MODES = ("vcan", "wire")
-
-
-class HubError(RuntimeError):
-    """The hub could not be started or reached; the message says why."""
 
 
 def default_directory() -> Path:

@@ -7,8 +7,10 @@ import re
 from pathlib import Path
 from typing import Any
 
+from encoder_conformance.cia.cia301 import PDO_MAPPING_OFFSET
 from encoder_conformance.profile.eds.importer import EdsImport, read_eds
 from encoder_conformance.profile.eds.numbers import _DYNAMIC_OBJECTS, _LSS_ASSUMED, _TIMING_PLACEHOLDERS, parse_number
+from encoder_conformance.profile.eds.storage import apply_storage_locations
 
 logger = logging.getLogger(__name__)
 
@@ -224,9 +226,9 @@ def _mapping_todos(objects: dict[int, dict[str, Any]], todos: list[str]) -> None
 def _tpdo_todos(objects: dict[int, dict[str, Any]], todos: list[str]) -> None:
     """A TPDO without a transmission type or a mapping in the EDS: what makes it send is unknown."""
     for comm in sorted(i for i in objects if 0x1800 <= i <= 0x19FF):
-        subs = objects[comm].get("subs", {})
+        subs, mapping = objects[comm].get("subs", {}), comm + PDO_MAPPING_OFFSET
         missing = [what for what, known in (("transmission type (sub 2)", 2 in subs and "default" in subs[2]),
-                                            (f"mapping ({comm + 0x200:04X}h)", comm + 0x200 in objects)) if not known]
+                                            (f"mapping ({mapping:04X}h)", mapping in objects)) if not known]
         if missing:
             todos.append(f"TPDO {comm:04X}h: the EDS gives no {' and no '.join(missing)}; the twin sends nothing "
                          "on it and the suites that need a sending TPDO skip: complete it from the manual")
@@ -291,15 +293,17 @@ STORE_GROUP_RANGES = {2: ("store_comm", range(0x1000, 0x2000)), 3: ("store_app",
 NOT_STORED = {0x1010, 0x1011, 0x1003, 0x1F51}  # commands, the error history, program control
 
 
-def _draft_persistence(objects: dict[int, dict[str, Any]], todos: list[str]) -> None:
-    """persisted_by for the writable values with a default, from the sub-indices 1010h offers (CiA 301:
-    1 all, 2 communication 1000h..1FFFh, 3 application 6000h..9FFFh, 4 manufacturer 2000h..5FFFh)."""
+def _draft_persistence(objects: dict[int, dict[str, Any]], locations: dict[str, str], todos: list[str]) -> None:
+    """persisted_by for the writable values with a default: from the EDS's ;StorageLocation comments where it
+    has them, else from the sub-indices 1010h offers (CiA 301: 1 all, 2 communication 1000h..1FFFh,
+    3 application 6000h..9FFFh, 4 manufacturer 2000h..5FFFh)."""
     subs = set(_sub_numbers(objects, 0x1010))
+    located = apply_storage_locations(objects, locations, subs, todos)
     if not subs:
         return
     labelled = 0
     for index, obj in objects.items():
-        if index in NOT_STORED or index in _DYNAMIC_OBJECTS:
+        if index in NOT_STORED or index in _DYNAMIC_OBJECTS or index in located:
             continue
         entries = [e for sub, e in obj["subs"].items() if sub != 0] if "subs" in obj else [obj]
         group = next((label for sub, (label, span) in STORE_GROUP_RANGES.items() if sub in subs and index in span),
@@ -319,7 +323,7 @@ def profile_draft_from_eds(path: Path, profile_id: str | None = None) -> tuple[d
     todos: list[str] = []
     objects = result.objects
     _mark_run_time_values(objects, todos)
-    _draft_persistence(objects, todos)
+    _draft_persistence(objects, result.cleaned.storage_locations, todos)
     identity = _identity(result, todos)
     capabilities = _capabilities(result, todos)
     _tpdo_todos(objects, todos)

@@ -30,6 +30,8 @@ class CleanedEds:
     sections: Sections
     origins: dict[str, str]  # cleaned section -> section of the vendor file it came from
     fixes: list[str] = field(default_factory=list)
+    #: section -> the ``;StorageLocation=`` comment of EDS generators (CANopenEditor: RAM, PERSIST_COMM, ...)
+    storage_locations: dict[str, str] = field(default_factory=dict)
 
 
 def _decode(data: bytes, fixes: list[str]) -> str:
@@ -91,11 +93,13 @@ class _IniReader:
         self.renamed_keys: dict[str, list[str]] = {}
         self.inline_comments = 0
         self.current: str | None = None
+        self.storage_locations: dict[str, str] = {}
 
     def read(self, text: str) -> Sections:
         for number, raw in enumerate(text.splitlines(), start=1):
             line = raw.strip()
             if not line or line.startswith((";", "#", "//")):
+                self._comment(line)
                 continue
             header = _SECTION_HEADER.match(line)
             if header:
@@ -107,6 +111,12 @@ class _IniReader:
                 self.fixes.append(f"line {number}: ignored {line[:40]!r} (not a section or key=value)")
         self._summarise()
         return self.sections
+
+    def _comment(self, line: str) -> None:
+        """Keep ``;StorageLocation=X`` (a comment to INI readers, the storage group to EDS generators)."""
+        key, _, value = line.lstrip(";#/ ").partition("=")
+        if self.current is not None and key.strip().lower() == "storagelocation" and value.strip():
+            self.storage_locations[self.current] = value.strip()
 
     def _section(self, name: str) -> None:
         canonical = _canonical_section(name)

@@ -266,6 +266,6 @@ def clean_eds(data: bytes) -> CleanedEds:
     _fix_numbers(sections, "DeviceComissioning", _COMMISSIONING_NUMBERS, fixes)
     _fix_objects(sections, origins, fixes)
     _check_object_lists(sections, fixes)
-    return CleanedEds(_render(sections), sections, origins, fixes)
+    return CleanedEds(_render(sections), sections, origins, fixes, reader.storage_locations)
 
 

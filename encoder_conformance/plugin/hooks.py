@@ -1,0 +1,200 @@
+"""The hook hub of the conformance plugin: every pytest hook the suite implements, each delegating to the
+module of its concern. Registered by the ``pytest11`` entry point (and named in conftest.py, for a checkout
+used without installing): ``pytest --device-profile ...`` works wherever the package is installed.
+
+Inert in a pytest session that is not about the suites (another project's tests in the same environment):
+its options exist, nothing else happens. Registered among the other plugins' entry points, not after them as
+a conftest.py is: the hooks whose order against other plugins shows (the report wrapper, the header, the
+terminal summary) say ``tryfirst``. Kept out of the package's ``__init__`` so that importing one plugin module
+(``plugin.evidence`` from a suite helper) does not import them all.
+"""
+
+from __future__ import annotations
+
+import gc
+from collections.abc import Generator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
+from encoder_conformance.paths import CONTENT_ROOT
+from encoder_conformance.plugin import (
+    bus_trace,
+    hypothesis_profiles,
+    lifecycle,
+    outcomes,
+    reporting,
+    run_record,
+    selection,
+    shuffle,
+    twin_launch,
+    verdicts,
+)
+from encoder_conformance.plugin import history_hook as history
+from encoder_conformance.plugin import options as opts
+
+pytest_plugins = ["encoder_conformance.plugin.progress"]
+
+_ACTIVE = pytest.StashKey[bool]()
+#: the session configured last is a conformance session (pytest-html's title hook gets no config)
+_HTML_REPORT_OURS = [False]
+
+#: markers of the suites (registered here, so that --strict-markers holds wherever the suites run)
+MARKERS = (
+    "bench: needs bench equipment the simulator provides (power switch)",
+)
+
+
+def _active(config: pytest.Config) -> bool:
+    return config.stash.get(_ACTIVE, False)
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    opts.add_options(parser)  # every row of plugin/option_table.py
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_configure(config: pytest.Config) -> None:
+    # the suites' own session, or the self-tests of the checkout they live in
+    config.stash[_ACTIVE] = reporting.runs_suites(config) or config.rootpath.resolve() == CONTENT_ROOT
+    _HTML_REPORT_OURS[0] = _active(config)
+    if not _active(config):
+        return
+    hypothesis_profiles.load()  # ci, bench, soak, dev (HYPOTHESIS_PROFILE)
+    for marker in MARKERS:
+        config.addinivalue_line("markers", marker)
+    try:
+        opts.configure(config)
+    except (ProfileError, BusSetupError) as exc:
+        raise pytest.UsageError(str(exc)) from None
+    reporting.configure_outputs(config)
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    if not _active(session.config):
+        return
+    twin_launch.launch_early(session)  # the twin starts while the tests are collected
+    reporting.set_metadata(session.config)
+    reporting.start_background_writers(session.config)
+    run_record.start(session.config)
+    lifecycle.start(session.config)
+    if lifecycle.state_of(session.config) is not None:
+        gc.disable()  # until the tests are collected (a full pass during collection took 60-100 ms): see below
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    if _active(metafunc.config):
+        selection.parametrize_from_profile(metafunc)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if not _active(config):
+        return
+    selection.apply_capability_marks(config, items)
+    shuffle.shuffle(config, items)  # --shuffle SEED: a test that inherits a state shows
+    selection.destructive_last(items)
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    if not _active(session.config):
+        return
+    lifecycle.note_collected(session)
+    if lifecycle.state_of(session.config) is not None:
+        # what a conformance run has built so far (modules, profile, ~700 items) lives until its end: the
+        # garbage collector's full passes during the tests need not walk it again and again
+        gc.freeze()
+        gc.enable()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> Generator[None, object, object]:
+    if not _active(item.config):
+        return (yield)
+    lifecycle.stop_if_gone(item.config)  # the device or bus is gone: one reason, the rest not run
+    result = yield
+    lifecycle.stop_if_gone(item.config)
+    return result
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    if _active(item.config):
+        bus_trace.mark_set_up_start(item)  # before the fixtures: their frames belong in the test's trace
+        selection.check_gates(item)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if _active(config):
+        twin_launch.abandon(config)  # launched, but no test asked for it
+
+
+@pytest.hookimpl(hookwrapper=True, tryfirst=True)  # outermost: others' wrappers see the report before ours judges
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Generator[None, Any, None]:
+    outcome = yield
+    if not _active(item.config):
+        return
+    report = outcome.get_result()
+    exc = call.excinfo.value if call.excinfo is not None else None
+    if isinstance(exc, BusLostError):
+        # the tester lost its bus: not the device's failure, and the test did not run to its end
+        report.outcome = "skipped"
+        report.longrepr = (str(item.path), item.location[1] or 0, f"not run to the end: {exc}")
+    elif isinstance(exc, DutLostError):
+        report.longrepr = str(exc)  # one line: the device is gone (note_loss adds the last frames sent)
+    outcomes.classify(item, call, report)  # no finding about the device: an internal error of the tool
+    lifecycle.note_loss(item, report)  # the device stopped answering in this test: it fails, naming the frames
+    verdicts.judge(item, report, exc)  # a broken inferred rule: a warning, or a failure with --strict-inferred
+    reporting.attach_evidence(item, call, report)
+    run_record.note_report(item, report)
+    lifecycle.note_report(item.config, report)
+
+
+@pytest.hookimpl(trylast=True)  # pytest shows the lines of the hooks called last first: ours above its own
+def pytest_report_header(config: pytest.Config) -> list[str]:
+    if not _active(config):
+        return []
+    return [*reporting.header_lines(config), *shuffle.header(config)]
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_html_report_title(report: Any) -> None:
+    if _HTML_REPORT_OURS[0]:  # pytest-html gives no config here
+        report.title = "CANopen encoder conformance report"
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_html_results_summary(prefix: list[str], summary: list[str], postfix: list[str],
+                                session: pytest.Session) -> None:
+    if _active(session.config):
+        reporting.html_summary(prefix, session, run_record.completed(session),
+                               lifecycle.summary_lines(session.config))
+
+
+def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
+    if _active(config):
+        reporting.terminal_summary(terminalreporter, config, lifecycle.summary_lines(config))
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_keyboard_interrupt(excinfo: Any) -> None:
+    lifecycle.give_back_now(excinfo)  # Ctrl-C or a stop: before pytest formats the traceback (slow)
+
+
+@pytest.hookimpl(wrapper=True, tryfirst=True)
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> Generator[None, object, object]:
+    if not _active(session.config):
+        return (yield)
+    lifecycle.give_back(session.config)  # after Ctrl-C or a stop: first thing, while the bus is still open
+    result = yield
+    xmlpath = session.config.option.xmlpath  # written by pytest's junitxml in the hooks just run
+    if xmlpath:
+        outcomes.junit_internal_errors_as_errors(Path(xmlpath))
+    bus_trace.write_unsettled(session.config)  # a test stopped before its teardown report keeps its trace
+    if not lifecycle.ended_early(session.config):
+        reporting.fail_all_skipped(session)
+    lifecycle.final_exit_status(session)
+    run_record.finish(session)
+    history.record(session)  # the history entry, and an acceptance run's certificate
+    reporting.finish_background_writers(session.config)
+    return result

@@ -1,0 +1,222 @@
+"""The suite's options, declared once: each is a pytest option (``pytest suites --help``, group "CANopen encoder
+conformance"), and many are also options of ``encoder-conformance run`` and ``accept``, with the same help text.
+
+From this table come the pytest options (``add_pytest_options``: the plugin's ``pytest_addoption`` calls it
+through ``options.add_options``), the ``run``/``accept`` arguments and the shared bus arguments of every command
+that opens a bus (cli/usage.py reads it), and the pytest arguments a ``run`` or ``accept`` hands over
+(``pytest_argv``). A new option is one row here; ``tests/test_option_table.py`` keeps both sides equal to it.
+
+The names are the same on both sides except three, which pytest already uses itself or which a pytest plugin
+needs to qualify; ``Option.renamed`` says why, and the help on both sides names both. The command line checks
+some values more strictly than pytest does (``kind``): a bit rate may be given as 250k there, a node-ID outside
+1..127 is refused while parsing; pytest takes plain numbers and the plugin's ``configure`` checks them.
+
+Light on purpose (the command line imports it at every start): no pytest, no python-can, no pydantic.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal
+
+from encoder_conformance.paths import DEFAULT_PROFILE
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    import pytest
+
+Command = Literal["run", "accept"]
+#: what a value is: how pytest and the command line convert it (cli/usage.py maps the last two to its checks)
+Kind = Literal["text", "int", "float", "bitrate", "node-id"]
+Action = Literal["store", "store_true", "append"]
+
+GROUP = "encoder-conformance"
+GROUP_TITLE = "CANopen encoder conformance"
+PROFILE_ENV = "ENCODER_CONFORMANCE_PROFILE"
+TRACE_OPTION = "--bus-trace"
+TRACE_POLICIES = ("failed", "all", "none")
+RUN_AND_ACCEPT: frozenset[Command] = frozenset({"run", "accept"})
+RUN: frozenset[Command] = frozenset({"run"})
+ACCEPT: frozenset[Command] = frozenset({"accept"})
+
+
+@dataclass(frozen=True)
+class Option:
+    """One option: its pytest name, its help (the same on both sides), and how the commands take it."""
+
+    name: str  #: the pytest option, e.g. "--device-profile"
+    help: str
+    commands: frozenset[Command] = frozenset()  #: the encoder-conformance commands that take it too (none: pytest only)
+    command_name: str | None = None  #: the commands' name, where it cannot be pytest's (``renamed`` says why)
+    renamed: str = ""  #: why the commands' name differs
+    action: Action = "store"
+    kind: Kind = "text"
+    default: object = None  #: pytest's default (an append option's: an empty list); the commands pass on what is given
+    choices: tuple[str, ...] | None = None
+    metavar: str | None = None
+    command_default: str | None = None  #: the commands' default, where they pass one on though not given
+    required_by: frozenset[Command] = frozenset()
+    several: bool = False  #: the commands take it several times (one run per value, in parallel); pytest once
+
+    @property
+    def cli_name(self) -> str:
+        """The name the encoder-conformance commands know it by."""
+        return self.command_name or self.name
+
+    @property
+    def dest(self) -> str:
+        """pytest's attribute name (``config.option.DEST``)."""
+        return _dest(self.name)
+
+    @property
+    def cli_dest(self) -> str:
+        """The attribute of the commands' parsed arguments."""
+        return _dest(self.cli_name)
+
+    @property
+    def help_text(self) -> str:
+        """The help shown by pytest and by the commands: the same text, naming both names where they differ."""
+        if self.command_name is None:
+            return self.help
+        commands = " and ".join(sorted(self.commands, reverse=True))
+        return f"{self.help} [pytest: {self.name} ({self.renamed}); {commands}: {self.command_name}]"
+
+
+def _dest(name: str) -> str:
+    return name.removeprefix("--").replace("-", "_")
+
+
+#: every option, in the order both sides list them
+OPTIONS: tuple[Option, ...] = (
+    Option("--device-profile", command_name="--profile", commands=RUN_AND_ACCEPT, required_by=ACCEPT,
+           command_default=DEFAULT_PROFILE, metavar="PROFILE",
+           renamed="pytest plugins share one namespace: pytest-profiling has --profile",
+           help=f"the device profile: an id (`encoder-conformance profile list`) or a YAML file; for accept the "
+                f"profile bought, which it requires. Default {DEFAULT_PROFILE}; plain pytest takes ${PROFILE_ENV} "
+                "first"),
+    Option("--can-interface", commands=RUN_AND_ACCEPT, metavar="NAME",
+           help="python-can interface: pcan, kvaser, socketcan, ixxat, slcan, remote, virtual ... (default: the "
+                "station file's, else python-can's configuration: CAN_INTERFACE, ~/can.conf; for a run with none "
+                "anywhere: the profile's built-in simulator)"),
+    Option("--can-channel", commands=RUN_AND_ACCEPT, metavar="CHANNEL",
+           help="the adapter's channel: PCAN_USBBUS1, can0, ws://HOST:PORT/ ... (default: the station file's, else "
+                "python-can's configuration)"),
+    Option("--can-bitrate", commands=RUN_AND_ACCEPT, kind="bitrate", metavar="BIT/S",
+           help="bit rate in bit/s, e.g. 250000 (the encoder-conformance commands also take 250k, 1M; default: the "
+                "station file's, else python-can's configuration)"),
+    Option("--node-id", commands=RUN_AND_ACCEPT, kind="node-id", metavar="1..127",
+           help="the device's node-ID, 1..127 (default: the station file's, else the profile's delivery node-ID)"),
+    Option("--station", commands=RUN_AND_ACCEPT, several=True, metavar="FILE",
+           help="station file (TOML or YAML): the bench's CAN adapter, node-ID, power switch, operator, motor "
+                "plug-in, report and history locations; options given override it. run and accept take it several "
+                "times: one device per station, in parallel"),
+    Option("--label-serial", commands=RUN_AND_ACCEPT, kind="int", metavar="NUMBER",
+           help="the serial number printed on the device's label (decimal): the identity tests check that the "
+                "device reports it (1018h sub 4, else 650Bh), and the history finds a device that reports none by "
+                "it (default: none; on the built-in simulator the twin's own, profile simulator.serial_number)"),
+    Option("--report-dir", commands=RUN_AND_ACCEPT, metavar="DIR",
+           help="folder for report.html, junit.xml, run-summary.json and the traces (and allure-results with "
+                "--allure) (default reports/<timestamp>-<profile>/, or under the station file's reports); with "
+                "several --station: the parent of one folder per station"),
+    Option("--history", commands=ACCEPT, metavar="PATH",
+           help="the history database the run is appended to (SQLite; default: the station file's history, else "
+                "$ENCODER_CONFORMANCE_HISTORY, else reports/history.sqlite); 'off' records nothing"),
+    Option("--allow-destructive", commands=RUN, action="store_true", default=False,
+           help="on hardware, allow tests that change what the device remembers (store, restore defaults, "
+                "node-ID); the run puts it all back (default: off; always on for the simulator)"),
+    Option("--delivery-state", commands=RUN, action="store_true", default=False,
+           help="the device is in its delivery state (fresh from the factory, never configured): check its factory "
+                "defaults as found, without restoring defaults first (no --allow-destructive needed; default: off)"),
+    Option("--power-off-cmd", commands=RUN, metavar="CMD",
+           help="shell command that switches the device off (with --power-on-cmd; default: the station file's): "
+                "the power-cycle tests run on the bench instead of skipping"),
+    Option("--power-on-cmd", commands=RUN, metavar="CMD", help="shell command that switches the device on"),
+    Option("--power-manual", commands=RUN, action="store_true", default=False,
+           help="ask the operator at the terminal to switch the power off and on (default: off)"),
+    Option("--power-off-time", commands=RUN, kind="float", metavar="SECONDS",
+           help="seconds the power stays off in a power cycle (default 1.0, 0 on the simulator)"),
+    Option("--shaft-drive", commands=ACCEPT, metavar="MODULE:FACTORY[=ARGUMENT]",
+           help="bench only: a plug-in that turns the encoder's shaft (a motor): FACTORY(config) returns an object "
+                "with turn_by(revolutions) and set_speed(revolutions_per_second); config.argument is the text after "
+                "'='. Default: the station file's; without one the tests that need rotation skip on a bench"),
+    Option("--sim-fault", commands=RUN_AND_ACCEPT, action="append", metavar="NAME",
+           help="built-in simulator only: inject a named fault; repeatable (`encoder-conformance faults` lists the "
+                "names)"),
+    Option("--sim-profile", commands=ACCEPT, metavar="PROFILE",
+           help="built-in simulator only: the profile the twin plays (default: the device profile). A twin of "
+                "another device shows how a wrong profile, or a delivery of another product, fails"),
+    Option("--sim-inprocess", action="store_true", default=False,
+           help="built-in simulator only: run it in the test process on the virtual interface (faster start, less "
+                "accurate timing)"),
+    Option("--strict-inferred", command_name="--strict", commands=RUN_AND_ACCEPT, action="store_true", default=False,
+           renamed="pytest's own --strict is about markers and configuration",
+           help="fail a device also on rules we only inferred (a manual's silence, an example); by default a device "
+                "that breaks only such rules passes with a warning"),
+    Option(TRACE_OPTION, command_name="--trace", commands=RUN_AND_ACCEPT, choices=TRACE_POLICIES, default="failed",
+           renamed="pytest's own --trace is its debugger",
+           help="which tests keep their bus trace (traces/<test>.asc and .log, candump format): 'failed' (default: "
+                "failed, error and warning tests), 'all', or 'none'"),
+    Option("--abort-codes", choices=("exact", "family"), default="exact",
+           help="how SDO abort codes are judged: 'exact' (default) the code CiA 301 or the manual names for the "
+                "situation; 'family' any code that differs only in its last digit (06090031h for 06090030h), as "
+                "the CiA conformance test tool accepts"),
+    Option("--budget", kind="float", default=1.0, metavar="SECONDS",
+           help="wall-clock time each property test (hypothesis sequences against the device) may spend generating "
+                "examples (default 1 s; raise it for long bench runs)"),
+    Option("--fuzz-budget", kind="float", metavar="SECONDS",
+           help="wall-clock time each SDO fuzz test may spend sending examples; once spent, it stops (default: no "
+                "limit, the hypothesis profile's example count decides; set it on a bench)"),
+    Option("--allure", action="store_true", default=False,
+           help="also write allure-pytest results (allure-results/ in the report folder; render with `npx allure "
+                "generate`). Off by default: about 3,400 files and 3 s of a 14 s WDGA run"),
+    Option("--shuffle", kind="int", metavar="SEED",
+           help="run the suite modules and the tests inside each in a random order drawn from SEED (the same SEED "
+                "gives the same order): shows tests that inherit a state"),
+    Option("--run-kind", choices=("run", "accept"), default="run",
+           help="what kind of run the history records (set by `encoder-conformance accept`)"),
+)
+
+#: the bus options every command that opens a bus takes (cli/usage.py bus_arguments), and the node-ID
+BUS_OPTIONS = ("--can-interface", "--can-channel", "--can-bitrate")
+NODE_ID_OPTION = "--node-id"
+_PYTEST_TYPES: dict[Kind, type[int] | type[float] | None] = {
+    "text": None, "int": int, "float": float, "bitrate": int, "node-id": int}
+
+
+def option(name: str) -> Option:
+    """The option of this pytest name."""
+    return next(entry for entry in OPTIONS if entry.name == name)
+
+
+def options_of(command: Command) -> tuple[Option, ...]:
+    """The options ``command`` takes, in table order."""
+    return tuple(entry for entry in OPTIONS if command in entry.commands)
+
+
+def add_pytest_options(parser: pytest.Parser) -> None:
+    """Every option of the table, as a pytest option of the suite's group."""
+    group = parser.getgroup(GROUP, GROUP_TITLE)
+    for entry in OPTIONS:
+        kwargs: dict[str, object] = {"action": entry.action, "default": entry.default, "help": entry.help_text}
+        if entry.action != "store_true":
+            kwargs.update(type=_PYTEST_TYPES[entry.kind], metavar=entry.metavar, choices=entry.choices)
+        if entry.action == "append":
+            kwargs["default"] = []  # a fresh list: pytest keeps the default object
+        group.addoption(entry.name, **{key: value for key, value in kwargs.items() if value is not None})
+
+
+def pytest_argv(command: Command, given: Mapping[str, object]) -> list[str]:
+    """The pytest arguments for what ``command`` was given (its parsed arguments, e.g. ``vars(args)``): each of its
+    options that was given (or has a command default), under its pytest name."""
+    argv: list[str] = []
+    for entry in options_of(command):
+        value = given.get(entry.cli_dest)
+        if isinstance(value, bool):
+            argv += [entry.name] if value else []
+        elif isinstance(value, list | tuple):
+            for item in value:
+                argv += [entry.name, str(item)]
+        elif value is not None:
+            argv += [entry.name, str(value)]
+    return argv

@@ -1,0 +1,30 @@
+"""The TPDO a transmission test uses, chosen the same way by every TPDO suite, and the report's note of the choice;
+the test is skipped where the profile has none that qualifies."""
+
+from __future__ import annotations
+
+import pytest
+
+from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.settings_journal import SettingsJournal
+from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
+from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.plugin.evidence import Evidence
+
+
+def tpdo_under_test(dut: DeviceUnderTest, sub: int, evidence: Evidence, journal: SettingsJournal,
+                    usable_types: list[int]) -> TpdoUnderTest:
+    """The TPDO to use (``choose_tpdo``: sub-index ``sub`` writable, a type of ``usable_types``), enabled for the
+    test where it is disabled; the choice's deviations and notes in the evidence. Skips where no TPDO qualifies."""
+    try:
+        choice = choose_tpdo(dut, sub, usable_types)
+    except NoUsableTpdo as exc:
+        for quirk_id, text in exc.deviations:
+            evidence.deviation(quirk_id, text)
+        pytest.skip(str(exc))
+    for quirk_id, text in choice.deviations:
+        evidence.deviation(quirk_id, text)
+    tpdo = TpdoUnderTest.chosen(dut, journal, choice)
+    for note in choice.notes:
+        evidence.note(note)
+    return tpdo
