@@ -25,6 +25,7 @@ from encoder_conformance.cia.cia301 import (
     EMCY_INHIBIT_TIME,
     ERROR_REGISTER,
     ERROR_REGISTER_GENERIC,
+    HEARTBEAT_BASE,
     EmcyCode,
 )
 from encoder_conformance.dut.emcy_trigger import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
@@ -211,7 +212,7 @@ def test_emcy_on_heartbeat_consumer_timeout(dut, emcy, settings_journal, evidenc
     trigger = _bus_trigger(HeartbeatTimeout, dut, settings_journal, evidence)
     beat = trigger.fire()
     frame = emcy.wait(beat, trigger, f"after {trigger.name}", judged=True)
-    sent = dut.frames.since(beat, lambda m: m.arbitration_id == 0x700 + trigger.producer)
+    sent = dut.frames.since(beat, lambda m: m.arbitration_id == HEARTBEAT_BASE + trigger.producer)
     after_ms = (frame.timestamp - sent[0].timestamp) * 1000 if sent else None
     if after_ms is not None:
         tolerance = dut.profile.timing.heartbeat_tolerance.allowed_ms(trigger.timeout_ms)

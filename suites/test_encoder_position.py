@@ -13,6 +13,7 @@ import time
 
 import pytest
 
+from encoder_conformance.cia.cia301 import PDO_MAPPING_OFFSET
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.reference_custody import ReferenceCustody
 from encoder_conformance.dut.store_watch import AUTO_STORED
@@ -334,7 +335,7 @@ def _position_tpdos(dut, index: int) -> list[tuple[int, int, int]]:
     """(comm index, byte offset, bits) of each TPDO whose readable mapping maps object ``index``."""
     found = []
     for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF):
-        mapping = comm + 0x200
+        mapping = comm + PDO_MAPPING_OFFSET
         if dut.profile.entry(mapping, 0) is None:
             continue
         bit = 0

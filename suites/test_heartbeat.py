@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.suite_support.periodic import judge_stream
 
@@ -38,7 +39,8 @@ def test_heartbeat_zero_disables(dut, heartbeat, settings_journal, evidence):
     # one heartbeat may be in flight when the write is processed; a producer that keeps running sends
     # at least two in two periods (plus the tester's margin)
     window = 2 * heartbeat / 1000 + dut.sdo_silence_s
-    late = dut.frames.quiet_period(lambda m: m.is_rx and m.arbitration_id == 0x700 + dut.node_id, window, stopped)
+    heartbeat_id = HEARTBEAT_BASE + dut.node_id
+    late = dut.frames.quiet_period(lambda m: m.is_rx and m.arbitration_id == heartbeat_id, window, stopped)
     # one heartbeat may already be on its way when the write is processed
     evidence.measure("heartbeats after 1017h = 0", len(late), "frames", 0, 1)
     assert len(late) <= 1, (

@@ -17,6 +17,7 @@ from contextlib import nullcontext
 import pytest
 
 from encoder_conformance.cia import cia305
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
 from encoder_conformance.cia.cia305 import (
     AUTO_BIT_RATE_INDEX,
     FASTSCAN_RESET_BIT,
@@ -236,9 +237,10 @@ def test_configured_node_id_pending_until_reset(lss: LssDevice, evidence, pytest
                                         f"{lss.node_id}: the new node-ID was active at once"
     assert not lss.answers_at(new_id, timeout=lss.dut.sdo_silence_s), f"answers at {new_id} before any reset"
     mark = lss.reset_communication(lss.node_id)
-    boot = lss.dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id in (0x700 + new_id, 0x700 + lss.node_id)
+    boot_ids = (HEARTBEAT_BASE + new_id, HEARTBEAT_BASE + lss.node_id)
+    boot = lss.dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id in boot_ids
                                    and bytes(m.data) == b"\x00", lss.dut.profile.timing.bootup_max_ms / 1000, mark)
-    booted_at = None if boot is None else boot.arbitration_id - 0x700
+    booted_at = None if boot is None else boot.arbitration_id - HEARTBEAT_BASE
     if not lss.applies_on_reset:
         documented_quirk(lss.dut, fx.LssOnlyInStates, evidence, "")
         evidence.rests_on("manual", NEW_BOOT_UP)

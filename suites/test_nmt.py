@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.cia.cia301 import COB_ID_INVALID, STATE_NAMES, cob_id_valid
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, HEARTBEAT_BASE, PDO_MAPPING_OFFSET, STATE_NAMES, cob_id_valid
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
@@ -103,9 +103,9 @@ def sync_tpdo(dut, settings_journal, evidence):
     put back afterwards; e.g. SIKO PDO2 is disabled after every init)."""
     types = dut.profile.capabilities.tpdo_transmission_types
     for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF):
-        mapping = dut.profile.entry(comm + 0x200, 0)
+        mapping = dut.profile.entry(comm + PDO_MAPPING_OFFSET, 0)
         kind = dut.profile.entry(comm, 2)
-        if kind is None or (mapping is not None and dut.read_uint(comm + 0x200, 0) == 0):
+        if kind is None or (mapping is not None and dut.read_uint(comm + PDO_MAPPING_OFFSET, 0) == 0):
             continue
         synchronous = 1 <= dut.read_uint(comm, 2) <= 240
         if not (synchronous or (kind.writable and 1 in types)):
@@ -125,7 +125,8 @@ def _complete_tpdos(profile) -> list[int]:
     found = profile.quirk_of(fx.FixedTpdoMapping)
     fixed = set(found[1].mapping) if found is not None else set()
     return [comm for comm in sorted(i for i in profile.objects if 0x1800 <= i <= 0x19FF)
-            if comm in fixed or (profile.entry(comm, 2) is not None and profile.entry(comm + 0x200, 0) is not None)]
+            if comm in fixed or (profile.entry(comm, 2) is not None
+                                 and profile.entry(comm + PDO_MAPPING_OFFSET, 0) is not None)]
 
 
 SHAFT_VALUES = {0x6004, 0x6008, 0x6030}  # position and speed: what a turning shaft changes (CiA 406)
@@ -136,7 +137,7 @@ def _shaft_moves_a_tpdo(profile) -> bool:
     if not profile.capabilities.encoder:
         return False
     for comm in _complete_tpdos(profile):
-        mapping = profile.objects.get(comm + 0x200)
+        mapping = profile.objects.get(comm + PDO_MAPPING_OFFSET)
         entries = mapping.entries() if mapping is not None else {}
         if any(isinstance(e.default, int) and e.default >> 16 in SHAFT_VALUES for s, e in entries.items() if s):
             return True
@@ -182,7 +183,7 @@ def test_stopped_sends_only_error_control(dut, nmt, shaft):
     mark = pdo_stimulus(dut, shaft)
     dut.send_sdo(sdo_frames.upload_request(0x1000, 0))
     own = dut.frames_from_node(mark, dut.sdo_silence_s)
-    others = [m for m in own if m.arbitration_id != 0x700 + dut.node_id]
+    others = [m for m in own if m.arbitration_id != HEARTBEAT_BASE + dut.node_id]
     assert not others, f"frames other than heartbeat in stopped:\n{format_frames(others[:5])}"
 
 

@@ -37,7 +37,7 @@ from hypothesis import strategies as st
 from hypothesis.control import currently_in_test_context
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule, run_state_machine_as_test
 
-from encoder_conformance.cia.cia301 import COB_ID_INVALID, STATE_NAMES, NmtCommand, NmtState
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, STATE_NAMES, NmtCommand, NmtState
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver
@@ -120,7 +120,7 @@ def _sync_driven_layouts(profile, comm: int) -> bool:
 
 def _maps_something(profile, comm: int) -> bool:
     fixed = profile.params_of(fx.FixedTpdoMapping)
-    mapping = profile.entry(comm + 0x200, 0)
+    mapping = profile.entry(comm + PDO_MAPPING_OFFSET, 0)
     return (fixed is not None and comm in fixed.mapping) or (mapping is not None and bool(mapping.default))
 
 

@@ -21,6 +21,8 @@ from encoder_conformance.cia.cia301 import (
     COB_ID_INVALID,
     COB_ID_NO_RTR,
     COMMUNICATION_CYCLE_PERIOD,
+    PDO_MAPPING_OFFSET,
+    RESTRICTED_CAN_IDS,
     SYNC_COB_ID,
     SYNC_COUNTER_OVERFLOW,
     SdoAbortCode,
@@ -44,9 +46,8 @@ pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.37 (TPDO communication parameter
 SYNC_TYPES = [1, *range(2, 241)]
 EVENT_TYPES = [255, 254]
 TURN = 0.05  # revolutions: enough to change any position value
-#: one CAN-ID of each restricted range, and its ends (CiA 301 §7.3.5)
-RESTRICTED_PROBES = [0x000, 0x001, 0x07F, 0x101, 0x180, 0x581, 0x5FF, 0x601, 0x67F, 0x6E0, 0x6FF, 0x701, 0x77F,
-                     0x780, 0x7FF]
+#: the ends of each restricted range, and 001h (CiA 301 §7.3.5): 000h, 001h, 07Fh, 101h, 180h, 581h, ... 7FFh
+RESTRICTED_PROBES = sorted({0x001} | {end for span in RESTRICTED_CAN_IDS for end in (span[0], span[-1])})
 ANY_ABORT = "CiA 301 names no abort code here: any abort refuses the write"
 
 
@@ -249,9 +250,9 @@ def test_restricted_cob_id_refused(dut, settings_journal, evidence):
 # -- RTR -------------------------------------------------------------------------------------------------
 def _rtr_dlc(dut, comm: int) -> int:
     """The DLC of the TPDO (a remote frame asks for it): from its mapping, or the layout quirk's polled spec."""
-    if dut.profile.entry(comm + 0x200, 0) is not None:
-        count = dut.read_uint(comm + 0x200, 0)
-        return min(8, sum(dut.read_uint(comm + 0x200, s) & 0xFF for s in range(1, count + 1)) // 8)
+    if dut.profile.entry(comm + PDO_MAPPING_OFFSET, 0) is not None:
+        count = dut.read_uint(comm + PDO_MAPPING_OFFSET, 0)
+        return min(8, sum(dut.read_uint(comm + PDO_MAPPING_OFFSET, s) & 0xFF for s in range(1, count + 1)) // 8)
     found = dut.profile.params_of(fx.FixedTpdoMapping)
     polled = next((p for p in found.polled_tpdos if p.tpdo == comm), None) if found else None
     return polled.rtr_dlc if polled is not None and isinstance(polled.rtr_dlc, int) else 0

@@ -20,6 +20,7 @@ import pytest
 from encoder_conformance.cia.cia301 import (
     COB_ID_INVALID,
     DUMMY_BITS,
+    PDO_MAPPING_OFFSET,
     PDO_MAX_BITS,
     SdoAbortCode,
     cob_id_valid,
@@ -70,11 +71,11 @@ class VariableMapping:
 
     @property
     def mapping(self) -> int:
-        return self.comm + 0x200
+        return self.comm + PDO_MAPPING_OFFSET
 
 
 def _variable(dut: DeviceUnderTest, comm: int) -> VariableMapping | None:
-    mapping = dut.profile.objects.get(comm + 0x200)
+    mapping = dut.profile.objects.get(comm + PDO_MAPPING_OFFSET)
     cob = dut.profile.entry(comm, 1)
     if mapping is None or cob is None or not cob.writable:
         return None

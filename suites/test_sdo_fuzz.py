@@ -19,7 +19,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from encoder_conformance.cia.cia301 import COB_ID_INVALID, SdoAbortCode
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, EMCY_BASE, SDO_REQUEST_BASE, SdoAbortCode
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.fuzz import exclusions, replay, rounds
 from encoder_conformance.fuzz import strategies as fz
@@ -44,7 +44,7 @@ def _emcy_cob_id(dut) -> int | None:
     if not dut.profile.capabilities.emcy:
         return None
     if dut.profile.entry(0x1014, 0) is None:
-        return 0x80 + dut.node_id
+        return EMCY_BASE + dut.node_id
     value = dut.read_uint(0x1014, 0)
     return None if value & COB_ID_INVALID else value & 0x7FF
 
@@ -139,7 +139,7 @@ def _fuzz(fuzz: FuzzRunner, strategy: st.SearchStrategy[fz.Example], evidence, r
 
 def _replay(fuzz: FuzzRunner, failure: Failure, evidence, rerun: str) -> str:
     """The failing example as text (also a note) and, next to the bus trace, as a file canplayer takes."""
-    cob_id = 0x600 + fuzz.dut.node_id
+    cob_id = SDO_REQUEST_BASE + fuzz.dut.node_id
     text = replay.describe(cob_id, failure.requests, failure.window, failure.before, rerun)
     if evidence.trace_path is not None:
         path = evidence.trace_path.with_suffix(".replay.log")

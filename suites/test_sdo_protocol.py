@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.cia.cia301 import SdoAbortCode
+from encoder_conformance.cia.cia301 import SDO_ABORT, SdoAbortCode
 from encoder_conformance.dut.device import SdoAborted
 from encoder_conformance.dut.sdo_client import SdoProtocolClient, echoes
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name, upload_request
@@ -299,7 +299,8 @@ def _next_initiate_served(dut, sdo, evidence, what: str, open_key: tuple[int, in
     response = sdo.request(request)
     frames = [bytes(m.data) for m in dut.frames.since(mark, sdo.is_response)]
     before = frames[: frames.index(response.raw)] if response is not None and response.raw in frames else frames
-    ended = [raw for raw in before if open_key is not None and raw[0] == 0x80 and raw[1:4] == request_mux(open_key)]
+    ended = [raw for raw in before
+             if open_key is not None and raw[0] == SDO_ABORT and raw[1:4] == request_mux(open_key)]
     others = [raw.hex(" ").upper() for raw in before if raw not in ended]
     if others:
         evidence.rests_on("cia", ABORT_NAMES_ITS_TRANSFER)
@@ -363,9 +364,9 @@ def test_transfer_left_open_does_not_block_the_server(dut, sdo, evidence):
     mark = dut.frames.mark()
     ended = False
     for raw in sdo.silent_after(mark):
-        if raw[0] != 0x80 or raw[1:4] != request_mux(key):
+        if raw[0] != SDO_ABORT or raw[1:4] != request_mux(key):
             evidence.rests_on("cia", ABORT_NAMES_ITS_TRANSFER)
-        assert raw[0] == 0x80, f"a frame after the transfer was left open, not an abort: {raw.hex(' ').upper()}"
+        assert raw[0] == SDO_ABORT, f"a frame after the transfer was left open, not an abort: {raw.hex(' ').upper()}"
         assert raw[1:4] == request_mux(key), (f"an abort of the transfer left open ({key[0]:04X}h.{key[1]:02X}) "
                                               f"names another entry: {raw.hex(' ').upper()}")
         ended = True

@@ -202,9 +202,8 @@ def test_cia_numbers_are_defined_once():
 #: COB-ID function code bases (CiA 301 §7.3.5: TPDO1-4, SDO response/request, NMT error control) and the LSS
 #: COB-IDs (CiA 305): written as a hex literal only in encoder_conformance/cia/, imported everywhere else
 COB_ID_LITERALS = {0x180, 0x280, 0x380, 0x480, 0x580, 0x600, 0x700, 0x7E4, 0x7E5}
-#: the folders the COB-ID literal rule covers; suites/ and fixtures/ still spell some (test_emcy, test_nmt,
-#: test_heartbeat, test_lss, test_pdo_comm, test_sdo_fuzz): add them here once those are gone
-COB_ID_FOLDERS = [LIBRARY]
+#: the folders the COB-ID literal rule covers
+COB_ID_FOLDERS = [LIBRARY, REPO / "suites", REPO / "fixtures"]
 #: a constant named as a CiA number (an abort byte, a COB-ID or its base) is defined in cia/ only
 CIA_CONSTANT_NAME = re.compile(r"^_?[A-Z0-9_]*(ABORT|_BASE|COB_ID)[A-Z0-9_]*$")
 

@@ -13,7 +13,7 @@ import can
 import pytest
 
 from encoder_conformance.cia.cia301 import LOAD, SAVE
-from encoder_conformance.cli.restore import RestoreRequest, restore_from_snapshot
+from encoder_conformance.cli.restore_actions import RestoreRequest, restore_from_snapshot
 from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.config.station import StationError, load_station
 from encoder_conformance.dut.custody import Custody, RestoreRecord

@@ -12,7 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from encoder_conformance.cia.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand, LssState
-from encoder_conformance.cli.restore import RestoreRequest, restore_from_snapshot
+from encoder_conformance.cli.restore_actions import RestoreRequest, restore_from_snapshot
 from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.dut.custody import Custody
 from encoder_conformance.dut.device import DeviceUnderTest

@@ -31,6 +31,8 @@ from pathlib import Path
 from encoder_conformance.errors import UsageError
 from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit
 
+#: the helper process: the power switch and the boot wait, started under the bus's environment
+HELPER = [sys.executable, "-m", "encoder_conformance.cli.firmware_ci"]
 STATE_PID = "simulator.pid"
 STATE_COMMAND = "simulator.command"
 STOP_GRACE_S = 5.0
@@ -38,7 +40,7 @@ PROBE_EVERY_S = 0.2
 
 
 def add_firmware_ci_parser(sub: argparse._SubParsersAction) -> None:
-    """The ``firmware-ci`` command, and its hidden helpers (the power switch, the boot wait)."""
+    """The ``firmware-ci`` command (its helpers, the power switch and the boot wait, are ``helper_main``)."""
     ci = sub.add_parser(
         "firmware-ci", help="CI against a firmware simulator: bus, simulator, power switch, run, exit code",
         description=__doc__.split("\n\n")[1] if __doc__ else None,
@@ -56,14 +58,6 @@ def add_firmware_ci_parser(sub: argparse._SubParsersAction) -> None:
     ci.add_argument("--no-power-switch", action="store_true",
                     help="do not stop and restart the simulator as a power switch (power-cycle tests skip)")
     ci.set_defaults(func=cmd_firmware_ci, parser=ci)
-
-    helper = sub.add_parser("firmware-ci-helper", help=argparse.SUPPRESS)
-    helper.add_argument("action", choices=["power-off", "power-on", "wait-boot"])
-    helper.add_argument("--state", type=Path, required=True)
-    helper.add_argument("--can-channel", default="vcan0")
-    helper.add_argument("--node-id", type=int, default=0)
-    helper.add_argument("--timeout", type=float, default=10.0)
-    helper.set_defaults(func=cmd_helper, parser=helper)
 
 
 def cmd_firmware_ci(args: argparse.Namespace, extra: list[str]) -> int:
@@ -96,7 +90,7 @@ def _interrupt(signum: int, frame: object) -> None:
 def _run_when_booted(args: argparse.Namespace, extra: list[str], node_id: int, report: Path, state: Path,
                      env: dict[str, str]) -> int:
     python = [sys.executable, "-m", "encoder_conformance"]
-    helper = [*python, "firmware-ci-helper", "--state", str(state), "--can-channel", args.can_channel]
+    helper = [*HELPER, "--state", str(state), "--can-channel", args.can_channel]
     booted = subprocess.run([*helper, "wait-boot", "--node-id", str(node_id), "--timeout", str(args.boot_timeout)],
                             env=env, check=False)
     if booted.returncode != 0:
@@ -147,12 +141,19 @@ def _bus(channel: str, state: Path) -> Iterator[dict[str, str]]:
 
 
 def _power(state: Path, env: dict[str, str], on: bool) -> None:
-    subprocess.run([sys.executable, "-m", "encoder_conformance", "firmware-ci-helper",
-                    "power-on" if on else "power-off", "--state", str(state)], env=env, check=True)
+    subprocess.run([*HELPER, "--state", str(state), "power-on" if on else "power-off"], env=env, check=True)
 
 
-def cmd_helper(args: argparse.Namespace, extra: list[str]) -> int:
-    """The power switch (stop / start the simulator's process) and the boot wait, run under the bus's env."""
+def helper_main(argv: list[str]) -> int:
+    """The power switch (stop / start the simulator's process) and the boot wait, run under the bus's env:
+    ``python -m encoder_conformance.cli.firmware_ci --state DIR power-on | power-off | wait-boot``."""
+    parser = argparse.ArgumentParser(prog="firmware-ci helper")
+    parser.add_argument("action", choices=["power-off", "power-on", "wait-boot"])
+    parser.add_argument("--state", type=Path, required=True)
+    parser.add_argument("--can-channel", default="vcan0")
+    parser.add_argument("--node-id", type=int, default=0)
+    parser.add_argument("--timeout", type=float, default=10.0)
+    args = parser.parse_args(argv)
     if args.action == "power-on":
         return _start_simulator(args.state)
     if args.action == "power-off":
@@ -207,3 +208,7 @@ def _wait_boot(channel: str, node_id: int, timeout: float) -> int:
             if bus.recv(timeout=min(PROBE_EVERY_S, max(0.0, deadline - time.monotonic()))) is not None:
                 return 0
     return 1
+
+
+if __name__ == "__main__":
+    sys.exit(helper_main(sys.argv[1:]))
