@@ -126,7 +126,7 @@ LAYERS: list[set[str]] = [
     {"profile"},
     {"models", "readings"},
     {"dut", "sim", "history"},
-    {"fuzz", "plugin"},
+    {"fuzz", "plugin", "probe"},
     {"suite_support"},
     {"runs"},
     {"cli"},

@@ -10,7 +10,7 @@ import argparse
 from collections.abc import Callable
 
 from encoder_conformance.cia.cia305 import BIT_TIMING_TABLE_0, MAX_NODE_ID, UNCONFIGURED_NODE_ID
-from encoder_conformance.exit_codes import RunExit
+from encoder_conformance.cli import usage
 
 BusArguments = Callable[..., None]
 
@@ -53,20 +53,12 @@ def _delay_ms(text: str) -> int:
 
 
 def _cmd_lss(args: argparse.Namespace, extra: list[str]) -> int:
-    import sys
 
     from encoder_conformance.cli import lss_actions as lss
-    from encoder_conformance.config.bus import resolve_bench_bus
-    from encoder_conformance.errors import BusSetupError
     from encoder_conformance.profile.loader import load_profile
 
-    try:
-        bus = resolve_bench_bus(args.can_interface, args.can_channel, args.can_bitrate,
-                                "for twins start 'encoder-conformance sim --profile ID --copies N --unconfigured "
+    bus = usage.bench_bus(args, "for twins start 'encoder-conformance sim --profile ID --copies N --unconfigured "
                                 "--listen HOST:PORT' and give --can-interface remote --can-channel ws://HOST:PORT/")
-    except BusSetupError as exc:
-        print(f"lss: {exc}", file=sys.stderr)
-        return RunExit.USAGE_ERROR
     if args.response_ms <= 0:
         args.parser.error("--response-ms must be above 0")
     profile = load_profile(args.profile).profile if args.profile else None  # ProfileError: a usage error

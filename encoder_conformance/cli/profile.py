@@ -85,12 +85,47 @@ def _cmd_profile_from_eds(args: argparse.Namespace, extra: list[str]) -> int:
     if out.exists() and not args.force:
         print(f"from-eds: {out} exists; not overwritten (pass --force to replace it)", file=sys.stderr)
         return RunExit.USAGE_ERROR
+    given = [name for name in ("can_interface", "can_channel", "can_bitrate", "node_id", "no_reset")
+             if getattr(args, name)]
+    if given and not args.probe:
+        print(f"from-eds: --{given[0].replace('_', '-')} is an option of the live probe; add --probe (or leave it "
+              "out)", file=sys.stderr)
+        return RunExit.USAGE_ERROR
+    if args.probe:
+        probed = _probe(args, draft, todos)
+        if isinstance(probed, int):
+            return probed
+        todos = probed
     write_profile_draft(draft, out, todos)
     print(f"wrote {out} ({len(draft.get('objects', {}))} objects); {len(todos)} assumptions to confirm against "
           f"the manual (listed under todo:, and by `profile validate --todo`):")
     for number, todo in enumerate(todos, 1):
         print(f"  TODO {number}: {todo}")
     return 0
+
+
+def _probe(args: argparse.Namespace, draft: dict, todos: list[str]) -> list[str] | int:
+    """The live probe's corrections to ``draft``: the todos after it, or an exit code."""
+    from encoder_conformance.errors import BusSetupError, DutLostError
+    from encoder_conformance.probe.session import ProbeOptions, probe_device
+
+    bus = usage.bench_bus(args, "--probe asks a live device")
+    node_id = args.node_id or draft["bus"]["node_id"]
+    options = ProbeOptions(bus, node_id, reset=not args.no_reset)
+    try:
+        result = probe_device(draft, todos, options, say=lambda text: print(text, flush=True))
+    except (DutLostError, BusSetupError) as exc:
+        print(f"from-eds --probe: {exc}; nothing written", file=sys.stderr)
+        return RunExit.COULD_NOT_TEST
+    findings = result.findings
+    print(f"probe: node {node_id}, {result.requests} SDO requests in {result.seconds:.1f} s"
+          + (f", boot-up {findings.boot_up_ms:.0f} ms after reset node" if findings.boot_up_ms is not None else "")
+          + ("; every value written was put back and read back" if result.restored else ""))
+    if not result.restored:
+        for failure in findings.put_back_failures:
+            print(f"from-eds --probe: NOT PUT BACK: {failure}", file=sys.stderr)
+    args.exit_status = RunExit.PASSED if result.restored else RunExit.NOT_RESTORED
+    return result.todos
 
 
 def _cmd_profile_to_eds(args: argparse.Namespace, extra: list[str]) -> int:
@@ -126,6 +161,18 @@ def add_profile_parser(sub: argparse._SubParsersAction) -> None:
     from_eds.add_argument("--id", help="profile id (default: the output file's name, else the EDS file's name)")
     from_eds.add_argument("-o", "--output", help="profile file to write (default: ID.yaml); its name is the id")
     from_eds.add_argument("--force", action="store_true", help="replace an existing output file")
+    probe = from_eds.add_argument_group(
+        "live probe", "--probe asks the device what the EDS cannot say (entries that exist, sizes, values that change "
+        "across a reset, transmission types, abort codes, LSS services, block transfer, SYNC producer, guarding). "
+        "Read-only: what it writes it puts back and reads back. It resets the device once (--no-reset: not)")
+    probe.add_argument("--probe", action="store_true", help="correct the draft by probing the live device")
+    probe.add_argument("--can-interface", help="python-can interface of the bus the device is on")
+    probe.add_argument("--can-channel", help="python-can channel")
+    probe.add_argument("--can-bitrate", type=usage.bitrate, help="bit rate in bit/s")
+    probe.add_argument("--node-id", type=node_id_type, metavar="1..127",
+                       help="the device's node-ID (default: the EDS's, else 1)")
+    probe.add_argument("--no-reset", action="store_true",
+                       help="do not reset the device (values that change only at a reset are not found)")
     from_eds.set_defaults(func=_cmd_profile_from_eds)
     to_eds = psub.add_parser("to-eds", help="export a profile as an EDS")
     to_eds.add_argument("profile")

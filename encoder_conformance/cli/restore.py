@@ -3,24 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
+from encoder_conformance.cli import usage
 from encoder_conformance.cli.usage import bus_arguments
-from encoder_conformance.errors import BusSetupError
-from encoder_conformance.exit_codes import RunExit
 
 
 def _cmd_restore(args: argparse.Namespace, extra: list[str]) -> int:
     from encoder_conformance.cli.restore_actions import RestoreRequest, restore_from_snapshot
-    from encoder_conformance.config.bus import resolve_bench_bus
 
-    try:
-        bus = resolve_bench_bus(args.can_interface, args.can_channel, args.can_bitrate,
-                                "a built-in simulator has nothing to restore")
-    except BusSetupError as exc:
-        print(f"restore: {exc}", file=sys.stderr)
-        return RunExit.USAGE_ERROR
+    bus = usage.bench_bus(args, "a built-in simulator has nothing to restore")
     request = RestoreRequest(Path(args.snapshot), bus, args.node_id, args.timeout, args.force, args.power_on_cmd,
                              args.power_off_cmd)
     return restore_from_snapshot(request)

@@ -188,3 +188,15 @@ def _did_you_mean(name: str, known: Iterable[str]) -> str:
     close = [known_name for known_name in names if name in known_name][:3]
     close = close or difflib.get_close_matches(name, names, n=3)
     return f" (did you mean {' or '.join(close)}?)" if close else ""
+
+
+def bench_bus(args: argparse.Namespace, why: str) -> Any:  # -> config.bus.BusConfig (imported lazily)
+    """The real bus a bench command names (--can-interface/--can-channel/--can-bitrate or python-can's
+    configuration); UsageError naming what to give, ``why`` saying what the built-in simulator would not do."""
+    from encoder_conformance.config.bus import resolve_bench_bus
+    from encoder_conformance.errors import BusSetupError
+
+    try:
+        return resolve_bench_bus(args.can_interface, args.can_channel, args.can_bitrate, why)
+    except BusSetupError as exc:
+        raise UsageError(str(exc)) from None
