@@ -9,6 +9,7 @@ import itertools
 import threading
 import uuid
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +17,7 @@ import can
 import canopen
 import pytest
 
+from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.dut.frames import FrameLog, Mark
 from encoder_conformance.dut.tracing_bus import TracingBus
 from encoder_conformance.profile.model import DeviceProfile
@@ -112,3 +114,23 @@ def rig(tmp_path: Path) -> Iterator[Rig]:
     yield Rig(host, network, log, tmp_path)
     network.disconnect()
     host.shutdown()
+
+
+@dataclass
+class Twin:
+    """A twin served on a private virtual channel, and the bus settings a tool reaches it with."""
+
+    host: SimulatorHost
+    node: SimulatedNode
+    bus: BusConfig
+
+
+@contextmanager
+def twin_of(profile: DeviceProfile, node_id: int | None = None) -> Iterator[Twin]:
+    channel = f"probe-{uuid.uuid4().hex[:8]}"
+    host = SimulatorHost(channel=channel)
+    try:
+        node = host.add_node(profile, node_id or profile.bus.node_id)
+        yield Twin(host, node, BusConfig({"interface": "virtual", "channel": channel}))
+    finally:
+        host.shutdown()

@@ -3,7 +3,8 @@
 For every EDS under tests/data/eds (public vendor files in vendors/, with their sources and licences in
 vendors/SOURCES.md, and our own files that each show an oddity): `profile from-eds` gives a draft that
 validates; the draft exports back to an EDS with every object's type, access and default; and the
-simulated twin of the draft passes the conformance suites with no failure.
+simulated twin of the draft passes the conformance suites with no failure, judged by the draft as
+``--probe`` corrects it against that twin.
 """
 
 from __future__ import annotations
@@ -13,9 +14,11 @@ from pathlib import Path
 
 import pytest
 
+from encoder_conformance.probe.session import ProbeOptions, probe_device
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.eds import export_eds, objects_from_eds, profile_draft_from_eds, write_profile_draft
 from encoder_conformance.profile.loader import load_profile
+from tests.sim_rig import twin_of
 from tests.suite_session import PARALLEL_RUNS, run_suite
 
 EDS_DIR = Path(__file__).parent / "data" / "eds"
@@ -59,13 +62,27 @@ def test_draft_validates_and_round_trips_through_to_eds(eds: Path, tmp_path: Pat
     assert not problems, f"{eds.name}: to-eds lost {len(problems)} fact(s): {problems[:10]}"
 
 
+def _probed_draft_file(eds: Path, twin_profile: Path, folder: Path) -> Path:
+    """The draft corrected by ``--probe`` against the twin of ``twin_profile`` (issue 28)."""
+    profile = load_profile(twin_profile).profile
+    with twin_of(profile) as twin:
+        draft, todos = profile_draft_from_eds(eds, f"{eds.stem.lower()}-probed")
+        result = probe_device(draft, todos, ProbeOptions(twin.bus, profile.bus.node_id, boot_timeout_s=6.0))
+    assert result.restored, result.findings.put_back_failures
+    out = folder / f"{draft['id']}.yaml"
+    write_profile_draft(draft, out, result.todos)
+    return out
+
+
 @pytest.fixture(scope="module")
 def twin_runs(tmp_path_factory):
-    """The suites against the twin of each draft (a few at a time)."""
+    """The suites against the twin of each draft (a few at a time): the twin plays the draft the EDS gives, the
+    suites judge it by that draft as the live probe corrected it (so the probe's corrections are tested too)."""
     def one(eds: Path):
         folder = tmp_path_factory.mktemp(eds.stem)
-        profile = _draft_file(eds, folder)
-        return eds.stem, run_suite(folder, "--device-profile", str(profile))[0]
+        plain = _draft_file(eds, folder)
+        probed = _probed_draft_file(eds, plain, folder)
+        return eds.stem, run_suite(folder, "--device-profile", str(probed), "--sim-profile", str(plain))[0]
 
     with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
         return dict(pool.map(one, CORPUS))

@@ -19,6 +19,7 @@ import pytest
 from encoder_conformance.vcan import BuildError, library
 
 PYTHON = [sys.executable, "-m", "encoder_conformance"]
+REPO = Path(__file__).resolve().parents[1]
 
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="SocketCAN (and the user-space bus) is Linux only")
 
@@ -73,3 +74,32 @@ def test_a_simulator_that_never_answers_is_infrastructure(tmp_path):
     done = firmware_ci(tmp_path, "exec sleep 60", "--boot-timeout", "1")
     assert done.returncode == 69, done.stdout[-4000:] + done.stderr[-2000:]
     assert "did not answer an SDO read of 1000h" in done.stderr
+
+
+@pytest.mark.parametrize("name", ["github", "gitlab"])
+def test_example_pipeline_is_printed_valid_and_in_the_readme(name: str, capsys):
+    """`firmware-ci --example NAME` prints the shipped file: valid YAML, a firmware-ci line its parser takes, the
+    same text as the README shows."""
+    import shlex
+
+    import yaml
+
+    from encoder_conformance.cli import firmware_ci
+    from encoder_conformance.cli.main import build_parser, main
+
+    assert main(["firmware-ci", "--example", name]) == 0
+    text = capsys.readouterr().out
+    assert text == (firmware_ci.PIPELINE_DIR / firmware_ci.PIPELINES[name]).read_text(encoding="utf-8")
+    assert isinstance(yaml.safe_load(text), dict)
+    line = next(part for part in text.splitlines() if "encoder-conformance firmware-ci" in part and "#" not in part)
+    words = shlex.split(line[line.index("encoder-conformance") :])[1:]
+    args, extra = build_parser().parse_known_args(words)
+    assert (args.simulator, args.profile, extra) == ("./build/fw_sim vcan0", "ci/my-encoder.yaml", [])
+    assert text in (REPO / "README.md").read_text(encoding="utf-8")
+
+
+def test_firmware_ci_without_simulator_names_what_is_missing(capsys):
+    from encoder_conformance.cli.main import main
+
+    assert main(["firmware-ci", "--profile", "waycon-sx"]) == 4
+    assert "give --simulator" in capsys.readouterr().err

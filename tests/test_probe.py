@@ -9,16 +9,12 @@ from __future__ import annotations
 
 import re
 import uuid
-from collections.abc import Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from encoder_conformance.cli.main import main as cli_main
-from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.probe.apply import apply_findings
 from encoder_conformance.probe.findings import Findings
@@ -28,8 +24,8 @@ from encoder_conformance.probe.session import ProbeOptions, ProbeResult, probe_d
 from encoder_conformance.profile.eds import export_eds, profile_draft_from_eds, write_profile_draft
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile
-from encoder_conformance.sim.host import SimulatorHost
 from encoder_conformance.sim.node import SimulatedNode
+from tests.sim_rig import Twin, twin_of
 
 SHIPPED = ["wachendorff-wdga-mt", "faulhaber-mc5005", "fraba-posital-awc58-c2-mt", "siko-wx58m-1212-mt", "waycon-sx",
            "cia406-c3-st"]
@@ -61,24 +57,6 @@ EXPLAINED: dict[str, dict[str, str]] = {
         "sync_producer": "the class profile says 'may' (either reading); a probe sees one",
     },
 }
-
-
-@dataclass
-class Twin:
-    host: SimulatorHost
-    node: SimulatedNode
-    bus: BusConfig
-
-
-@contextmanager
-def twin_of(profile: DeviceProfile, node_id: int | None = None) -> Iterator[Twin]:
-    channel = f"probe-{uuid.uuid4().hex[:8]}"
-    host = SimulatorHost(channel=channel)
-    try:
-        node = host.add_node(profile, node_id or profile.bus.node_id)
-        yield Twin(host, node, BusConfig({"interface": "virtual", "channel": channel}))
-    finally:
-        host.shutdown()
 
 
 def probed(eds: Path, twin: Twin, node_id: int, **options: Any) -> tuple[dict[str, Any], ProbeResult]:

@@ -94,3 +94,10 @@ def test_pytest_finds_the_plugin_through_its_entry_point(installed, tmp_path):
     done = _run([str(installed / "python"), "-m", "pytest", "--help"], cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "--device-profile" in done.stdout
+
+
+def test_the_wheel_carries_the_example_pipelines(installed, tmp_path):
+    for name in ("github", "gitlab"):
+        done = _run([str(installed / "encoder-conformance"), "firmware-ci", "--example", name], cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        assert "encoder-conformance firmware-ci --simulator" in done.stdout

@@ -36,6 +36,8 @@ HELPER = [sys.executable, "-m", "encoder_conformance.cli.firmware_ci"]
 STATE_PID = "simulator.pid"
 STATE_COMMAND = "simulator.command"
 STOP_GRACE_S = 5.0
+PIPELINE_DIR = Path(__file__).with_name("pipelines")
+PIPELINES = {"github": "github-actions.yml", "gitlab": "gitlab-ci.yml"}  # --example NAME -> the file it prints
 PROBE_EVERY_S = 0.2
 
 
@@ -45,10 +47,13 @@ def add_firmware_ci_parser(sub: argparse._SubParsersAction) -> None:
         "firmware-ci", help="CI against a firmware simulator: bus, simulator, power switch, run, exit code",
         description=__doc__.split("\n\n")[1] if __doc__ else None,
         epilog="Arguments it does not know go to 'run' (e.g. --node-id 4, -k heartbeat, --strict).")
-    ci.add_argument("--simulator", required=True, metavar="COMMAND",
+    ci.add_argument("--example", choices=sorted(PIPELINES),
+                    help="print an example pipeline file (github: GitHub Actions with kernel vcan; gitlab: a container "
+                         "job with the user-space bus) and exit")
+    ci.add_argument("--simulator", metavar="COMMAND",
                     help="the command that starts your firmware simulator on the channel, e.g. "
                          "'./build/fw_sim vcan0' (run by the shell; it must stay in the foreground)")
-    ci.add_argument("--profile", required=True, help="your device profile (YAML file or shipped id)")
+    ci.add_argument("--profile", help="your device profile (YAML file or shipped id)")
     ci.add_argument("--can-channel", default="vcan0", help="the SocketCAN channel (default vcan0)")
     ci.add_argument("--report-dir", default="conformance-report", type=Path,
                     help="where junit.xml, report.html, run-summary.json and the simulator's log go "
@@ -61,9 +66,15 @@ def add_firmware_ci_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_firmware_ci(args: argparse.Namespace, extra: list[str]) -> int:
-    from encoder_conformance.cli.usage import check_profile
+    from encoder_conformance.cli.usage import UsageError, check_profile
     from encoder_conformance.profile.loader import load_profile
 
+    if args.example:
+        print((PIPELINE_DIR / PIPELINES[args.example]).read_text(encoding="utf-8"), end="")
+        return 0
+    missing = [option for option, value in (("--simulator", args.simulator), ("--profile", args.profile)) if not value]
+    if missing:
+        raise UsageError(f"give {' and '.join(missing)} (or --example github|gitlab for a pipeline file)")
     check_profile("--profile", args.profile)
     node_id = _node_id(extra) or load_profile(args.profile).profile.bus.node_id
     report = args.report_dir.resolve()

@@ -73,6 +73,7 @@ def _flag_dynamic(entry: dict[str, Any], why: str) -> None:
 
 def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: int, todos: list[str]) -> None:
     missing: list[Key] = []
+    refused: dict[str, list[str]] = {}
     for key, entry in list(draft_entries(objects)):
         reads = findings.readings.get(key)
         if not reads:
@@ -86,8 +87,8 @@ def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: in
             todos.append(f"probe: {where} was not answered; check that the device has it")
             continue
         if not first.ok:
-            todos.append(f"probe: reading {where} was refused with {first.describe()} although the EDS gives access "
-                         f"{entry.get('access')!r}")
+            if not (first.abort == SdoAbortCode.NO_DATA and entry.get("dynamic")):  # an empty error-history entry
+                refused.setdefault(first.describe(), []).append(where)
             continue
         assert first.data is not None
         size = size_bytes(canonical_name(str(entry.get("type", ""))))
@@ -112,6 +113,9 @@ def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: in
             todos.append(f"probe: {where} reads {_hex(values[-1])}, the EDS default is {entry.get('default')!r}: "
                          "a value changed and stored by the device's owner, or the EDS and the firmware disagree "
                          "(a run fails it)")
+    for answer, places in refused.items():
+        todos.append(f"probe: reading {', '.join(places)} was refused with {answer} although the EDS gives read "
+                     "access")
     for key in missing:
         _remove(objects, key)
     if missing:
