@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 SUMMARY_FILE = "run-summary.json"
 
@@ -126,6 +126,7 @@ class RunSummary:
     not_run: int = 0  # tests collected but not run (the run stopped early)
     device_restored: bool | None = None
     report_dir: str | None = None
+    time_budget: dict[str, Any] | None = None  # where the run's time went (plugin/time_budget.py)
 
     @property
     def serial(self) -> str | None:

@@ -31,6 +31,7 @@ from encoder_conformance.cia.cia301 import (
 )
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import FrameLog, Mark, format_frames
+from encoder_conformance.dut.time_budget import BUDGET
 from encoder_conformance.errors import BusLostError, DutLostError, EncoderConformanceError, RunInterrupted
 from encoder_conformance.models.encoder.freeze import FreezeRule
 from encoder_conformance.profile.model import DeviceProfile
@@ -190,7 +191,8 @@ class DeviceUnderTest:
         self._check_alive()
         mark = self.frames.mark()
         try:
-            return self.node.sdo.upload(index, sub)
+            with BUDGET.booking("sdo"):
+                return self.node.sdo.upload(index, sub)
         except SdoCommunicationError as exc:
             raise self._timeout(f"SDO upload {index:04X}h.{sub:02X}", exc, mark) from None
         except SdoAbortedError as exc:
@@ -201,7 +203,8 @@ class DeviceUnderTest:
         self._check_alive()
         mark = self.frames.mark()
         try:
-            self.node.sdo.download(index, sub, data)
+            with BUDGET.booking("sdo"):
+                self.node.sdo.download(index, sub, data)
             if self._freeze is not None:
                 until = time.monotonic() + self._freeze.duration_s(index, int.from_bytes(data, "little"))
                 self._executing_until = max(self._executing_until, until)
@@ -218,7 +221,8 @@ class DeviceUnderTest:
         inherit a position frozen by the put-back of the test before."""
         remaining = self._executing_until - time.monotonic()
         if remaining > 0:
-            time.sleep(remaining)  # nothing on the bus shows the end of the execution
+            with BUDGET.booking("execution"):
+                time.sleep(remaining)  # nothing on the bus shows the end of the execution
 
     def read_uint(self, index: int, sub: int = 0) -> int:
         return int.from_bytes(self.read(index, sub), "little")
@@ -335,7 +339,8 @@ class DeviceUnderTest:
 
     def wait_bootup(self, after: Mark, timeout: float | None = None) -> can.Message | None:
         limit = timeout if timeout is not None else self.profile.timing.bootup_max_ms / 1000
-        return self.frames.wait_for(lambda m: self.is_heartbeat(m) and bytes(m.data) == b"\x00", limit, after)
+        with BUDGET.booking("boot-up"):
+            return self.frames.wait_for(lambda m: self.is_heartbeat(m) and bytes(m.data) == b"\x00", limit, after)
 
     def wait_heartbeat(self, after: Mark, timeout: float, state: int | None = None) -> can.Message | None:
         """Next heartbeat (not boot-up) after ``after``; with ``state``, the next one reporting it."""

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import can
 
 from encoder_conformance.dut.clock import FrameClock
+from encoder_conformance.dut.time_budget import BUDGET
 from encoder_conformance.errors import BusLostError
 
 log = logging.getLogger(__name__)
@@ -141,7 +142,7 @@ class FrameLog(can.Listener):
         start = after or self.mark()
         deadline = time.monotonic() + timeout
         hits: list[can.Message] = []
-        with self._cond:
+        with BUDGET.booking("periodic" if count > 1 else "answer") as booking, self._cond:
             seen = start.seq
             while True:
                 self._raise_if_closed()
@@ -149,6 +150,8 @@ class FrameLog(can.Listener):
                 seen = self._seq
                 remaining = deadline - time.monotonic()
                 if len(hits) >= count or remaining <= 0:
+                    if len(hits) < count and count == 1:
+                        booking.category = "silence"  # nothing came: the whole window was owed
                     return hits[:count]
                 self._cond.wait(remaining)
 
@@ -156,7 +159,7 @@ class FrameLog(can.Listener):
         """Frames matching ``predicate`` within ``duration`` s (an observation window, not a sleep)."""
         start = after or self.mark()
         end = time.monotonic() + duration
-        with self._cond:
+        with BUDGET.booking("silence"), self._cond:
             while (remaining := end - time.monotonic()) > 0:
                 self._raise_if_closed()
                 self._cond.wait(remaining)

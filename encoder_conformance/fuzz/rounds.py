@@ -17,6 +17,8 @@ from collections.abc import Callable
 
 from hypothesis import seed, settings
 
+from encoder_conformance.dut.time_budget import BUDGET
+
 ROUND_EXAMPLES = 50
 
 
@@ -36,8 +38,9 @@ def run_rounds(make_test: Callable[[int], Callable[[], None]], total: int, base:
         return 1
     assert base is not None
     rounds, sent = 0, 0
-    while sent < total and not spent():
-        count = min(ROUND_EXAMPLES, total - sent)
-        seed(base + rounds)(make_test(count))()
-        rounds, sent = rounds + 1, sent + count
+    with BUDGET.booking("generation"):  # a budget the user gave: owed by choice, frames and all
+        while sent < total and not spent():
+            count = min(ROUND_EXAMPLES, total - sent)
+            seed(base + rounds)(make_test(count))()
+            rounds, sent = rounds + 1, sent + count
     return rounds

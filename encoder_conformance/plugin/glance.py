@@ -90,8 +90,8 @@ def render(summary: RunSummary, context: PageContext | None = None) -> str:
                      "</div>")
     parts += [_identity(summary), _areas(summary), _failures(summary), _internal_errors(summary), _warnings(summary),
               _custody(summary, context.custody), _by_basis(summary, context.inferred_mode),
-              _deviations(summary, context.deviations), _skips(summary), _settings(summary, context.environment),
-              "</div>"]
+              _deviations(summary, context.deviations), _skips(summary), _time_budget(summary),
+              _settings(summary, context.environment), "</div>"]
     return "".join(parts)
 
 
@@ -254,3 +254,26 @@ def _settings(summary: RunSummary, environment: dict[str, str]) -> str:
     body = "".join(f"<tr><th>{escape(k)}</th><td>{escape(str(v))}</td></tr>" for k, v in rows)
     return (f"<details id='settings'><summary>Settings with their sources, environment</summary>"
             f"<table>{body}</table></details>")
+
+
+def _time_budget(summary: RunSummary) -> str:
+    """Where the run's time went: owed to the device per kind of wait, the tester's share, per area, the
+    costliest tests and why."""
+    budget = summary.time_budget
+    if not budget:
+        return ""
+    owed = "".join(f"<tr><th>{escape(name)}</th><td class='n'>{seconds:.2f} s</td></tr>"
+                   for name, seconds in sorted(budget["owed"].items(), key=lambda item: -item[1]))
+    areas = "".join(f"<tr><th>{escape(name)}</th><td class='n'>{a['tests']:.0f}</td><td class='n'>{a['seconds']:.2f} s"
+                    f"</td><td class='n'>{a['owed']:.2f} s</td></tr>"
+                    for name, a in sorted(budget["areas"].items(), key=lambda item: -item[1]["seconds"]))
+    costly = "".join(f"<tr><td>{escape(t['nodeid'])}</td><td class='n'>{t['seconds']:.2f} s</td>"
+                     f"<td>{escape(t['why'])}</td></tr>" for t in budget["costliest"])
+    share = budget.get("tester_share") or 0
+    return (f"<details id='time-budget'><summary>Time budget: {budget['wall_s']:.1f} s, owed to the device "
+            f"{budget['owed_s']:.1f} s, tester {budget['tester_s']:.1f} s ({100 * share:.0f} %)</summary>"
+            f"<p>Owed: every wait for the device, booked to what it waits for. Tester: the rest (start-up, "
+            f"collection and reports {budget['outside_tests_s']:.2f} s; median per test "
+            f"{budget['tester_per_test_median_ms']} ms).</p><table>{owed}</table>"
+            f"<table><tr><th>area</th><th>tests</th><th>seconds</th><th>owed</th></tr>{areas}</table>"
+            f"<table><tr><th>the costliest tests</th><th>seconds</th><th>why</th></tr>{costly}</table></details>")

@@ -29,6 +29,7 @@ from encoder_conformance.plugin import (
     run_record,
     selection,
     shuffle,
+    time_budget,
     twin_launch,
     verdicts,
 )
@@ -79,6 +80,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     reporting.set_metadata(session.config)
     reporting.start_background_writers(session.config)
     run_record.start(session.config)
+    time_budget.start(session.config)
     lifecycle.start(session.config)
     if lifecycle.state_of(session.config) is not None:
         gc.disable()  # until the tests are collected (a full pass during collection took 60-100 ms): see below
@@ -113,7 +115,8 @@ def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> 
     if not _active(item.config):
         return (yield)
     lifecycle.stop_if_gone(item.config)  # the device or bus is gone: one reason, the rest not run
-    result = yield
+    with time_budget.measure(item):
+        result = yield
     lifecycle.stop_if_gone(item.config)
     return result
 

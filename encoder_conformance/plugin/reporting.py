@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.paths import SUITES_DIR, default_reports_dir
-from encoder_conformance.plugin import bus_trace
+from encoder_conformance.plugin import bus_trace, time_budget
 from encoder_conformance.plugin.allure_writer import BackgroundWriter, write_in_background
 from encoder_conformance.plugin.evidence import EVIDENCE
 from encoder_conformance.plugin.glance import Deviation, PageContext, render, skip_reason_key
@@ -296,6 +296,9 @@ def terminal_summary(terminalreporter, config: pytest.Config,  # noqa: ANN001 - 
         terminalreporter.write_sep("-", "the device on the bench")
         for text, alarm in run_lines:
             terminalreporter.write_line(text, red=alarm, bold=alarm)
+    budget_line = time_budget.terminal_line(config)
+    if budget_line:
+        terminalreporter.write_line(budget_line)
     skipped = terminalreporter.stats.get("skipped", [])
     if skipped:
         reasons: dict[str, int] = {}

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.plugin import acceptance, lifecycle
+from encoder_conformance.plugin import acceptance, lifecycle, time_budget
 from encoder_conformance.plugin.evidence import EVIDENCE
 from encoder_conformance.plugin.options import bench_settings, settings_of
 from encoder_conformance.plugin.outcomes import is_internal_error
@@ -137,6 +137,7 @@ def completed(session: pytest.Session) -> RunSummary | None:
     if label is not None:
         summary.identity["serial number (label)"] = str(label)
     summary.duration_s = round(time.monotonic() - config.stash[_STARTED], 2)
+    summary.time_budget = time_budget.budget(config)
     summary.exit_code = int(session.exitstatus)
     state = lifecycle.state_of(config)
     if state is not None:

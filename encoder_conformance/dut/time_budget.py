@@ -1,0 +1,72 @@
+"""What a run owes the device, measured: every wait the tester makes for it, booked to what it waits for.
+
+The categories: ``sdo`` (an SDO transfer through canopen, request to last answer), ``answer`` (a frame waited
+for that came: the device's answer time), ``silence`` (an observation window, or a wait that ended without the
+frame: owed in full), ``periodic`` (several periodic frames captured), ``boot-up`` (reset or power-on to the
+boot-up message), ``execution`` (a manual's execution time waited out) and ``generation`` (a fuzzing budget the
+user gave, ``--fuzz-budget``: owed by choice). What a run takes beyond their sum
+is the tester's own work: collection, evidence, reports, the plugin.
+
+Only the thread that runs the tests books (a background capture's waits overlap the test's own), and nested
+waits count once, under the outermost booking (a boot-up wait made of frame waits is a boot-up).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+CATEGORIES = ("sdo", "answer", "silence", "periodic", "boot-up", "execution", "generation")
+
+
+@dataclass
+class Booking:
+    """One wait being measured; its category may change once its outcome is known (a timed-out answer wait
+    is a silence)."""
+
+    category: str
+
+
+class TimeBudget:
+    """Seconds owed per category, summed over the process (one run per process)."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._totals = dict.fromkeys(CATEGORIES, 0.0)
+        self._depth = threading.local()
+        self.thread: threading.Thread = threading.main_thread()  # the thread whose waits are booked
+
+    @contextmanager
+    def booking(self, category: str) -> Iterator[Booking]:
+        booking = Booking(category)
+        if threading.current_thread() is not self.thread:
+            yield booking
+            return
+        depth = getattr(self._depth, "value", 0)
+        self._depth.value = depth + 1
+        start = time.perf_counter()
+        try:
+            yield booking
+        finally:
+            self._depth.value = depth
+            if depth == 0:
+                elapsed = time.perf_counter() - start
+                with self._lock:
+                    self._totals[booking.category] = self._totals.get(booking.category, 0.0) + elapsed
+
+    def snapshot(self) -> dict[str, float]:
+        with self._lock:
+            return dict(self._totals)
+
+
+#: the process's ledger (a run is one process; the suites' waits all go through the DUT layer)
+BUDGET = TimeBudget()
+
+
+def difference(after: dict[str, float], before: dict[str, float]) -> dict[str, float]:
+    """Seconds booked between two snapshots, per category (categories with none left out)."""
+    return {key: round(value - before.get(key, 0.0), 6) for key, value in after.items()
+            if value - before.get(key, 0.0) > 0}

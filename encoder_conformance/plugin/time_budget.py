@@ -1,0 +1,129 @@
+"""The time budget of a run: per test, the seconds owed to the device (booked by the DUT layer's waits,
+``dut/time_budget.py``) and the rest, the tester's; per area and in total; the tests that cost most, and why.
+
+The run's wall time is the process's (interpreter start, imports and collection included, as a user waits
+for them), read from /proc on Linux, else from the session's start.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from encoder_conformance.dut.time_budget import BUDGET, difference
+from encoder_conformance.run_summary import area_of
+
+TOP = 10
+
+
+@dataclass
+class TestCost:
+    nodeid: str
+    seconds: float
+    owed: dict[str, float]
+
+    @property
+    def tester(self) -> float:
+        return max(0.0, self.seconds - sum(self.owed.values()))
+
+    def why(self) -> str:
+        parts = sorted(self.owed.items(), key=lambda item: -item[1])
+        owed = ", ".join(f"{name} {seconds:.2f} s" for name, seconds in parts if seconds >= 0.005)
+        return f"{owed or 'nothing owed'}; tester {self.tester:.2f} s"
+
+
+@dataclass
+class RunBudget:
+    session_started: float = field(default_factory=time.monotonic)
+    tests: list[TestCost] = field(default_factory=list)
+
+
+KEY = pytest.StashKey[RunBudget]()
+
+
+def _process_age_s() -> float | None:
+    """Seconds since this process started (Linux /proc), None elsewhere."""
+    try:
+        fields = Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()
+        started_ticks = int(fields[19])  # field 22 of the whole line: start time in clock ticks since boot
+        uptime = float(Path("/proc/uptime").read_text().split()[0])
+        return uptime - started_ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def start(config: pytest.Config) -> None:
+    config.stash[KEY] = RunBudget()
+
+
+@contextmanager
+def measure(item: pytest.Item) -> Iterator[None]:
+    """Book one test's set-up, call and teardown: its seconds and what of them the device was owed."""
+    run = item.config.stash.get(KEY, None)
+    if run is None:
+        yield
+        return
+    before, started = BUDGET.snapshot(), time.perf_counter()
+    try:
+        yield
+    finally:
+        run.tests.append(TestCost(item.nodeid, time.perf_counter() - started,
+                                  difference(BUDGET.snapshot(), before)))
+
+
+def budget(config: pytest.Config) -> dict[str, Any] | None:
+    """The budget so far, as run-summary.json keeps it."""
+    run = config.stash.get(KEY, None)
+    if run is None:
+        return None
+    age = _process_age_s()
+    wall = age if age is not None else time.monotonic() - run.session_started
+    owed = {name: round(seconds, 3) for name, seconds in BUDGET.snapshot().items() if seconds > 0}
+    owed_total = sum(owed.values())
+    in_tests = sum(t.seconds for t in run.tests)
+    areas: dict[str, dict[str, float]] = {}
+    for cost in run.tests:
+        area = areas.setdefault(area_of(cost.nodeid), {"seconds": 0.0, "owed": 0.0, "tests": 0})
+        area["seconds"] += cost.seconds
+        area["owed"] += sum(cost.owed.values())
+        area["tests"] += 1
+    return {
+        "wall_s": round(wall, 3),
+        "owed_s": round(owed_total, 3),
+        "owed": owed,
+        "tester_s": round(wall - owed_total, 3),
+        "tester_share": round((wall - owed_total) / wall, 3) if wall > 0 else None,
+        "outside_tests_s": round(wall - in_tests, 3),  # start-up, collection, reports
+        "tests": len(run.tests),
+        "tester_per_test_median_ms": _median_ms([t.tester for t in run.tests]),
+        "areas": {name: {key: round(value, 3) for key, value in values.items()} for name, values in areas.items()},
+        "costliest": [{"nodeid": t.nodeid, "seconds": round(t.seconds, 3), "why": t.why()}
+                      for t in sorted(run.tests, key=lambda t: -t.seconds)[:TOP]],
+    }
+
+
+def _median_ms(values: list[float]) -> float | None:
+    if not values:
+        return None
+    ordered = sorted(values)
+    middle = len(ordered) // 2
+    median = ordered[middle] if len(ordered) % 2 else (ordered[middle - 1] + ordered[middle]) / 2
+    return round(median * 1000, 2)
+
+
+def terminal_line(config: pytest.Config) -> str | None:
+    data = budget(config)
+    if data is None or not data["tests"]:
+        return None
+    owed = ", ".join(f"{name} {seconds:.1f} s" for name, seconds in sorted(data["owed"].items(), key=lambda i: -i[1]))
+    return (f"time budget: {data['wall_s']:.1f} s, of which owed to the device {data['owed_s']:.1f} s ({owed}); "
+            f"tester {data['tester_s']:.1f} s ({100 * (data['tester_share'] or 0):.0f} %, "
+            f"{data['outside_tests_s']:.1f} s outside the tests, median {data['tester_per_test_median_ms']} ms per "
+            "test)")

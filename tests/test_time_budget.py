@@ -1,0 +1,59 @@
+"""The time budget of a run (issue 30): every wait for the device booked to what it waits for, the rest the
+tester's; in run-summary.json, the report and the terminal."""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from pathlib import Path
+
+from encoder_conformance.dut.frames import FrameLog
+from encoder_conformance.dut.time_budget import TimeBudget, difference
+from tests.suite_session import run_suite
+
+
+def test_nested_waits_count_once_under_the_outer_booking():
+    budget = TimeBudget()
+    with budget.booking("boot-up"), budget.booking("answer"):
+        time.sleep(0.02)  # stands in for a wait on the bus
+    totals = budget.snapshot()
+    assert totals["boot-up"] >= 0.02
+    assert totals["answer"] == 0
+
+
+def test_waits_of_other_threads_are_not_booked():
+    """A background capture's waits overlap the test's own: only the test thread books."""
+    budget = TimeBudget()
+
+    def elsewhere() -> None:
+        with budget.booking("silence"):
+            time.sleep(0.01)
+
+    worker = threading.Thread(target=elsewhere)
+    worker.start()
+    worker.join()
+    assert budget.snapshot()["silence"] == 0
+
+
+def test_an_answer_wait_that_times_out_is_a_silence():
+    from encoder_conformance.dut import time_budget
+
+    before = time_budget.BUDGET.snapshot()
+    assert FrameLog().wait_for(lambda m: True, 0.03) is None
+    booked = difference(time_budget.BUDGET.snapshot(), before)
+    assert booked.keys() == {"silence"}
+    assert booked["silence"] >= 0.03
+
+
+def test_a_run_reports_its_budget(tmp_path: Path):
+    completed, _ = run_suite(tmp_path, "--device-profile", "waycon-sx", "-k", "heartbeat_period or identity")
+    assert completed.returncode == 0, completed.output[-2000:]
+    budget = json.loads((tmp_path / "report" / "run-summary.json").read_text(encoding="utf-8"))["time_budget"]
+    assert 0 < budget["owed_s"] < budget["wall_s"]
+    assert abs(budget["wall_s"] - budget["owed_s"] - budget["tester_s"]) < 0.01
+    assert budget["owed"]["periodic"] > 0.5, "the heartbeat capture is owed to the device"
+    heartbeat = next(t for t in budget["costliest"] if "heartbeat_period" in t["nodeid"])
+    assert heartbeat["why"].startswith("periodic")
+    assert "time budget:" in completed.output
+    assert "id='time-budget'" in (tmp_path / "report" / "report.html").read_text(encoding="utf-8")
