@@ -570,3 +570,13 @@ def test_storage_location_comments_give_the_storage_groups(tmp_path):
     assert objects[0x2000]["persisted_by"] == "volatile"
     assert any("StorageLocation=PERSIST_TEST (2001h)" in todo for todo in todos)
     assert objects[0x2001]["persisted_by"] == "store_all"  # not named: the CiA 301 group guess, with its todo
+
+
+def test_a_store_sub_named_for_the_location_wins_over_the_cia_group():
+    """CANopenNode's demo EDS: 1010h sub 5 is "Save PERSIST_APP parameters" (CiA's application sub 3 stores
+    nothing there): its objects are stored by sub 1, with a todo naming sub 5."""
+    eds = Path(__file__).parent / "data" / "eds" / "vendors" / "canopennode-demodevice.eds"
+    draft, todos = profile_draft_from_eds(eds)
+    assert draft["objects"][0x2111]["subs"][1]["persisted_by"] == "store_all"
+    assert draft["objects"][0x1017]["persisted_by"] == "store_comm"
+    assert any("1010h sub 5 is named for PERSIST_APP" in todo for todo in todos)
