@@ -116,7 +116,7 @@ def test_station_toml_reads_every_setting(tmp_path):
     assert station.power.off_time_s == 1.0
     assert station.shaft_drive == "bench_motor:connect=/dev/ttyUSB0"
     assert station.reports == tmp_path / "runs"  # relative paths from the station file's folder
-    assert station.history == tmp_path / "db" / "history.sqlite"
+    assert station.history == str(tmp_path / "db" / "history.sqlite")  # a path, or a postgresql:// URL as given
 
 
 def test_station_toml_manual_power_and_absolute_paths(tmp_path):

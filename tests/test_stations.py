@@ -153,3 +153,16 @@ def test_ctrl_c_reaches_every_station(two_stations, tmp_path):
         assert "device restored as found" in console.read_text(encoding="utf-8", errors="replace")
     assert stdout.count("(exit 130)") == 2, stdout
     assert stdout.count("INTERRUPTED (") == 2, stdout
+
+
+def test_a_station_history_url_stays_a_url(tmp_path):
+    """A PostgreSQL history in the station file is not taken for a path under the station's folder."""
+    from encoder_conformance.config.station import load_station
+    from encoder_conformance.history.target import history_path
+
+    station_file = tmp_path / "station.toml"
+    station_file.write_text('station = "goods-in-3"\nhistory = "postgresql://qa@db.example/conformance"\n',
+                            encoding="utf-8")
+    station = load_station(station_file)
+    assert station.history == "postgresql://qa@db.example/conformance"
+    assert str(history_path(None, station.history)) == "postgresql://qa@db.example/conformance"

@@ -1,8 +1,9 @@
-"""``encoder-conformance history list | show | export | compare``: what the history database holds.
+"""``encoder-conformance history list | show | export | compare | sync | serve | upgrade``: what the history
+database holds (an SQLite file or a PostgreSQL URL), the records waiting in the spool, and the history page.
 
-Light at start-up (the command line builds every parser): sqlite3 and the views load only when a history
-command runs. Every usage error (no database, unknown run, bad date, unreadable station file) is one line
-naming the option and the fix, exit code 4.
+Light at start-up (the command line builds every parser): the database drivers, the views and the web stack
+load only when a history command runs; the work is done in encoder_conformance/history/. Every usage error (no
+database, unknown run, bad date, unreadable station file) is one line naming the option and the fix, exit code 4.
 """
 
 from __future__ import annotations
@@ -44,18 +45,27 @@ def _run_id(text: str, what: str) -> int:
     return int(text)
 
 
-def _db(args: argparse.Namespace, must_exist: bool = True) -> Path:
+def _station(args: argparse.Namespace):  # -> Station | None (imported lazily)
     from encoder_conformance.config.station import StationError, load_station
-    from encoder_conformance.history.db import history_path
 
-    station_history = None
-    if args.db is None and args.station is not None:
-        try:
-            station_history = load_station(Path(args.station)).history
-        except StationError as exc:
-            raise UsageError(str(exc).replace("\n", " ")) from None
-    path = history_path(args.db, station_history)
-    if must_exist and not path.is_file():
+    if args.station is None:
+        return None
+    try:
+        return load_station(Path(args.station))
+    except StationError as exc:
+        raise UsageError(str(exc).replace("\n", " ")) from None
+
+
+def _db(args: argparse.Namespace, must_exist: bool = True):  # -> db.Target (imported lazily)
+    from encoder_conformance.history.db import HistoryError, history_path, path_exists
+
+    station = _station(args) if args.db is None else None
+    station_history = station.history if station is not None else None
+    try:
+        path = history_path(args.db, station_history)
+    except HistoryError as exc:
+        raise UsageError(f"--db {exc}") from None
+    if must_exist and not path_exists(path):
         source = "--db" if args.db else "--station's history" if station_history else "the history database"
         raise UsageError(f"{source} {path}: no history database there; give --db PATH (or --station FILE) with "
                          "the file the runs were recorded in")
@@ -69,7 +79,7 @@ def _filters(args: argparse.Namespace):  # -> db.Filters (imported lazily)
                    since_utc=parse_since(args.since) if args.since else None)
 
 
-def _stored(path: Path, text: str, what: str):  # -> db.StoredRun (imported lazily)
+def _stored(path, text: str, what: str):  # noqa: ANN001 - db.Target  # -> db.StoredRun (imported lazily)
     from encoder_conformance.history.db import get_run
 
     run = get_run(path, _run_id(text, what))
@@ -134,6 +144,51 @@ def _compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _spool_folder(args: argparse.Namespace) -> Path:
+    from encoder_conformance.history.spool import FOLDER_NAME
+    from encoder_conformance.paths import default_reports_dir
+
+    if args.spool:
+        return Path(args.spool)
+    station = _station(args)
+    reports = station.reports if station is not None and station.reports is not None else default_reports_dir()
+    return Path(reports) / FOLDER_NAME
+
+
+def _sync(args: argparse.Namespace) -> int:
+    from encoder_conformance.history.sync import send_waiting
+
+    target, folder = _db(args, must_exist=False), _spool_folder(args)
+    report = send_waiting(target, folder)
+    print(report.text(target, folder))
+    return RunExit.USAGE_ERROR if report.error else 0
+
+
+def _upgrade(args: argparse.Namespace) -> int:
+    from encoder_conformance.history.backend import upgrade
+
+    target = _db(args)
+    found, now = upgrade(target)
+    print(f"{target}: schema {now}" + (f" (upgraded from {found})" if found != now else " (already current)"))
+    return 0
+
+
+def parse_listen(text: str) -> tuple[str, int]:
+    """--listen HOST:PORT ([::1]:8600 for an IPv6 address)."""
+    host, _, port = text.rpartition(":")
+    host = host.strip("[]")
+    if not host or not port.isdigit() or int(port) > 65535:
+        raise UsageError(f"--listen {text!r}: give HOST:PORT, such as 127.0.0.1:8600")
+    return host, int(port)
+
+
+def _serve(args: argparse.Namespace) -> int:
+    from encoder_conformance.history.web.server import serve
+
+    host, port = parse_listen(args.listen)
+    return serve(_db(args), host, port)
+
+
 def _run(args: argparse.Namespace, extra: list[str]) -> int:
     from encoder_conformance.history.db import HistoryError
 
@@ -145,14 +200,16 @@ def _run(args: argparse.Namespace, extra: list[str]) -> int:
     except UsageError as exc:
         print(f"history {args.history_command}: {exc}", file=sys.stderr)
     except HistoryError as exc:
-        print(f"history {args.history_command}: {exc}; give --db PATH with a history database the runs wrote",
-              file=sys.stderr)
+        hint = "" if args.history_command in ("sync", "serve", "upgrade") else \
+            "; give --db PATH with a history database the runs wrote"
+        print(f"history {args.history_command}: {exc}{hint}", file=sys.stderr)
     return RunExit.USAGE_ERROR
 
 
 def _where(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--db", metavar="PATH", help="the history database (default: the station file's history, "
-                        "else $ENCODER_CONFORMANCE_HISTORY, else reports/history.sqlite)")
+    parser.add_argument("--db", metavar="PATH|URL", help="the history database: an SQLite file or "
+                        "postgresql://user@host/database (default: the station file's history, else "
+                        "$ENCODER_CONFORMANCE_HISTORY, else reports/history.sqlite)")
     parser.add_argument("--station", metavar="FILE", help="station file whose 'history' names the database")
 
 
@@ -166,7 +223,8 @@ def _selection(parser: argparse.ArgumentParser) -> None:
 
 
 def add_history_parser(sub, parser_class: type[argparse.ArgumentParser]) -> None:  # noqa: ANN001 - subparsers
-    history = sub.add_parser("history", help="the recorded runs: list, show, export, compare (SQLite history)")
+    history = sub.add_parser("history", help="the recorded runs: list, show, export, compare, sync, serve, upgrade "
+                                             "(SQLite or PostgreSQL history)")
     hsub = history.add_subparsers(dest="history_command", required=True, parser_class=parser_class)
     listing = hsub.add_parser("list", help="one line per recorded run, oldest first")
     _selection(listing)
@@ -190,4 +248,22 @@ def add_history_parser(sub, parser_class: type[argparse.ArgumentParser]) -> None
     compare.add_argument("run_b", metavar="RUN_B")
     _where(compare)
     compare.set_defaults(history_func=_compare)
+    sync = hsub.add_parser("sync", help="send the records that wait in the spool (the database was unreachable or "
+                                        "refused them) to the history, each once")
+    sync.add_argument("--spool", metavar="FOLDER", help="the spool folder (default: history-spool in the station "
+                      "file's reports, else reports/history-spool)")
+    _where(sync)
+    sync.set_defaults(history_func=_sync)
+    serve = hsub.add_parser("serve", help="a read-only web page of the history for the quality office: runs with "
+                                          "filters, one run, a serial number's timeline, pass rates per station "
+                                          "and profile")
+    serve.add_argument("--listen", metavar="HOST:PORT", default="127.0.0.1:8600",
+                       help="where the page listens (default 127.0.0.1:8600, this computer only; 0.0.0.0:8600 for "
+                            "the network)")
+    _where(serve)
+    serve.set_defaults(history_func=_serve)
+    upgrade = hsub.add_parser("upgrade", help="bring the history's schema to this version of the suite (a run does "
+                                              "it by itself where its database user may)")
+    _where(upgrade)
+    upgrade.set_defaults(history_func=_upgrade)
     history.set_defaults(func=_run)

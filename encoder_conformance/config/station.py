@@ -9,7 +9,8 @@ operator = "J. Meyer"
 node_id = 5
 shaft_drive = "bench_motor:connect=/dev/ttyUSB0"   # optional motor plug-in (see --shaft-drive)
 reports = "/srv/conformance/reports"               # report folders go here (default reports/)
-history = "/srv/conformance/history.sqlite"        # the history database (default reports/history.sqlite)
+history = "/srv/conformance/history.sqlite"        # the history: an SQLite file (default reports/history.sqlite)
+                                                   # or postgresql://user@host/db, shared by many stations
 
 [can]
 interface = "pcan"
@@ -63,13 +64,17 @@ class Station(_Strict):
     power: StationPower | Literal["manual"] | None = None
     shaft_drive: str | None = Field(default=None, description="motor plug-in MODULE:FACTORY[=ARGUMENT]")
     reports: Path | None = Field(default=None, description="folder the report folders go into")
-    history: Path | None = Field(default=None, description="the history database (SQLite)")
+    history: str | None = Field(default=None, description="the history database: an SQLite file, or a PostgreSQL "
+                                "URL (postgresql://user@host/database) that many stations share")
 
     def resolved(self, folder: Path) -> Station:
-        """Relative paths taken from the station file's folder."""
-        paths = {key: folder / value for key in ("reports", "history")
-                 if (value := getattr(self, key)) is not None and not value.is_absolute()}
-        return self.model_copy(update=paths)
+        """Relative paths taken from the station file's folder (a URL stays as it is)."""
+        updates: dict[str, object] = {}
+        if self.reports is not None and not self.reports.is_absolute():
+            updates["reports"] = folder / self.reports
+        if self.history is not None and "://" not in self.history and not Path(self.history).is_absolute():
+            updates["history"] = str(folder / self.history)
+        return self.model_copy(update=updates)
 
 
 def _parse(path: Path) -> Any:

@@ -8,11 +8,11 @@ from __future__ import annotations
 import csv
 import io
 import json
-import sqlite3
 from collections.abc import Sequence
 from datetime import datetime
 
 from encoder_conformance.history.db import StoredRun
+from encoder_conformance.history.dbapi import Row
 
 LIST_COLUMNS = (("id", "id"), ("date", "started"), ("kind", "kind"), ("profile", "profile_id"),
                 ("serial", "serial"), ("revision", "revision"), ("verdict", "overall"), ("station", "station"),
@@ -36,7 +36,7 @@ def table(rows: Sequence[Sequence[str]]) -> str:
     return "\n".join("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in rows)
 
 
-def run_table(runs: Sequence[sqlite3.Row]) -> str:
+def run_table(runs: Sequence[Row]) -> str:
     rows = [[title for title, _ in LIST_COLUMNS]]
     for run in runs:
         rows.append([_date(run[c]) if c == "started" else str(run[c] if run[c] is not None else "-")
@@ -76,7 +76,7 @@ def show(stored: StoredRun, certificate: str | None) -> str:
     return "\n".join(lines)
 
 
-def _areas_text(areas: Sequence[sqlite3.Row]) -> str:
+def _areas_text(areas: Sequence[Row]) -> str:
     return "; ".join(f"{a['area']}={a['verdict']}" for a in areas)
 
 
@@ -90,7 +90,7 @@ def export_csv(runs: Sequence[StoredRun]) -> str:
     return out.getvalue()
 
 
-def _without_run_id(row: sqlite3.Row) -> dict[str, object]:
+def _without_run_id(row: Row) -> dict[str, object]:
     return {key: value for key, value in dict(row).items() if key != "run_id"}
 
 

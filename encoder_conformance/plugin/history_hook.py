@@ -1,25 +1,33 @@
 """At the end of a conformance run: append it to the history, and write an acceptance run's certificate.
 
-Neither may change the run's verdict: a broken, locked or unwritable history gives one warning line
-and the run's exit status stands (the run-summary.json in the report folder still holds everything).
+Neither may change the run's verdict: a broken, locked, unreachable or refusing history gives one warning line
+and the run's exit status stands. The record is written to the spool beside the report folder first
+(``history-spool/<run key>.json``, whole or not at all) and deleted after the database's commit, so it waits
+there for the next run or ``encoder-conformance history sync`` when the database could not take it; a run killed
+in between leaves the file, whose key makes a second sending a no-op. After its own record, a run sends what
+earlier runs left waiting for the same history.
 """
 
 from __future__ import annotations
 
 import sys
+import uuid
 from pathlib import Path
 
 import pytest
 
+from encoder_conformance.history import spool
 from encoder_conformance.history.certificate import write_certificate
-from encoder_conformance.history.db import OFF, HistoryError, history_path, note_certificate, record_run
+from encoder_conformance.history.db import OFF, HistoryError, Target, history_path, record_new
+from encoder_conformance.history.sync import send_waiting
+from encoder_conformance.history.target import target_key
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.plugin.run_record import summary_of
 
 OPTION = "--history"  # declared in option_table.py
 
 
-def _db_path(config: pytest.Config) -> Path | None:
+def _target(config: pytest.Config) -> Target | None:
     given = config.getoption(OPTION, default=None)
     if given == OFF:
         return None
@@ -56,18 +64,44 @@ def _record(config: pytest.Config) -> None:
             _say(config, f"certificate: not written ({exc}); make it later with 'encoder-conformance history show "
                          "RUN_ID --certificate'", warning=True)
         else:
-            certificate = files.html
+            certificate = str(files.html)
             _say(config, f"certificate: {files.pdf or files.html}" + (f" ({files.pdf_note})" if files.pdf_note
                                                                       else ""))
-    db_path = _db_path(config)
-    if db_path is None:
-        return
     try:
-        run_id = record_run(summary, db_path)
-        if certificate is not None:
-            note_certificate(db_path, run_id, certificate)
+        target = _target(config)
     except HistoryError as exc:
-        _say(config, f"history: this run was not recorded: {exc}; the verdict stands (fix or move the file, or "
-                     f"give {OPTION} PATH)", warning=True)
+        _say(config, f"history: this run was not recorded: {exc}; the verdict stands (give {OPTION} PATH or URL)",
+             warning=True)
         return
-    _say(config, f"history: run {run_id} recorded in {db_path}")
+    if target is None:
+        return
+    key = str(uuid.uuid4())
+    folder = spool.folder_for(Path(summary.report_dir))
+    try:
+        spooled: Path | None = spool.put(folder, key, target_key(target), summary, certificate)
+        unspooled = ""
+    except OSError as exc:
+        spooled, unspooled = None, f"{folder}: {exc.strerror or exc}"
+    try:
+        run_id, _ = record_new(summary, target, key, certificate)
+    except HistoryError as exc:
+        if spooled is not None:
+            _say(config, f"history: this run was not recorded: {exc}; the verdict stands; the record waits in "
+                         f"{spooled} for the next run or 'encoder-conformance history sync'", warning=True)
+        else:
+            _say(config, f"history: this run was not recorded: {exc}; the verdict stands (fix or move the file, "
+                         f"or give {OPTION} PATH; the spool could not keep it either: {unspooled})", warning=True)
+        return
+    if spooled is not None:
+        spool.remove(spooled)
+    _say(config, f"history: run {run_id} recorded in {target}")
+    _send_earlier(config, target, folder)
+
+
+def _send_earlier(config: pytest.Config, target: Target, folder: Path) -> None:
+    report = send_waiting(target, folder)
+    if report.sent or report.already:
+        _say(config, f"history: {len(report.sent)} earlier run(s) sent from {folder}"
+                     + (f" ({len(report.already)} were there already)" if report.already else ""))
+    if report.error:
+        _say(config, f"history: {report.left} earlier run(s) still wait in {folder}: {report.error}", warning=True)

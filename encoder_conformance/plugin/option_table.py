@@ -120,8 +120,9 @@ OPTIONS: tuple[Option, ...] = (
                 "--allure) (default reports/<timestamp>-<profile>/, or under the station file's reports); with "
                 "several --station: the parent of one folder per station"),
     Option("--history", commands=ACCEPT, metavar="PATH",
-           help="the history database the run is appended to (SQLite; default: the station file's history, else "
-                "$ENCODER_CONFORMANCE_HISTORY, else reports/history.sqlite); 'off' records nothing"),
+           help="the history the run is appended to: an SQLite file, or a postgresql://user@host/db URL that many "
+                "stations share (default: the station file's history, else $ENCODER_CONFORMANCE_HISTORY, else "
+                "reports/history.sqlite); 'off' records nothing"),
     Option("--allow-destructive", commands=RUN, action="store_true", default=False,
            help="on hardware, allow tests that change what the device remembers (store, restore defaults, "
                 "node-ID); the run puts it all back (default: off; always on for the simulator)"),

@@ -12,6 +12,7 @@ import pytest
 from encoder_conformance.config.bus import BusConfig, resolve_bus_config
 from encoder_conformance.config.station import Station, StationError, StationPower, load_station
 from encoder_conformance.dut.actuator import ShaftDrivePlugin
+from encoder_conformance.history.target import shown
 from encoder_conformance.paths import DEFAULT_PROFILE
 from encoder_conformance.plugin import option_table
 from encoder_conformance.plugin.option_table import PROFILE_ENV, TRACE_OPTION
@@ -173,9 +174,10 @@ def bench_settings(settings: RunSettings, station_path: str | None, shaft_option
         values["station"] = f"{station.station} ({from_station})"
         if station.operator:
             values["operator"] = f"{station.operator} ({from_station})"
-        for key in ("reports", "history"):
-            if getattr(station, key) is not None:
-                values[key] = f"{getattr(station, key)} ({from_station})"
+        if station.reports is not None:
+            values["reports"] = f"{station.reports} ({from_station})"
+        if station.history is not None:  # a URL's password is not shown
+            values["history"] = f"{shown(station.history)} ({from_station})"
     power = settings.power
     if power is not None:
         how = "operator (asked at the terminal)" if power.manual else f"{power.off_command} / {power.on_command}"
