@@ -4,8 +4,9 @@ CiA 301 §7.2.4.3 (SDO protocol). Each example is a few request frames: initiate
 sub-index and size bits, reserved command specifiers, frames shorter than 8 bytes, segments without
 or out of order, interleaved transfers. After every example (``encoder_conformance.fuzz``): one reply
 to each request that owes one and none to a client's abort, DLC 8, the server command that answers the
-request or an abort, the multiplexer echoed, 1000h still readable, the heartbeat's NMT state unchanged
-(an EMCY is a warning: ``watch.EMCY_RULE``); over the whole test the heartbeat keeps coming. Downloads
+request or an abort, the multiplexer echoed (an initiate with reserved bits set may instead be refused with
+05040001h naming any: open reading sdo-initiate-reserved-bits), 1000h still readable, the heartbeat's NMT state
+unchanged (an EMCY is a warning: ``watch.EMCY_RULE``); over the whole test the heartbeat keeps coming. Downloads
 never reach the exclusion list (store, restore, node-ID, bit rate, preset, self-storing entries:
 ``fuzz.exclusions``) and write nothing: they go to entries that must refuse them, or open a segmented
 transfer that is never completed. ``--fuzz-budget`` bounds each test.
@@ -151,7 +152,8 @@ def _replay(fuzz: FuzzRunner, failure: Failure, evidence, rerun: str) -> str:
 
 def test_initiate_requests_answered_once(fuzz, targets, evidence, request):
     """Upload and download initiates with any index, sub-index and size bits: one reply each, echoing the
-    multiplexer; a write to a read-only entry or a reserved index aborted."""
+    multiplexer; a write to a read-only entry or a reserved index aborted. An upload with reserved bits set (41h-5Fh)
+    is served as 40h or refused with 05040001h naming any multiplexer (open reading sdo-initiate-reserved-bits)."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.3-§7.2.4.3.9 (initiate SDO download/upload), §7.2.4.3.17 (abort)")
     examples = st.lists(fz.initiates(targets), min_size=1, max_size=3).map(tuple)
     _fuzz(fuzz, examples, evidence, request)

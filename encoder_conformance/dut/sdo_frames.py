@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.cia.cia301 import SDO_ABORT, SDO_ANSWER, SdoClientCommand, SdoServerCommand
+from encoder_conformance.cia.cia301 import SDO_ABORT, SDO_ANSWER, SdoAbortCode, SdoClientCommand, SdoServerCommand
 
 
 def upload_request(index: int, sub: int) -> bytes:
@@ -30,11 +30,30 @@ ANSWER_SCS = SDO_ANSWER  # client command specifier -> the server command specif
 BLOCK_CCS = (SdoClientCommand.BLOCK_UPLOAD, SdoClientCommand.BLOCK_DOWNLOAD)
 #: initiate requests: the answer (also an abort) repeats index and sub-index
 ECHOES_MULTIPLEXER = {SdoClientCommand.INITIATE_DOWNLOAD, SdoClientCommand.INITIATE_UPLOAD, *BLOCK_CCS}
+#: the bits of an initiate request's command byte that CiA 301 marks "x: not used, always 0" (§7.2.4.3.3 initiate
+#: download: bit 4; §7.2.4.3.6 initiate upload: bits 4-0)
+INITIATE_RESERVED_BITS: dict[int, int] = {SdoClientCommand.INITIATE_DOWNLOAD: 0x10,
+                                          SdoClientCommand.INITIATE_UPLOAD: 0x1F}
+
+
+def reserved_bits_set(request: bytes) -> bool:
+    """An initiate request with a bit set that CiA 301 says is always 0: no valid initiate. The device may serve it
+    as if the bits were 0, or refuse it as an invalid command (open reading sdo-initiate-reserved-bits)."""
+    return bool(request) and bool(request[0] & INITIATE_RESERVED_BITS.get(request[0] >> 5, 0))
+
+
+def refused_as_invalid(request: bytes, reply: bytes) -> bool:
+    """``reply`` refuses ``request``, an initiate with reserved bits set, as an invalid command: abort 05040001h with
+    any multiplexer (no text gives one for a frame that is no valid request; CANopenNode names its previous
+    transfer's). A request with the bits 0 is a valid initiate: its abort echoes its multiplexer."""
+    return (reserved_bits_set(request) and len(reply) == 8 and reply[0] >> 5 == ABORT_SCS
+            and struct.unpack_from("<I", reply, 4)[0] == SdoAbortCode.COMMAND_SPECIFIER)
 
 
 def answers(request: bytes, reply: bytes) -> bool:
     """True when ``reply`` can be the server's answer to ``request``: the matching server command (or an
-    abort) and, for an initiate request, the same multiplexer. A reply that fits no open request is a
+    abort) and, for an initiate request, the same multiplexer (an abort of a block initiate, or the 05040001h
+    that refuses an initiate with reserved bits set, with any). A reply that fits no open request is a
     stale one (a late answer to an earlier request), never the answer to this one.
     """
     if not request or not reply:
@@ -45,7 +64,8 @@ def answers(request: bytes, reply: bytes) -> bool:
     if scs not in (ANSWER_SCS[ccs], ABORT_SCS):
         return False
     if ccs in ECHOES_MULTIPLEXER and len(request) >= 4 and len(reply) >= 4:
-        return reply[1:4] == request[1:4] or (scs == ABORT_SCS and ccs in BLOCK_CCS)
+        return (reply[1:4] == request[1:4] or (scs == ABORT_SCS and ccs in BLOCK_CCS)
+                or refused_as_invalid(request, reply))
     return True
 
 

@@ -2,7 +2,8 @@
 
 An SDO server answers its requests in order, so a reply belongs to a request sent before it and
 not before the request the previous reply answered. Among those, a reply goes to the earliest
-request it can only be the answer to (its command and, for initiates, its multiplexer: ``oracle.fits``);
+request it can only be the answer to (its command and, for initiates, its multiplexer, or for an initiate with
+reserved bits set the 05040001h that refuses it, naming any: ``oracle.fits``);
 else to the earliest that may draw an odd answer (a short frame, a client's abort, a reserved command);
 requests still without a reply first. A reply that fits only answered requests is counted against the
 earliest of them: that is how two replies to one request show, unless an earlier short frame or abort

@@ -3,7 +3,9 @@
 Per request: a DLC-8 request other than an abort (ccs 4) gets exactly one reply; a client's abort gets
 none; a frame shorter than 8 bytes gets none or one abort. Every reply has DLC 8 and the server command
 specifier that answers the request, or is an abort (command byte 80h). Initiate requests (ccs 1, 2) are
-answered, also when aborted, with their multiplexer; an abort during a segmented transfer carries the
+answered, also when aborted, with their multiplexer; one with bits set that CiA 301 says are always 0 may
+instead be refused as an invalid command, abort 05040001h with any multiplexer (open reading
+sdo-initiate-reserved-bits: ``sdo_frames.refused_as_invalid``). An abort during a segmented transfer carries the
 transfer's multiplexer. Segments outside a transfer, of the other direction or with the toggle bit not
 alternated are aborted; a segment response echoes the toggle bit.
 
@@ -21,7 +23,7 @@ from dataclasses import dataclass, field
 from itertools import pairwise
 
 from encoder_conformance.cia.cia301 import SDO_ABORT, SdoClientCommand
-from encoder_conformance.dut.sdo_frames import ABORT_SCS, ANSWER_SCS, answers
+from encoder_conformance.dut.sdo_frames import ABORT_SCS, ANSWER_SCS, answers, refused_as_invalid, reserved_bits_set
 from encoder_conformance.fuzz.strategies import Request
 
 ABORT = SDO_ABORT
@@ -207,8 +209,10 @@ class Judge:
         problems = [f"abort {_hex(reply)}: the command byte of an abort is 80h"] if reply[0] != ABORT else []
         transfer = self.transfer
         if ccs in INITIATE_CCS:
-            if reply[1:4] != frame[1:4]:
-                problems.append(f"abort {_hex(reply)} does not echo the request's multiplexer {_hex(frame[1:4])}")
+            if reply[1:4] != frame[1:4] and not refused_as_invalid(frame, reply):
+                problems.append(f"abort {_hex(reply)} does not echo the request's multiplexer {_hex(frame[1:4])}"
+                                + (" (only 05040001h, refusing it as an invalid command, may name another)"
+                                   if reserved_bits_set(frame) else ""))
             self.transfer = UNKNOWN if transfer is not None else None  # the open transfer may go on
         elif ccs in SEGMENT_CCS and isinstance(transfer, Transfer) and reply[1:4] != transfer.mux:
             problems.append(f"abort {_hex(reply)} during the transfer of {_hex(transfer.mux)} does not carry its "

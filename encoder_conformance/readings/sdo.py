@@ -68,6 +68,25 @@ READINGS: list[OpenReading] = [
         requires=("segmented_sdo",),
     ),
     OpenReading(
+        point="sdo-initiate-reserved-bits",
+        question="An initiate request has a bit set that CiA 301 marks \"always 0\" (upload 41h-5Fh, download with "
+                 "bit 4): may the server refuse it as an invalid command, and must that abort echo the request's "
+                 "multiplexer?",
+        source='CiA 301 v4.2.0 §7.2.4.3.6 (initiate SDO upload protocol): byte 0 of the request is ccs = 2 and '
+               'bits 4-0 "x: not used, always 0" (§7.2.4.3.3, initiate SDO download: bit 4 likewise), so a request '
+               'with them set is no valid initiate; §7.2.4.3.17 table 22: "0504 0001h Client/server command '
+               'specifier not valid or unknown". No text says which multiplexer an abort of a frame that is no valid '
+               'request carries: the CiA conformance test tool accepts any for an unknown command (CTT SDO 07), and '
+               'CANopenNode (301/CO_SDOserver.c: only 40h starts an upload) names the last valid request\'s',
+        readings=("the request served as if the reserved bits were 0: its answer (or abort) echoes its multiplexer",
+                  "the request refused as an invalid command: abort 05040001h with any multiplexer (CANopenNode: the "
+                  "previous transfer's), and no other answer"),
+        variant="initiate_reserved_bits_refused",
+        variant_text="an initiate request with a reserved bit set (upload 41h-5Fh, download bit 4) is refused: abort "
+                     "05040001h naming the previous initiate's multiplexer, as CANopenNode does",
+        modules=("test_sdo_fuzz",),
+    ),
+    OpenReading(
         point="sdo-transfer-left-open",
         question="A client leaves a segmented transfer half-finished: may the server end it by itself after a "
                  "time-out, and when?",

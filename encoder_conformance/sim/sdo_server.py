@@ -248,6 +248,36 @@ class InterruptConsumedByOpenTransfer(SdoServer):
         return [abort_frame(transfer.index, transfer.sub, COMMAND_INVALID)]
 
 
+#: the bits of an initiate request's command byte that CiA 301 marks "x: not used, always 0" (§7.2.4.3.3 download:
+#: bit 4; §7.2.4.3.6 upload: bits 4-0). The twin's own copy: the simulator shares no code with the tester.
+_INITIATE_RESERVED_BITS: dict[int, int] = {SdoClientCommand.INITIATE_DOWNLOAD: 0x10,
+                                           SdoClientCommand.INITIATE_UPLOAD: 0x1F}
+
+
+@breaks(SdoServer, "initiate_reserved_bits_refused")
+class InitiateReservedBitsRefused(SdoServer):
+    """An initiate request with a reserved bit set is no initiate: it is refused as an invalid command, abort 05040001h
+    naming the multiplexer of the last valid initiate (0000h.00 before the first), and a transfer left open ends
+    (CANopenNode: only 40h is an upload request, and its abort carries the index and sub-index it last took in)."""
+
+    _previous: tuple[int, int] = (0, 0)
+
+    def reset(self) -> None:
+        super().reset()
+        self._previous = (0, 0)
+
+    def respond(self, request: bytes) -> list[bytes]:
+        initiate = len(request) == 8 and request[0] >> 5 in _INITIATE_RESERVED_BITS
+        if not initiate or (self._block is not None and self._block.in_progress):
+            return super().respond(request)
+        if request[0] & _INITIATE_RESERVED_BITS[request[0] >> 5]:
+            self._transfer = None
+            return [abort_frame(*self._previous, COMMAND_INVALID)]
+        index, sub = struct.unpack_from("<HB", request, 1)
+        self._previous = (index, sub)
+        return super().respond(request)
+
+
 @breaks(SdoServer, "left_open_transfer_times_out")
 class LeftOpenTransferTimesOut(SdoServer):
     """A segmented transfer without a request for 25 ms (a short time-out, within any profile's
