@@ -2,24 +2,54 @@
 the firmware simulator (a process on a SocketCAN channel; here the user-space bus, as in a container).
 
 A conformant simulator passes (0) with its artifacts in the report folder and its process restarted by the power
-switch; a faulty one fails (1); one that never answers is infrastructure (69), not a verdict on the firmware.
+switch; a faulty one fails (1); one that never answers, or exits by itself, is infrastructure (69), not a verdict
+on the firmware. Power off lets a simulator behind a shell (or in the README's restart loop) store at shutdown.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
+import re
+import shutil
 import subprocess
 import sys
+import tempfile
+import time
 from collections import Counter
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
+from encoder_conformance.cli import firmware_ci as fwci
 from encoder_conformance.vcan import BuildError, library
 
 PYTHON = [sys.executable, "-m", "encoder_conformance"]
 REPO = Path(__file__).resolve().parents[1]
+HELPER = [sys.executable, "-m", "encoder_conformance.cli.firmware_ci"]
+
+#: a firmware simulator's stand-in: says it is up, and on SIGTERM stores after a while (as CANopenLinux writes its
+#: auto-stored data at shutdown), then ends; with "--reset-once" it ends by itself at its first start (as
+#: CANopenLinux does on NMT reset node)
+STAND_IN = """
+import signal, sys, time
+from pathlib import Path
+folder = Path(sys.argv[1])
+stopping = []
+signal.signal(signal.SIGTERM, lambda *_: stopping.append(1))
+with open(folder / "starts", "a") as starts:
+    starts.write("start\\n")
+if "--reset-once" in sys.argv and (folder / "starts").read_text().count("start") == 1:
+    time.sleep(0.2)
+    sys.exit(0)
+(folder / "up").write_text("up")
+while not stopping:
+    time.sleep(0.01)
+time.sleep(0.5)
+(folder / "stored").write_text("node-ID 5")
+"""
 
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="SocketCAN (and the user-space bus) is Linux only")
 
@@ -41,8 +71,10 @@ def twin(nvm: Path, *faults: str) -> str:
     return " ".join(command)
 
 
-def firmware_ci(folder: Path, simulator: str, *extra: str) -> subprocess.CompletedProcess[str]:
+def firmware_ci(folder: Path, simulator: str, *extra: str, tmp: Path | None = None) -> subprocess.CompletedProcess[str]:
     env = {k: v for k, v in os.environ.items() if k not in ("LD_PRELOAD", "ENCODER_CONFORMANCE_VCAN_DIR")}
+    if tmp is not None:
+        env["TMPDIR"] = str(tmp)  # where firmware-ci makes its state folder
     return subprocess.run([*PYTHON, "firmware-ci", "--simulator", simulator, "--profile", "waycon-sx",
                            "--history", "off", *extra], cwd=folder, env=env, capture_output=True, text=True,
                           timeout=300)
@@ -70,10 +102,124 @@ def test_a_faulty_simulator_fails(tmp_path):
     assert "exit 1: device non-conformant" in done.stderr
 
 
-def test_a_simulator_that_never_answers_is_infrastructure(tmp_path):
-    done = firmware_ci(tmp_path, "exec sleep 60", "--boot-timeout", "1")
+@pytest.fixture
+def short_tmp() -> Iterator[Path]:
+    """A TMPDIR for firmware-ci with a short path (the hub's socket path is limited to 107 bytes)."""
+    folder = Path(tempfile.mkdtemp(prefix="fwt-", dir="/tmp"))
+    yield folder
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+def test_a_simulator_that_never_answers_is_infrastructure(tmp_path, short_tmp):
+    done = firmware_ci(tmp_path, "exec sleep 60", "--boot-timeout", "1", tmp=short_tmp)
     assert done.returncode == 69, done.stdout[-4000:] + done.stderr[-2000:]
     assert "did not answer an SDO read of 1000h" in done.stderr
+    assert list(short_tmp.iterdir()) == []  # the state folder is removed, on an error too
+
+
+def test_a_simulator_that_exits_by_itself_is_named_at_once(tmp_path, short_tmp):
+    """CANopenLinux ends its process on NMT reset node: firmware-ci says so (69) as soon as it happened, not after
+    the boot time-out, and leaves no state folder behind."""
+    start = time.monotonic()
+    done = firmware_ci(tmp_path, "sleep 0.2; exit 3", "--boot-timeout", "60", tmp=short_tmp)
+    elapsed = time.monotonic() - start
+    assert done.returncode == 69, done.stdout[-4000:] + done.stderr[-2000:]
+    assert "the simulator exited by itself (exit status 3)" in done.stderr
+    assert "a firmware simulator must keep running across NMT reset node (restart it in a loop" in done.stderr
+    assert elapsed < 30, f"{elapsed:.1f} s: the boot wait did not notice the simulator had ended"
+    assert list(short_tmp.iterdir()) == []
+
+
+def test_how_a_simulator_exited_is_read_from_its_keeper(tmp_path):
+    """The keeper writes the exit status when the simulator ends (negative: the signal that killed it); firmware-ci
+    reads it after the boot wait and after the run (where the run's non-zero status becomes 69, naming it)."""
+    state = tmp_path / "state"
+    state.mkdir()
+    (state / fwci.STATE_EXIT).write_text("-11", encoding="utf-8")
+    assert fwci._exited_by_itself(state) == "killed by SIGSEGV"
+    (state / fwci.STATE_EXIT).write_text("0", encoding="utf-8")
+    assert fwci._exited_by_itself(state) == "exit status 0"
+    (state / fwci.STATE_EXIT).unlink()
+    assert fwci._exited_by_itself(state) is None  # still running
+
+
+# -- the power switch: power on starts the simulator under a keeper, power off waits for all of it ----------------
+def _power(state: Path, action: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*HELPER, "--state", str(state), action], cwd=cwd, capture_output=True, text=True,
+                          timeout=30, check=True)
+
+
+def _wait_for(path: Path, timeout: float = 15.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not path.exists():
+        assert time.monotonic() < deadline, f"{path.name} did not appear within {timeout} s"
+        time.sleep(0.02)
+
+
+def _switched(tmp_path: Path, simulator: str) -> Path:
+    state = tmp_path / "state"
+    state.mkdir()
+    (state / fwci.STATE_COMMAND).write_text(simulator, encoding="utf-8")
+    (tmp_path / "stand_in.py").write_text(STAND_IN, encoding="utf-8")
+    return state
+
+
+def test_power_off_lets_a_simulator_behind_a_shell_store_at_shutdown(tmp_path):
+    """Started through a shell (which does not exec it here): the shell ends at once on SIGTERM; the simulator's
+    own shutdown (0.5 s, then it writes its data) is waited for, not cut off by SIGKILL when the shell ends."""
+    state = _switched(tmp_path, f"{sys.executable} stand_in.py {tmp_path}; echo ended")
+    _power(state, "power-on", tmp_path)
+    _wait_for(tmp_path / "up")
+    group = int((state / fwci.STATE_PID).read_text(encoding="utf-8"))
+    _power(state, "power-off", tmp_path)
+    assert (tmp_path / "stored").read_text(encoding="utf-8") == "node-ID 5"
+    assert not fwci._group_running(group)
+    assert not (state / fwci.STATE_PID).exists()
+    assert not (state / fwci.STATE_EXIT).exists()  # ended by the power switch, not by itself
+
+
+def test_the_readme_restart_loop_survives_reset_node_and_stores_at_power_off(tmp_path):
+    """The README's loop: the simulator ends by itself once (NMT reset node) and is started again; power off
+    lets it store and does not start it again."""
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    loop = re.search(r"```sh\n(\s*trap .*?)```", readme, re.S)
+    assert loop is not None, "the restart loop example is not in the README"
+    script = "\n".join(line.strip() for line in loop.group(1).splitlines())
+    assert "./build/fw_sim vcan0" in script
+    (tmp_path / "fw_sim_loop.sh").write_text(
+        script.replace("./build/fw_sim vcan0", f"{sys.executable} stand_in.py {tmp_path} --reset-once"),
+        encoding="utf-8")
+    state = _switched(tmp_path, "sh fw_sim_loop.sh")
+    _power(state, "power-on", tmp_path)
+    _wait_for(tmp_path / "up")  # the second start: the first ended by itself
+    assert (tmp_path / "starts").read_text(encoding="utf-8").count("start") == 2
+    assert not (state / fwci.STATE_EXIT).exists()  # the loop keeps running
+    _power(state, "power-off", tmp_path)
+    assert (tmp_path / "stored").read_text(encoding="utf-8") == "node-ID 5"
+    assert (tmp_path / "starts").read_text(encoding="utf-8").count("start") == 2  # not started again
+
+
+def test_power_off_kills_what_does_not_end_in_the_grace_time(tmp_path, monkeypatch):
+    state = _switched(tmp_path, "trap '' TERM; sleep 60")
+    _power(state, "power-on", tmp_path)
+    group = int((state / fwci.STATE_PID).read_text(encoding="utf-8"))
+    monkeypatch.setattr(fwci, "STOP_GRACE_S", 0.3)
+    start = time.monotonic()
+    assert fwci._stop_simulator(state) == 0
+    assert time.monotonic() - start < 3
+    assert not fwci._group_running(group)
+
+
+def test_the_run_gets_no_station_history_unless_asked():
+    """In a checkout the run would write reports/history.sqlite: a CI job has no use for it."""
+    args = argparse.Namespace(profile="p.yaml", can_channel="vcan0", no_power_switch=True)
+    command = fwci._run_command(args, ["--node-id", "4"], Path("/r"), [])
+    assert command[command.index("--history") + 1] == "off"
+    assert command[-2:] == ["--node-id", "4"]
+    for given in (["--history", "h.sqlite"], ["--history=h.sqlite"]):
+        command = fwci._run_command(args, given, Path("/r"), [])
+        assert "off" not in command
+        assert command[-len(given) :] == given
 
 
 @pytest.mark.parametrize("name", ["github", "gitlab"])

@@ -1,7 +1,8 @@
 """The LSS master (dut/lss_master.py) against the twin's LSS slaves (sim/lss_slave.py) on a private virtual bus.
 
 Issue 10: fastscan finds one unconfigured device in < 1 s and eight on one bus in < 5 s (canopen's LssMaster
-took 16.9 s for one); every service answers as CiA 305 says.
+took 16.9 s for one); every service answers as CiA 305 says. A request keeps one frame time after an answer, as a
+wire would (CANopenNode drops a request that comes while it is still finishing its answer).
 """
 
 from __future__ import annotations
@@ -16,8 +17,9 @@ import can
 import pytest
 
 from encoder_conformance.cia.cia305 import MASTER_COB_ID, SLAVE_COB_ID, UNCONFIGURED_NODE_ID, LssState
+from encoder_conformance.dut import lss_master
 from encoder_conformance.dut.frames import FrameLog
-from encoder_conformance.dut.lss_master import LssAddress, LssMaster
+from encoder_conformance.dut.lss_master import FRAME_BITS, FRAME_S, LssAddress, LssMaster
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.sim.lss_slave import LssSlave
 from tests import sim_rig
@@ -148,3 +150,51 @@ def test_wdga_twin_lss_selective_and_inquiry(wdga_twin):
     assert master.inquire_node_id() == node.node_id
     master.switch_global(LssState.WAITING)
     assert master.inquire_node_id() is None  # waiting state: inquiry is not answered
+
+
+# -- one frame time between an answer and the next request ------------------------------------------------------
+def _answer_at(log: FrameLog, timestamp: float) -> None:
+    log.on_message_received(can.Message(arbitration_id=SLAVE_COB_ID, data=bytes(8), is_extended_id=False,
+                                         timestamp=timestamp, is_rx=True))
+
+
+def test_a_request_waits_only_what_is_left_of_one_frame_time_after_an_answer(monkeypatch):
+    """Counted from the answer's timestamp: a fresh answer costs the rest of a frame time, an older one nothing; a
+    timestamp on an adapter's own clock (not the host's) counts as just arrived."""
+    log = FrameLog()
+    waits: list[float] = []
+    master = LssMaster(lambda cob_id, data: None, log, RESPONSE_S)
+    monkeypatch.setattr(lss_master.time, "sleep", waits.append)  # what it would wait, without waiting
+    assert master.frame_s == FRAME_S == pytest.approx(0.001)  # one 8-byte frame at 125 kbit/s
+    master.request(0x5E)
+    assert waits == []  # no answer yet
+    _answer_at(log, time.time())
+    master.request(0x5E)
+    assert len(waits) == 1
+    assert 0 < waits[0] <= FRAME_S
+    master.request(0x5E)
+    assert len(waits) == 1  # no answer since the last request
+    _answer_at(log, time.time() - 0.005)
+    master.request(0x5E)
+    assert len(waits) == 1  # five frame times ago: nothing left to wait
+    _answer_at(log, 12.5)  # an adapter's clock
+    master.request(0x5E)
+    assert waits[1:] == [FRAME_S]
+    assert LssMaster(lambda cob_id, data: None, log, RESPONSE_S, bitrate=1_000_000).frame_s == FRAME_BITS / 1e6
+
+
+def test_no_request_follows_an_answer_closer_than_one_frame_time(lss_bus):
+    """On a simulated bus the answer arrives at once: the master keeps the frame time a wire would take."""
+    master = lss_bus.master
+    assert master.switch_selective(LssAddress(VENDOR, PRODUCT, REVISION, 1000))
+    assert master.inquire_address() == LssAddress(VENDOR, PRODUCT, REVISION, 1000)
+    assert master.configure_node_id(5).error == 0
+    answered, gaps = None, []
+    for msg in master.frames.last(100):
+        if msg.is_rx:
+            answered = msg.timestamp
+        elif answered is not None:
+            gaps.append(msg.timestamp - answered)
+            answered = None
+    assert len(gaps) == 5  # inquiries after the selective answer and each other, the configure after the last
+    assert min(gaps) >= master.frame_s - 1e-6, gaps

@@ -4,13 +4,18 @@
    SocketCAN bus (``vcan``: a hub in a private folder, wire mode, as an adapter);
 2. the firmware simulator: the given command, started on that bus (its output in
    ``<report>/firmware-simulator.log``), and a power switch that stops and restarts its process, so the
-   store/restore and LSS tests that need a power cycle run;
+   store/restore and LSS tests that need a power cycle run; power off is SIGTERM to its whole process group
+   and a wait (up to STOP_GRACE_S) until every process of it has ended, so it stores what it keeps at
+   shutdown as a device keeps it in flash; only then SIGKILL;
 3. wait until the device answers an SDO read of 1000h (its boot time, up to ``--boot-timeout``);
-4. the conformance run (``run``, every option of it), its exit code returned unchanged: 0 conformant,
+4. the conformance run (``run``, every option of it; ``--history off`` unless you give ``--history``: a CI
+   job has no use for the station history), its exit code returned unchanged: 0 conformant,
    1 firmware non-conformant, 69 infrastructure (bus, simulator silent or dead), 70 not restored, 3 a bug of
    the tool, 4 usage. The report folder keeps junit.xml, report.html and run-summary.json for the artifacts.
 
-The simulator and the hub are stopped at the end, also on Ctrl-C or SIGTERM.
+A simulator that ends by itself (CANopenLinux ends its process on NMT reset node unless it is restarted in a
+loop) is named as such (exit 69). The simulator and the hub are stopped and the state folder is removed at the
+end, also on an error, Ctrl-C or SIGTERM.
 """
 
 from __future__ import annotations
@@ -18,8 +23,8 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
-import select
 import shlex
+import shutil
 import signal
 import subprocess
 import sys
@@ -35,7 +40,13 @@ from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit
 HELPER = [sys.executable, "-m", "encoder_conformance.cli.firmware_ci"]
 STATE_PID = "simulator.pid"
 STATE_COMMAND = "simulator.command"
-STOP_GRACE_S = 5.0
+STATE_EXIT = "simulator.exit"  # the simulator's exit status, written by its keeper when it ends
+STOP_GRACE_S = 5.0  # power off: how long the simulator's processes may take to end after SIGTERM
+KILL_WAIT_S = 1.0  # after SIGKILL: how long to wait for the processes to be gone
+GROUP_POLL_S = 0.02  # how often power off looks whether the process group has ended
+BOOT_NO_ANSWER, BOOT_SIMULATOR_EXITED = 1, 2  # wait-boot's exit statuses besides 0
+KEEP_RUNNING = ('a firmware simulator must keep running across NMT reset node (restart it in a loop, see README '
+                '"Firmware CI")')
 PIPELINE_DIR = Path(__file__).with_name("pipelines")
 PIPELINES = {"github": "github-actions.yml", "gitlab": "gitlab-ci.yml"}  # --example NAME -> the file it prints
 PROBE_EVERY_S = 0.2
@@ -46,13 +57,16 @@ def add_firmware_ci_parser(sub: argparse._SubParsersAction) -> None:
     ci = sub.add_parser(
         "firmware-ci", help="CI against a firmware simulator: bus, simulator, power switch, run, exit code",
         description=__doc__.split("\n\n")[1] if __doc__ else None,
-        epilog="Arguments it does not know go to 'run' (e.g. --node-id 4, -k heartbeat, --strict).")
+        epilog="Arguments it does not know go to 'run' (e.g. --node-id 4, -k heartbeat, --strict). The run "
+               "records nothing in the station history (firmware-ci gives it --history off) unless you give "
+               "--history PATH: a CI job has no use for it.")
     ci.add_argument("--example", choices=sorted(PIPELINES),
                     help="print an example pipeline file (github: GitHub Actions with kernel vcan; gitlab: a container "
                          "job with the user-space bus) and exit")
     ci.add_argument("--simulator", metavar="COMMAND",
                     help="the command that starts your firmware simulator on the channel, e.g. "
-                         "'./build/fw_sim vcan0' (run by the shell; it must stay in the foreground)")
+                         "'./build/fw_sim vcan0' (run by the shell; it must stay in the foreground and keep "
+                         "running across NMT reset node: restart it in a loop if it ends there)")
     ci.add_argument("--profile", help="your device profile (YAML file or shipped id)")
     ci.add_argument("--can-channel", default="vcan0", help="the SocketCAN channel (default vcan0)")
     ci.add_argument("--report-dir", default="conformance-report", type=Path,
@@ -80,9 +94,9 @@ def cmd_firmware_ci(args: argparse.Namespace, extra: list[str]) -> int:
     report = args.report_dir.resolve()
     report.mkdir(parents=True, exist_ok=True)
     state = Path(tempfile.mkdtemp(prefix="fwci-"))  # short: the hub's socket path is limited to 107 bytes
-    (state / STATE_COMMAND).write_text(args.simulator, encoding="utf-8")
     signal.signal(signal.SIGTERM, _interrupt)
     try:
+        (state / STATE_COMMAND).write_text(args.simulator, encoding="utf-8")
         with _bus(args.can_channel, state) as env:
             env["FWCI_LOG"] = str(report / "firmware-simulator.log")
             _power(state, env, on=True)
@@ -92,6 +106,8 @@ def cmd_firmware_ci(args: argparse.Namespace, extra: list[str]) -> int:
                 _power(state, env, on=False)
     except KeyboardInterrupt:
         return RunExit.INTERRUPTED
+    finally:
+        shutil.rmtree(state, ignore_errors=True)  # the hub's folder and the power switch's files
 
 
 def _interrupt(signum: int, frame: object) -> None:
@@ -100,25 +116,63 @@ def _interrupt(signum: int, frame: object) -> None:
 
 def _run_when_booted(args: argparse.Namespace, extra: list[str], node_id: int, report: Path, state: Path,
                      env: dict[str, str]) -> int:
-    python = [sys.executable, "-m", "encoder_conformance"]
     helper = [*HELPER, "--state", str(state), "--can-channel", args.can_channel]
     booted = subprocess.run([*helper, "wait-boot", "--node-id", str(node_id), "--timeout", str(args.boot_timeout)],
                             env=env, check=False)
     if booted.returncode != 0:
-        print(f"firmware-ci: the simulator did not answer an SDO read of 1000h at node-ID {node_id} within "
-              f"{args.boot_timeout} s (see {env['FWCI_LOG']}); exit {RunExit.COULD_NOT_TEST}: infrastructure",
+        exited = _exited_by_itself(state)
+        if exited is None:
+            print(f"firmware-ci: the simulator did not answer an SDO read of 1000h at node-ID {node_id} within "
+                  f"{args.boot_timeout} s (see {env['FWCI_LOG']}); exit {RunExit.COULD_NOT_TEST}: infrastructure",
+                  file=sys.stderr)
+        else:
+            print(f"firmware-ci: the simulator exited by itself ({exited}) before it answered an SDO read of 1000h "
+                  f"(see {env['FWCI_LOG']}); {KEEP_RUNNING}; exit {RunExit.COULD_NOT_TEST}: infrastructure",
+                  file=sys.stderr)
+        return RunExit.COULD_NOT_TEST
+    status = subprocess.run(_run_command(args, extra, report, helper), env=env, check=False).returncode
+    exited = _exited_by_itself(state)
+    if exited is not None and status != RunExit.PASSED:
+        print(f"firmware-ci: the run ended with {status} ({DESCRIPTIONS.get(status, 'see the run output')}) "
+              f"because the simulator exited by itself ({exited}; see {env['FWCI_LOG']}); {KEEP_RUNNING}; "
+              f"exit {RunExit.COULD_NOT_TEST}: infrastructure, not a verdict on the firmware; report in {report}",
               file=sys.stderr)
         return RunExit.COULD_NOT_TEST
-    command = [*python, "run", "--profile", args.profile, "--can-interface", "socketcan", "--can-channel",
-               args.can_channel, "--report-dir", str(report), *extra]
+    if exited is not None:
+        print(f"firmware-ci: note: the simulator exited by itself ({exited}; see {env['FWCI_LOG']}); "
+              f"{KEEP_RUNNING}", file=sys.stderr)
+    print(f"firmware-ci: exit {status}: {DESCRIPTIONS.get(status, 'see the run output')}; "
+          f"report in {report}", file=sys.stderr)
+    return status
+
+
+def _run_command(args: argparse.Namespace, extra: list[str], report: Path, helper: list[str]) -> list[str]:
+    """The ``run`` command line: the bus, the report folder, the power switch (unless ``--no-power-switch``), no
+    station history unless ``extra`` gives one, then ``extra``."""
+    command = [sys.executable, "-m", "encoder_conformance", "run", "--profile", args.profile,
+               "--can-interface", "socketcan", "--can-channel", args.can_channel, "--report-dir", str(report)]
+    if not any(arg == "--history" or arg.startswith("--history=") for arg in extra):
+        command += ["--history", "off"]  # a CI job has no use for the station history (in a checkout: reports/)
     if not args.no_power_switch:
         command += ["--allow-destructive",
                     "--power-off-cmd", shlex.join([*helper, "power-off"]),
                     "--power-on-cmd", shlex.join([*helper, "power-on"])]
-    status = subprocess.run(command, env=env, check=False).returncode
-    print(f"firmware-ci: exit {status}: {DESCRIPTIONS.get(status, 'see the run output')}; "
-          f"report in {report}", file=sys.stderr)
-    return status
+    return [*command, *extra]
+
+
+def _exited_by_itself(state: Path) -> str | None:
+    """How the simulator started last ended if it ended without a power off (its keeper wrote its exit status),
+    e.g. "exit status 3", "killed by SIGSEGV"; None while it runs."""
+    try:
+        code = int((state / STATE_EXIT).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if code >= 0:
+        return f"exit status {code}"
+    try:
+        return f"killed by {signal.Signals(-code).name}"
+    except ValueError:
+        return f"killed by signal {-code}"
 
 
 def _node_id(extra: list[str]) -> int | None:
@@ -169,43 +223,111 @@ def helper_main(argv: list[str]) -> int:
         return _start_simulator(args.state)
     if args.action == "power-off":
         return _stop_simulator(args.state)
-    return _wait_boot(args.can_channel, args.node_id, args.timeout)
+    return _wait_boot(args.can_channel, args.node_id, args.timeout, args.state)
 
 
 def _start_simulator(state: Path) -> int:
+    """Power on: a keeper process (forked, a session and process group of its own) starts the simulator's command
+    in its group and waits for it; when it ends the keeper writes its exit status (``STATE_EXIT``: a simulator
+    that ended by itself is told from a silent one). The keeper's pid, the group's id, goes to ``STATE_PID``.
+    Returns once the simulator is started (the helper's caller waits for its output pipes to close: the keeper
+    keeps none of them open)."""
     command = (state / STATE_COMMAND).read_text(encoding="utf-8")
-    log = open(os.environ.get("FWCI_LOG", os.devnull), "ab")  # noqa: SIM115 - handed to the child
-    process = subprocess.Popen(command, shell=True, stdin=subprocess.DEVNULL, stdout=log, stderr=log,
-                               start_new_session=True)
-    (state / STATE_PID).write_text(str(process.pid), encoding="utf-8")
-    return 0
+    (state / STATE_EXIT).unlink(missing_ok=True)
+    started, ready = os.pipe()
+    if os.fork() != 0:
+        os.close(ready)
+        with os.fdopen(started, "rb") as pipe:
+            pipe.read()  # end of file: the keeper wrote the pid file (or failed)
+        return 0 if (state / STATE_PID).exists() else 1
+    os.close(started)
+    try:
+        _keep(state, command, ready)
+    finally:
+        os._exit(0)
+
+
+def _keep(state: Path, command: str, ready: int) -> None:
+    """The keeper (in the forked child): the simulator started and waited for; its exit status written."""
+    os.setsid()
+    devnull = os.open(os.devnull, os.O_RDWR)
+    for fd in (0, 1, 2):
+        os.dup2(devnull, fd)  # not the helper's pipes: its caller would wait for them to close
+    # a handler, not SIG_IGN (which the simulator would inherit): power off's SIGTERM is for the simulator; the
+    # keeper stays until the simulator has ended, so the group ends after the exit status is written
+    for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+        signal.signal(signum, _keep_running)
+    with open(os.environ.get("FWCI_LOG", os.devnull), "ab") as log:
+        process = subprocess.Popen(command, shell=True, stdin=subprocess.DEVNULL, stdout=log, stderr=log)
+    (state / STATE_PID).write_text(str(os.getpid()), encoding="utf-8")
+    os.close(ready)
+    code = process.wait()
+    with contextlib.suppress(OSError):  # the state folder may be gone (firmware-ci ended)
+        (state / STATE_EXIT).write_text(str(code), encoding="utf-8")
+
+
+def _keep_running(signum: int, frame: object) -> None:
+    """The keeper's handler of SIGTERM, SIGINT and SIGHUP: nothing (it ends when the simulator has ended)."""
 
 
 def _stop_simulator(state: Path) -> int:
-    """SIGTERM to the simulator's process group, SIGKILL after a grace time: power off."""
+    """Power off: SIGTERM to the simulator's process group, then a wait (up to ``STOP_GRACE_S``) until every
+    process of it has ended (a simulator started through a shell, or in a restart loop, stores at shutdown
+    what it keeps: killing it when the shell ends would lose that), and only then SIGKILL to what is left."""
     try:
-        pid = int((state / STATE_PID).read_text(encoding="utf-8"))
+        group = int((state / STATE_PID).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return 0
-    try:
-        ended = os.pidfd_open(pid)  # readable once the process has ended (not our child: no wait() for it)
-    except ProcessLookupError:
-        ended = None
     with contextlib.suppress(ProcessLookupError):
-        os.killpg(pid, signal.SIGTERM)
-    if ended is not None:
-        poll = select.poll()
-        poll.register(ended, select.POLLIN)
-        poll.poll(STOP_GRACE_S * 1000)
-        os.close(ended)
-    with contextlib.suppress(ProcessLookupError):
-        os.killpg(pid, signal.SIGKILL)
+        os.killpg(group, signal.SIGTERM)
+    if not _group_ends(group, STOP_GRACE_S):
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(group, signal.SIGKILL)
+        _group_ends(group, KILL_WAIT_S)
     (state / STATE_PID).unlink(missing_ok=True)
+    (state / STATE_EXIT).unlink(missing_ok=True)  # ended by the power switch, not by itself
     return 0
 
 
-def _wait_boot(channel: str, node_id: int, timeout: float) -> int:
-    """Ask for 1000h every 0.2 s until the device answers (any SDO response, an abort too): 0, else 1."""
+def _group_ends(group: int, timeout: float) -> bool:
+    """Whether every process of process group ``group`` has ended within ``timeout`` s (looked at every
+    ``GROUP_POLL_S``)."""
+    deadline = time.monotonic() + timeout
+    while _group_running(group):
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(GROUP_POLL_S)
+    return True
+
+
+def _group_running(group: int) -> bool:
+    """Whether a process of group ``group`` still runs. A zombie has ended (only its parent has not read its
+    status; an orphan's may be never read where the container's init does not reap), so it does not count."""
+    try:
+        os.killpg(group, 0)
+    except ProcessLookupError:
+        return False  # no process, not even a zombie
+    except PermissionError:
+        pass
+    try:
+        names = [name for name in os.listdir("/proc") if name.isdigit()]
+    except OSError:
+        return True  # no /proc: a zombie cannot be told from a process
+    for name in names:
+        try:
+            with open(f"/proc/{name}/stat", "rb") as stat:
+                fields = stat.read()
+        except OSError:
+            continue  # ended meanwhile
+        state, _parent, process_group = fields[fields.rindex(b")") + 2 :].split()[:3]
+        if int(process_group) == group and state not in (b"Z", b"X"):
+            return True
+    return False
+
+
+def _wait_boot(channel: str, node_id: int, timeout: float, state: Path) -> int:
+    """Ask for 1000h every 0.2 s until the device answers (any SDO response, an abort too): 0; ``BOOT_NO_ANSWER``
+    when the time is up, ``BOOT_SIMULATOR_EXITED`` as soon as the simulator has ended by itself."""
     import can
 
     from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE, SDO_RESPONSE_BASE
@@ -215,10 +337,12 @@ def _wait_boot(channel: str, node_id: int, timeout: float) -> int:
     with can.Bus(interface="socketcan", channel=channel) as bus:
         bus.set_filters([{"can_id": SDO_RESPONSE_BASE + node_id, "can_mask": 0x7FF}])
         while time.monotonic() < deadline:
+            if (state / STATE_EXIT).exists():
+                return BOOT_SIMULATOR_EXITED
             bus.send(can.Message(arbitration_id=SDO_REQUEST_BASE + node_id, data=request, is_extended_id=False))
             if bus.recv(timeout=min(PROBE_EVERY_S, max(0.0, deadline - time.monotonic()))) is not None:
                 return 0
-    return 1
+    return BOOT_SIMULATOR_EXITED if (state / STATE_EXIT).exists() else BOOT_NO_ANSWER
 
 
 if __name__ == "__main__":

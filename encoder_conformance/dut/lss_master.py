@@ -4,6 +4,12 @@ Why not canopen's LssMaster: it sleeps 0.5 s per '1' bit of a fastscan and 0.2 s
 (16.9 s to find one slave), reads no identify answers and only finds non-configured slaves
 (../shared/reference/python-stack-measured.md §2.5). Here each step waits for the answer on the frame log
 and returns as soon as it is there; only a step nobody answers costs the full response window.
+
+A request never follows a slave's answer closer than one frame time (``LssMaster.frame_s``): on a wire the
+answer and the request each take that long, but a simulated bus (the user-space SocketCAN bus, a virtual
+channel) delivers both at once, and a slave that is still finishing its answer drops the request (CANopenNode
+clears its "response pending" flag just after sending: a request 92 µs after its answer was lost). Only the
+rest of that time is waited, counted from the answer's timestamp, so a step whose answer is older costs nothing.
 """
 
 from __future__ import annotations
@@ -29,12 +35,22 @@ from encoder_conformance.cia.cia305 import (
 )
 from encoder_conformance.dut.device import TESTER_MARGIN_S, answer_window
 from encoder_conformance.dut.frames import FrameLog, Mark
+from encoder_conformance.dut.time_budget import BUDGET
 
 #: the shortest response window a learned one may be (``LssMaster.learned_window``)
 WINDOW_FLOOR_S = 0.01
 #: after an answer, how long other slaves' copies of it may still arrive (on a real bus identical
 #: answers merge into one frame; a simulated bus delivers each)
 ECHO_S = 0.003
+#: bits of a CAN frame with 8 data bytes and an 11-bit identifier: 111 without stuff bits (the 3-bit
+#: intermission included), up to 135 with them; 125 makes it 1 ms at 125 kbit/s
+FRAME_BITS = 125
+#: the shortest time between a slave's answer and the next request when the bit rate is not known:
+#: one frame time at 125 kbit/s (8 data bytes: 1 ms)
+FRAME_S = FRAME_BITS / 125_000
+#: a frame timestamp at most this old is on the host's wall clock (time.time(): socketcan, virtual, the
+#: user-space bus); any other is on an adapter's own clock, and the frame counts as just arrived
+HOST_STAMP_AGE_S = 60.0
 
 
 @dataclass(frozen=True)
@@ -67,10 +83,14 @@ Send = Callable[[int, bytes], None]
 class LssMaster:
     """LSS services over ``send`` (one frame on 7E5h) and the frame log (answers on 7E4h)."""
 
-    def __init__(self, send: Send, frames: FrameLog, response_s: float) -> None:
+    def __init__(self, send: Send, frames: FrameLog, response_s: float, bitrate: int | None = None) -> None:
+        """``bitrate``: the bus's bit rate, bit/s, if known: a request keeps one frame time at it after an answer
+        (``frame_s``); else one frame time at 125 kbit/s (``FRAME_S``)."""
         self._send = send
         self.frames = frames
         self.response_s = response_s  # the profile's window: what the device owes (search steps wait this)
+        self.frame_s = FRAME_BITS / bitrate if bitrate else FRAME_S  # the least time from an answer to a request
+        self._sent = frames.mark()  # the last request: the slave frames after it are the answers to keep clear of
         self.answer_timeout_s = answer_window(response_s)  # an expected answer is waited for this long
         self._silence = False  # inside ``no_answer_expected``
         self.steps = 0  # frames sent (fastscan cost, for the report)
@@ -79,11 +99,27 @@ class LssMaster:
 
     # -- the exchange ------------------------------------------------------------------------------
     def request(self, command: int, payload: bytes = b"") -> Mark:
-        """One master frame; a mark before it."""
+        """One master frame, at least ``frame_s`` after the last slave answer; a mark before it."""
+        self._keep_clear_of_answers()
         mark = self.frames.mark()
         self._send(MASTER_COB_ID, bytes([command]) + payload.ljust(7, b"\x00")[:7])
+        self._sent = mark
         self.steps += 1
         return mark
+
+    def _keep_clear_of_answers(self) -> None:
+        """Wait what is left of one frame time after the latest slave frame since the last request (every
+        answer counts, the copies of other slaves and late ones too): a computed remainder, not a fixed sleep."""
+        answers = self.frames.since(self._sent, _from_slave)
+        if not answers:
+            return
+        age = time.time() - answers[-1].timestamp
+        if not 0.0 <= age <= HOST_STAMP_AGE_S:  # an adapter's own clock: the answer is only known to be here now
+            age = 0.0
+        remaining = self.frame_s - age
+        if remaining > 0:
+            with BUDGET.booking("silence"):  # the bus's frame time, owed in full
+                time.sleep(remaining)
 
     @property
     def silence_s(self) -> float:
@@ -122,7 +158,7 @@ class LssMaster:
 
     @staticmethod
     def _is_answer(command: int) -> Callable[[can.Message], bool]:
-        return lambda m: m.is_rx and m.arbitration_id == SLAVE_COB_ID and bool(m.data) and m.data[0] == command
+        return lambda m: _from_slave(m) and bool(m.data) and m.data[0] == command
 
     def answers(self, command: int, mark: Mark, window: float | None = None) -> list[can.Message]:
         """Every slave frame with ``command`` after ``mark``: with ``window``, those within it (waits the whole
@@ -242,3 +278,8 @@ class LssMaster:
                 return None  # a known part was wrong, or the slave left the scan
             address.append(value)
         return LssAddress(*address)
+
+
+def _from_slave(msg: can.Message) -> bool:
+    """A frame an LSS slave sent (7E4h, received)."""
+    return bool(msg.is_rx) and msg.arbitration_id == SLAVE_COB_ID
