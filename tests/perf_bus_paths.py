@@ -14,6 +14,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 import canopen
@@ -42,11 +43,16 @@ def measure(bus_kwargs: dict[str, object], node_id: int, seconds: float) -> dict
             done += 1
         rate = done / (time.perf_counter() - start)
         stamps: list[float] = []
-        network.subscribe(0x700 + node_id, lambda can_id, data, timestamp: stamps.append(timestamp))
+        enough = threading.Event()
+
+        def heartbeat(can_id: int, data: bytearray, timestamp: float) -> None:
+            stamps.append(timestamp)
+            if len(stamps) > HEARTBEATS:
+                enough.set()
+
+        network.subscribe(0x700 + node_id, heartbeat)
         node.sdo.download(0x1017, 0, HEARTBEAT_MS.to_bytes(2, "little"))
-        deadline = time.monotonic() + HEARTBEATS * HEARTBEAT_MS / 1000 * 3
-        while len(stamps) < HEARTBEATS + 1 and time.monotonic() < deadline:
-            time.sleep(0.05)
+        enough.wait(HEARTBEATS * HEARTBEAT_MS / 1000 * 3)
         node.sdo.download(0x1017, 0, b"\x00\x00")
     finally:
         network.disconnect()

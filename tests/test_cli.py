@@ -125,3 +125,18 @@ def test_sim_with_unknown_profile_exits_without_traceback(runs):
     assert result.returncode == 4  # usage error (RunExit.USAGE_ERROR)
     assert "does-not-exist" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_a_bug_of_the_tool_exits_3_not_1(monkeypatch, capsys):
+    """An exception no command expects is the tool's internal error (3), never 'non-conformant' (1)."""
+    from encoder_conformance.cli import profile as profile_command
+    from encoder_conformance.cli.main import main
+
+    def broken(args, extra):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(profile_command, "_cmd_profile_effects", broken)
+    assert main(["profile", "effects"]) == 3
+    err = capsys.readouterr().err
+    assert "RuntimeError: boom" in err
+    assert "internal error of the tool" in err

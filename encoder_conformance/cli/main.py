@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import traceback
 from collections.abc import Callable
 from functools import partial
 
@@ -72,6 +73,11 @@ def main(argv: list[str] | None = None) -> int:
         return usage.report(f"encoder-conformance {args.command}", str(exc))
     except ProfileError as exc:
         return usage.report(f"encoder-conformance {args.command}", usage.profile_error_text(exc))
+    except Exception:  # a bug of the tool: exit 3, never 1 (which says the device is non-conformant)
+        traceback.print_exc()
+        print(f"encoder-conformance {args.command}: internal error of the tool: please report it with the output "
+              "above", file=sys.stderr)
+        return RunExit.INTERNAL_ERROR
     except KeyboardInterrupt:  # before the run took the device into custody: nothing to put back
         print("interrupted", file=sys.stderr)
         # exit now with the documented code: an interrupt that struck inside code the interpreter ran for

@@ -74,9 +74,8 @@ def _options(url: str, readonly: bool) -> dict[str, Any]:
 
 
 @contextmanager
-def connect(url: str, create: bool = True, readonly: bool = False) -> Iterator[Db]:
-    """A connection with the current schema in place (``create``: made where the database has none yet;
-    ``readonly``: any known version, nothing written); every psycopg problem comes out as HistoryError."""
+def _opened(url: str, readonly: bool) -> Iterator[tuple[PostgresDb, int]]:
+    """A connection and the schema version it holds (a newer one refused); psycopg problems as HistoryError."""
     where = str(PostgresUrl(url))
     try:
         with psycopg.connect(url, autocommit=True, row_factory=dict_row, **_options(url, readonly)) as connection:
@@ -84,13 +83,21 @@ def connect(url: str, create: bool = True, readonly: bool = False) -> Iterator[D
             version = _version(db)
             if version > SCHEMA_VERSION:
                 raise HistoryError(newer_message(where, version))
-            if version == 0 and not create:
-                raise HistoryError(f"{where}: no history in this database yet (no run recorded into it)")
-            if version < SCHEMA_VERSION and not readonly:
-                _upgrade(db)
-            yield db
+            yield db, version
     except psycopg.Error as exc:
         raise HistoryError(f"{where}: {_one_line(exc)}") from exc
+
+
+@contextmanager
+def connect(url: str, create: bool = True, readonly: bool = False) -> Iterator[Db]:
+    """A connection with the current schema in place (``create``: made where the database has none yet;
+    ``readonly``: any known version, nothing written); every psycopg problem comes out as HistoryError."""
+    with _opened(url, readonly) as (db, version):
+        if version == 0 and not create:
+            raise HistoryError(f"{db.where}: no history in this database yet (no run recorded into it)")
+        if version < SCHEMA_VERSION and not readonly:
+            _upgrade(db)
+        yield db
 
 
 def _version(db: Db) -> int:
@@ -128,15 +135,7 @@ def _upgrade(db: Db) -> None:
 
 def upgrade_only(url: str) -> tuple[int, int]:
     """``history upgrade``: (version found, version now)."""
-    where = str(PostgresUrl(url))
-    try:
-        with psycopg.connect(url, autocommit=True, row_factory=dict_row, **_options(url, False)) as connection:
-            db = PostgresDb(connection, where)
-            found = _version(db)
-            if found > SCHEMA_VERSION:
-                raise HistoryError(newer_message(where, found))
-            if found < SCHEMA_VERSION:
-                _upgrade(db)
-            return found, _version(db)
-    except psycopg.Error as exc:
-        raise HistoryError(f"{where}: {_one_line(exc)}") from exc
+    with _opened(url, readonly=False) as (db, found):
+        if found < SCHEMA_VERSION:
+            _upgrade(db)
+        return found, _version(db)

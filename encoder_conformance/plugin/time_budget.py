@@ -8,6 +8,7 @@ for them), read from /proc on Linux, else from the session's start.
 from __future__ import annotations
 
 import os
+import statistics
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -110,12 +111,7 @@ def budget(config: pytest.Config) -> dict[str, Any] | None:
 
 
 def _median_ms(values: list[float]) -> float | None:
-    if not values:
-        return None
-    ordered = sorted(values)
-    middle = len(ordered) // 2
-    median = ordered[middle] if len(ordered) % 2 else (ordered[middle - 1] + ordered[middle]) / 2
-    return round(median * 1000, 2)
+    return round(statistics.median(values) * 1000, 2) if values else None
 
 
 def terminal_line(config: pytest.Config) -> str | None:

@@ -11,6 +11,7 @@ from encoder_conformance.cia.cia301 import SdoAbortCode
 from encoder_conformance.probe.entries import draft_entries
 from encoder_conformance.probe.findings import Findings, Key
 from encoder_conformance.profile.datatypes import canonical_name, size_bytes, string_bytes
+from encoder_conformance.profile.eds.draft import flag_unchecked
 from encoder_conformance.profile.model import resolve_node_id_expression
 
 #: draft todos a probe settles, by their start, with what must have been seen to settle each
@@ -64,13 +65,6 @@ def _remove(objects: dict[int, dict[str, Any]], key: Key) -> None:
         objects.pop(index)
 
 
-def _flag_dynamic(entry: dict[str, Any], why: str) -> None:
-    default = entry.pop("default", None)
-    entry.pop("per_unit", None)
-    entry["dynamic"] = True
-    entry["notes"] = f"probe: {why}" + ("" if default is None else f" (EDS default {default!r} not checked)")
-
-
 def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: int, todos: list[str]) -> None:
     missing: list[Key] = []
     refused: dict[str, list[str]] = {}
@@ -102,7 +96,9 @@ def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: in
         if changed_alone or (changed_at_reset and not writable):
             if not entry.get("dynamic"):
                 why = "changes by itself" if changed_alone else "changes across an NMT reset node"
-                _flag_dynamic(entry, f"{why} ({_hex(values[0])} -> {_hex(values[-1])})")
+                entry.pop("per_unit", None)
+                flag_unchecked(entry, "dynamic", f"the probe saw it {why.removeprefix('changes ')} "
+                               f"({_hex(values[0])} -> {_hex(values[-1])})")
                 todos.append(f"probe: {where} {why}: marked dynamic (no default checked)")
             continue
         if changed_at_reset:

@@ -256,7 +256,7 @@ def _mark_run_time_values(objects: dict[int, dict[str, Any]], todos: list[str]) 
         obj = objects[index]
         entries = [e for s, e in obj["subs"].items() if s != 0] if "subs" in obj else [obj]
         for entry in entries:
-            _flag(entry, "dynamic", "value changes at run time")
+            flag_unchecked(entry, "dynamic", "value changes at run time")
         marked.append(f"{index:04X}h")
     history = objects.get(0x1003, {}).get("subs", {})
     if history:  # CiA 301 §7.5.2.4: sub 0 counts the errors (rw, writing 0 clears them), subs 1.. hold them
@@ -264,20 +264,21 @@ def _mark_run_time_values(objects: dict[int, dict[str, Any]], todos: list[str]) 
         if count is not None:
             count.update(name="Number of errors", access="rw")
         for entry in history.values():
-            _flag(entry, "dynamic", "the error history changes at run time")
+            flag_unchecked(entry, "dynamic", "the error history changes at run time")
         marked.append("1003h (error history: sub 0 the count, rw)")
     serial = objects.get(0x1018, {}).get("subs", {}).get(4)
     if serial is not None:
-        _flag(serial, "per_unit", "serial number differs per unit")
+        flag_unchecked(serial, "per_unit", "serial number differs per unit")
         marked.append("1018h sub 4 (per_unit)")
     if 0x650B in objects and "subs" not in objects[0x650B]:
-        _flag(objects[0x650B], "per_unit", "serial number differs per unit")
+        flag_unchecked(objects[0x650B], "per_unit", "serial number differs per unit")
         marked.append("650Bh (per_unit)")
     if marked:
         todos.append(f"objects: marked dynamic/per_unit without a default check: {', '.join(marked)}")
 
 
-def _flag(entry: dict[str, Any], flag: str, why: str) -> None:
+def flag_unchecked(entry: dict[str, Any], flag: str, why: str) -> None:
+    """Mark ``entry`` dynamic or per_unit: its default is dropped (kept in the notes with ``why``)."""
     default = entry.pop("default", None)
     manual = entry.pop("manual", None)
     entry[flag] = True
