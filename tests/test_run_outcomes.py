@@ -156,3 +156,18 @@ def test_start_up_replies_with_another_client_on_the_bus_are_not_judged():
     assert shared.other_client, "another client's request must be seen"
     short = startup_frames.judge([frames[0], _frame(0x585, "43 00 10 00 96 01", True)], 5)
     assert [clause for _, clause in short.broken] == [startup_frames.DLC_CLAUSE]
+
+
+def test_a_late_answer_to_a_request_given_up_on_is_not_a_broken_reply():
+    """On a loaded machine the tester may time out and send its next request before the device answers: the
+    late answer names the earlier request's multiplexer. Only a reply to a request that was answered
+    meanwhile, or to the current one, is judged."""
+    gave_up = [_frame(0x605, "40 03 18 05 00 00 00 00", False), _frame(0x605, "40 00 10 00 00 00 00 00", False),
+               _frame(0x585, "4B 03 18 05 FF 00 00 00", True), _frame(0x585, "43 00 10 00 96 01 02 00", True)]
+    assert not startup_frames.judge(gave_up, 5).broken
+    answered_then_wrong = [_frame(0x605, "40 03 18 05 00 00 00 00", False),
+                           _frame(0x585, "4B 03 18 05 FF 00 00 00", True),
+                           _frame(0x605, "40 00 10 00 00 00 00 00", False),
+                           _frame(0x585, "4B 03 18 05 FF 00 00 00", True)]
+    assert [clause for _, clause in startup_frames.judge(answered_then_wrong, 5).broken] == [
+        startup_frames.MUX_CLAUSES[2]]

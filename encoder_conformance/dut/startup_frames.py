@@ -3,7 +3,9 @@
 A device whose replies break CiA 301 (a multiplexer that is not the request's, a DLC other than 8) while only
 this tester's requests are on the bus has been shown to be non-conformant: a FAIL with the clause. Only where
 requests of another client were seen on the device's SDO channel (600h + node-ID, not sent by this tester) may
-the replies be answers to it: the run could not test.
+the replies be answers to it: the run could not test. A reply that answers a request the tester gave up on
+(it sent its next request before any reply came) is a late answer to that request, not a broken one: on a
+loaded machine a device may answer after the tester's timeout.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from encoder_conformance.cia.cia301 import (
     SdoClientCommand,
     SdoServerCommand,
 )
+from encoder_conformance.dut.sdo_frames import answers
 
 #: CiA 301 v4.2.0 clauses a start-up reply can break
 DLC_CLAUSE = "CiA 301 v4.2.0 §7.2.4.3.1 (SDO: every SDO frame has a DLC of 8)"
@@ -59,6 +62,8 @@ def judge(frames: list[can.Message], node_id: int) -> StartupFrames:
     """Judge every SDO reply of ``frames`` (the log since the check began) against the request before it."""
     found = StartupFrames()
     request: bytes | None = None
+    replied = True
+    given_up: list[bytes] = []  # requests followed by the next one before any reply came
     for msg in frames:
         if msg.is_remote_frame or msg.is_error_frame:
             continue
@@ -67,10 +72,17 @@ def judge(frames: list[can.Message], node_id: int) -> StartupFrames:
             if msg.is_rx:
                 found.other_client.append(msg)
             else:
-                request = data
+                if request is not None and not replied and len(request) >= 4 and request[0] >> 5 in MUX_CLAUSES:
+                    given_up.append(request)  # an initiate: its late answer names its multiplexer
+                request, replied = data, False
             continue
         if not msg.is_rx or msg.arbitration_id != SDO_RESPONSE_BASE + node_id:
             continue
+        late = next((old for old in given_up if len(data) == 8 and data[1:4] == old[1:4] and answers(old, data)), None)
+        if late is not None:
+            given_up.remove(late)  # its one late answer
+            continue
+        replied = True
         if msg.dlc != 8:
             found.broken.append((f"reply {_hex(data)} with DLC {msg.dlc}", DLC_CLAUSE))
             continue
