@@ -72,24 +72,27 @@ def _preflight_outcome(folder: Path) -> str:
     return "failed" if stopped.startswith("start-up check failed") else "passed"
 
 
-def _suite_paths(fault: str | None, targeted: bool) -> list[str]:
-    """suites/ as a whole, or only the modules ``fault`` is made for."""
-    if targeted and fault is not None:
-        return [str(SUITES_DIR / f"{module}.py") for module in TARGET_MODULES[fault]]
+def _suite_paths(faults: tuple[str, ...], targeted: bool) -> list[str]:
+    """suites/ as a whole, or only the modules ``faults`` are made for (each module once, in the order named)."""
+    if targeted and faults:
+        modules = dict.fromkeys(module for fault in faults for module in TARGET_MODULES[fault])
+        return [str(SUITES_DIR / f"{module}.py") for module in modules]
     return [str(SUITES_DIR)]
 
 
 def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None = None,
-              targeted: bool = False) -> RunResult:
+              targeted: bool = False, together: tuple[str, ...] = ()) -> RunResult:
     """One pytest run of suites/ (``targeted``: the fault's own modules) against the twin with ``fault``
-    (strict about inferred rules where the fault is in JUDGED_STRICTLY)."""
-    folder = workdir / (fault or "no-fault")
-    command = [*_suite_paths(fault, targeted), "-q", "-p", "no:cacheprovider",
+    (strict about inferred rules where the fault is in JUDGED_STRICTLY). ``together``: further deviations the
+    twin plays in the same run (the variant matrix's conformant variants; their modules are run too)."""
+    faults = (fault, *together) if fault else together
+    folder = workdir / (f"{faults[0]}+{len(together)}" if together else fault or "no-fault")
+    command = [*_suite_paths(faults, targeted), "-q", "-p", "no:cacheprovider",
                "--device-profile", profile, "--report-dir", str(folder), "--tb=no",
                "--history", "off"]  # a fault's run says nothing about a device: not in the history
-    if fault:
-        command += ["--sim-fault", fault]
-    if fault in JUDGED_STRICTLY:
+    for name in faults:
+        command += ["--sim-fault", name]
+    if set(faults) & JUDGED_STRICTLY:
         command.append(STRICT_OPTION)
     if select:
         command += ["-k", select]

@@ -84,17 +84,60 @@ def plan(profiles: tuple[str, ...] = REPRESENTATIVE_PROFILES,
     return pairs
 
 
-def run_variants(pairs: list[tuple[OpenReading, str]], workdir: Path, workers: int = 2) -> list[VariantRun]:
-    """Each variant against its modules on its profile, ``workers`` suite sessions at a time."""
+def _overrides(variant: str) -> frozenset[tuple[str, str]]:
+    """(behaviour, method) pairs the variant's mixins override in the twin."""
+    from encoder_conformance.sim import node  # noqa: F401  # imports every behaviour, so every mixin is declared
+    from encoder_conformance.sim.faults import mixins_of
 
-    def one(pair: tuple[OpenReading, str]) -> VariantRun:
-        reading, profile = pair
+    return frozenset((behaviour.__name__, name) for behaviour, mixin in mixins_of(variant)
+                     for name in vars(mixin) if not name.startswith("__"))
+
+
+def combine(pairs: list[tuple[OpenReading, str]]) -> list[tuple[str, list[OpenReading]]]:
+    """The pairs as runs: per profile, readings whose variants override no method in common share one twin
+    (and one run of the union of their modules). Readings of different points are independent choices, so a
+    conformant device may take them all at once; a variant whose method another one overrides would be hidden
+    behind it, so those two never share a twin."""
+    runs: list[tuple[str, list[OpenReading], set[tuple[str, str]]]] = []
+    for reading, profile in pairs:
+        taken = _overrides(reading.variant)
+        home = next((run for run in runs if run[0] == profile and not run[2] & taken), None)
+        if home is None:
+            runs.append((profile, [reading], set(taken)))
+        else:
+            home[1].append(reading)
+            home[2].update(taken)
+    return [(profile, readings) for profile, readings, _ in runs]
+
+
+def _restricted(result: RunResult, modules: tuple[str, ...]) -> RunResult:
+    """The outcomes of ``result`` in ``modules`` (and the start-up check, which every reading needs)."""
+    outcomes = {name: outcome for name, outcome in result.outcomes.items()
+                if name == PREFLIGHT or name.split("::")[0] in modules}
+    return RunResult(result.fault, result.returncode, outcomes)
+
+
+def run_variants(pairs: list[tuple[OpenReading, str]], workdir: Path, workers: int = 2) -> list[VariantRun]:
+    """Each variant against its modules on its profile, ``workers`` suite sessions at a time.
+
+    Variants that can share a twin (``combine``) run together, once; a shared run with a failure is run again
+    one variant at a time, so that each failure is charged to the reading that shows it."""
+
+    def one(run: tuple[str, list[OpenReading]]) -> list[VariantRun]:
+        profile, readings = run
         folder = workdir / Path(profile).stem
         folder.mkdir(parents=True, exist_ok=True)
-        return VariantRun(reading, profile, run_suite(profile, reading.variant, folder, targeted=True))
+        variants = tuple(r.variant for r in readings)
+        result = run_suite(profile, variants[0], folder, targeted=True, together=variants[1:])
+        shared = [VariantRun(r, profile, _restricted(result, r.modules)) for r in readings]
+        if len(readings) == 1 or (result.returncode == 0 and all(run.ok for run in shared)):
+            return shared
+        return [VariantRun(r, profile, run_suite(profile, r.variant, folder, targeted=True)) for r in readings]
 
+    order = {(reading.point, profile): n for n, (reading, profile) in enumerate(pairs)}
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        return list(pool.map(one, pairs))
+        runs = [run for batch in pool.map(one, combine(pairs)) for run in batch]
+    return sorted(runs, key=lambda run: order[(run.reading.point, run.profile)])
 
 
 def format_runs(runs: list[VariantRun]) -> str:

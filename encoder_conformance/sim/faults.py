@@ -68,6 +68,12 @@ def assemble(behaviour: type[T], faults: FaultSet) -> type[T]:
     return type(f"Faulty{behaviour.__name__}", (*mixins, behaviour), {})
 
 
+def mixins_of(name: str) -> list[tuple[type, type]]:
+    """(behaviour, mixin) for each behaviour fault ``name`` breaks (every behaviour module must have been
+    imported)."""
+    return [(behaviour, mixin) for behaviour, mixins in _MIXINS.items() for fault, mixin in mixins if fault == name]
+
+
 def implemented_faults() -> dict[str, list[str]]:
     """fault name -> the behaviours it breaks (every behaviour module must have been imported)."""
     found: dict[str, list[str]] = {}
