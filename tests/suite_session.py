@@ -11,7 +11,7 @@ REPO = Path(__file__).resolve().parents[1]
 
 #: two runs at a time on two cores: with three, a twin itself (the device side) is sometimes stalled past its
 #: heartbeat tolerance (seen: a 40 ms late heartbeat and event-timer frame at once, in an EDS-draft twin)
-PARALLEL_RUNS = 2
+PARALLEL_RUNS = 3
 
 
 def run_suite(tmp_path: Path, *args: str) -> tuple[SessionResult, float]:

@@ -10,11 +10,13 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[1]
 TESTER = """
-import time
-from encoder_conformance.sim.process import start_simulator
-sim = start_simulator("waycon-sx")
+import sys, time
+from encoder_conformance.sim.process import launch_simulator
+sim = launch_simulator("waycon-sx", fork=sys.argv[1] == "fork").ready()
 print("SIMPID", sim.process.pid, flush=True)
 time.sleep(120)
 """
@@ -28,8 +30,11 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def test_simulator_stops_when_its_tester_is_killed():
-    tester = subprocess.Popen([sys.executable, "-c", TESTER], cwd=REPO, stdout=subprocess.PIPE, text=True)
+@pytest.mark.parametrize("start", ["new interpreter", "fork"])
+def test_simulator_stops_when_its_tester_is_killed(start: str):
+    """Both ways a simulator is started (sim/process.py): a new interpreter, or a fork of the tester."""
+    tester = subprocess.Popen([sys.executable, "-c", TESTER, start.split()[-1]], cwd=REPO, stdout=subprocess.PIPE,
+                              text=True)
     try:
         assert tester.stdout is not None
         line = tester.stdout.readline()

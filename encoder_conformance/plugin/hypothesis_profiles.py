@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import os
 
-from hypothesis import HealthCheck, settings
-
 PROFILE_ENV = "HYPOTHESIS_PROFILE"
 
 
 def register() -> None:
+    # imported here, at configure time: a process that preloads the plugin (runs/suite_runner.py) must not have
+    # imported hypothesis, which pytest rewrites as a plugin of its own
+    from hypothesis import HealthCheck, settings
+
     settings.register_profile(
         "ci", max_examples=50, deadline=None, derandomize=True, database=None, print_blob=True,
         suppress_health_check=[HealthCheck.too_slow],
@@ -30,6 +32,8 @@ def register() -> None:
 
 def load() -> str:
     """Register the profiles and load the chosen one; its name."""
+    from hypothesis import settings
+
     register()
     name = os.getenv(PROFILE_ENV, "ci" if os.getenv("CI") else "dev")
     settings.load_profile(name)

@@ -41,7 +41,7 @@ def launch_early(session: pytest.Session) -> None:
     log = (folder / "simulator.log") if folder else factory.mktemp("simlog") / "simulator.log"
     nvm = factory.mktemp("simulator") / "nvm.json"
     config.stash[LAUNCHED] = launch_simulator(str(settings.sim_profile.path), settings.node_id,
-                                              list(settings.sim_faults), nvm, log)
+                                              list(settings.sim_faults), nvm, log, fork=True)
 
 
 def take_launched(config: pytest.Config) -> LaunchedSimulator | None:

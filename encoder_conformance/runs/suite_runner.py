@@ -25,7 +25,8 @@ from pathlib import Path
 #: imported once in the fork server (the heavy imports of a session that are no pytest plugin)
 PRELOAD = ["pytest", "_pytest.assertion.rewrite", "_pytest.python", "jinja2", "allure_commons", "attr", "can",
            "canopen", "pydantic", "yaml", "encoder_conformance.profile.loader", "encoder_conformance.dut.device",
-           "encoder_conformance.sim.process"]
+           "encoder_conformance.sim.process", "encoder_conformance.plugin.hooks",
+           "encoder_conformance.sim.serve"]
 #: how long a child may take to stop after SIGTERM before it is killed
 STOP_GRACE_S = 5.0
 

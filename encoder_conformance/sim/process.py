@@ -18,8 +18,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from multiprocessing.connection import Client, Connection
 from pathlib import Path
-from typing import Any
+from typing import IO, Any, Protocol
 
+from encoder_conformance.sim import forked
 from encoder_conformance.sim.control import AUTHKEY, ControlApi, parse_address
 
 __all__ = ["LaunchedSimulator", "SimulatorControl", "SimulatorProcess", "launch_simulator", "parse_address",
@@ -29,9 +30,29 @@ READY_TIMEOUT_S = 30.0
 STOP_TIMEOUT_S = 1.0
 
 
+class ProcessHandle(Protocol):
+    """What the launcher needs of the simulator's process: ``subprocess.Popen``, or a forked one (sim/forked.py)."""
+
+    stdout: IO[str] | None
+
+    @property
+    def pid(self) -> int | None: ...
+
+    @property
+    def returncode(self) -> int | None: ...
+
+    def poll(self) -> int | None: ...
+
+    def wait(self, timeout: float | None = None) -> int: ...
+
+    def terminate(self) -> None: ...
+
+    def kill(self) -> None: ...
+
+
 @dataclass
 class SimulatorProcess:
-    process: subprocess.Popen[str]
+    process: ProcessHandle
     can_url: str
     control: tuple[str, int]
     node_id: int
@@ -68,7 +89,7 @@ class LaunchedSimulator:
     """A simulator process that is starting: ``ready()`` waits for its READY line (a run launches it
     before collecting the tests, so that its start-up overlaps the collection)."""
 
-    process: subprocess.Popen[str]
+    process: ProcessHandle
     command: list[str]
     log_path: Path | None
     _lines: list[str]
@@ -97,25 +118,31 @@ def launch_simulator(
     nvm_path: Path | None = None,
     log_path: Path | None = None,
     extra_args: Sequence[str] = (),
+    fork: bool = False,
 ) -> LaunchedSimulator:
     """Start ``encoder-conformance sim`` in a process of its own; returns at once. ``extra_args`` go to ``sim``
-    (e.g. ``--copies 8 --unconfigured``)."""
-    command = [sys.executable, "-m", "encoder_conformance", "sim", "--profile", profile,
-               "--listen", "127.0.0.1:0", "--control", "127.0.0.1:0", "--ready-line"]
+    (e.g. ``--copies 8 --unconfigured``). ``fork``: as a fork of this process where that is safe (a run's own
+    twin: serving in a fraction of a new interpreter's start-up, sim/forked.py), else a new interpreter."""
+    args = ["--profile", profile, "--listen", "127.0.0.1:0", "--control", "127.0.0.1:0", "--ready-line"]
     if node_id is not None:
-        command += ["--node-id", str(node_id)]
+        args += ["--node-id", str(node_id)]
     for fault in faults or []:
-        command += ["--fault", fault]
+        args += ["--fault", fault]
     if nvm_path is not None:
-        command += ["--nvm", str(nvm_path)]
-    command += list(extra_args)
-    stderr = open(log_path, "w", encoding="utf-8") if log_path else subprocess.DEVNULL  # noqa: SIM115
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    # a session of its own: the terminal's Ctrl-C reaches only the run, which gives the device back first
-    # stdin a pipe that only this process holds: when it ends, however (even SIGKILL), the simulator reads
-    # end-of-file and stops, instead of living on as an orphan holding its ports
-    process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr, text=True,
-                               env=env, start_new_session=True)
+        args += ["--nvm", str(nvm_path)]
+    args += list(extra_args)
+    command = [sys.executable, "-m", "encoder_conformance", "sim", *args]
+    process: ProcessHandle
+    if fork and forked.can_fork():
+        process = forked.fork_simulator(args, str(log_path) if log_path else None)
+    else:
+        stderr = open(log_path, "w", encoding="utf-8") if log_path else subprocess.DEVNULL  # noqa: SIM115
+        env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+        # a session of its own: the terminal's Ctrl-C reaches only the run, which gives the device back first
+        # stdin a pipe that only this process holds: when it ends, however (even SIGKILL), the simulator reads
+        # end-of-file and stops, instead of living on as an orphan holding its ports
+        process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr,
+                                   text=True, env=env, start_new_session=True)
     lines: list[str] = []
 
     def read_ready_line() -> None:
