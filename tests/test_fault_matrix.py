@@ -13,6 +13,7 @@ import pytest
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.runs.fault_matrix import CONTENT_ROOT, format_matrix, run_matrix, run_until_caught
 from encoder_conformance.sim.fault_catalogue import FAULTS, faults_for
+from tests.suite_session import PARALLEL_RUNS
 
 MAIN_PROFILE = "wachendorff-wdga-mt"
 #: profiles with what the WDGA lacks, tried in order: a write-only object; a store-by-reboot command;
@@ -46,7 +47,8 @@ def _functions(result, outcome: str) -> set[str]:
 def main_matrix(tmp_path_factory):
     """Every fault that can show on the main profile (faults of quirks it lacks go to the complements)."""
     faults = faults_for(_effects(MAIN_PROFILE))
-    return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=2, targeted=True)
+    return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=PARALLEL_RUNS,
+                      targeted=True)
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +70,7 @@ def complement_matrices(main_matrix, tmp_path_factory):
         folder = tmp_path_factory.mktemp("matrix-extra")
         applicable = set(faults_for(_effects(profile)))
         matrix = run_until_caught(profile, [f for f in order if f in applicable], folder,
-                                  " or ".join(sorted(uncovered)), workers=2, must_try=unseen & applicable,
+                                  " or ".join(sorted(uncovered)), workers=PARALLEL_RUNS, must_try=unseen & applicable,
                                   targeted=True)
         matrices.append(matrix)
         uncovered -= _functions(matrix[0], "passed")
@@ -104,3 +106,16 @@ def test_every_fault_is_caught(main_matrix, complement_matrices):
 def test_skipped_tests_are_covered_by_a_complement(complement_matrices):
     _, uncovered = complement_matrices
     assert not uncovered, f"tests no profile of the matrix exercises: {sorted(uncovered)}"
+
+
+def test_a_matrix_run_until_caught_is_the_same_whatever_the_workers():
+    """Runs started beside the one that completed the matrix are dropped: the matrix one worker would give."""
+    from encoder_conformance.runs.fault_matrix import RunResult, _as_if_one_at_a_time
+
+    def run(fault: str, *failed: str) -> RunResult:
+        return RunResult(fault, 1, {**{t: "failed" for t in failed}, "m::other": "passed"})
+
+    tried = [run("a", "m::t1"), run("b"), run("c", "m::t2"), run("d", "m::t1", "m::t2")]
+    assert [r.fault for r in _as_if_one_at_a_time(tried, {"m::t1", "m::t2"}, frozenset())] == ["a", "b", "c"]
+    assert [r.fault for r in _as_if_one_at_a_time(tried, {"m::t1", "m::t2"}, frozenset({"d"}))] == list("abcd")
+    assert [r.fault for r in _as_if_one_at_a_time(tried[:2], {"m::t1", "m::t2"}, frozenset())] == ["a", "b"]

@@ -16,6 +16,7 @@ from encoder_conformance.paths import SUITES_DIR
 from encoder_conformance.readings import all_readings
 from encoder_conformance.runs.variant_matrix import REPRESENTATIVE_PROFILES, format_runs, plan, run_variants
 from encoder_conformance.sim.fault_catalogue import FAULTS, TARGET_MODULES, VARIANTS
+from tests.suite_session import PARALLEL_RUNS
 
 #: a source a vendor can look up: a CiA document with its version and a section or table, or a manual's section
 _CITABLE = re.compile(r"(CiA 30[1-9]|CiA 4\d\d)( v\d[\d.]*)? (§|table |figure )\d|manual|M §|§\d")
@@ -54,7 +55,7 @@ def test_every_reading_applies_to_some_representative_profile():
 
 @pytest.fixture(scope="module")
 def variant_runs(tmp_path_factory):
-    return run_variants(plan(REPRESENTATIVE_PROFILES), tmp_path_factory.mktemp("variants"), workers=2)
+    return run_variants(plan(REPRESENTATIVE_PROFILES), tmp_path_factory.mktemp("variants"), workers=PARALLEL_RUNS)
 
 
 def test_every_conformant_variant_passes_on_every_profile_where_it_applies(variant_runs):
@@ -62,3 +63,21 @@ def test_every_conformant_variant_passes_on_every_profile_where_it_applies(varia
     failing = [f"{run.reading.variant} on {run.profile}: {run.bad or f'exit {run.result.returncode}'}"
                f"{'' if run.judged else ' (no test judged)'}" for run in variant_runs if not run.ok]
     assert failing == [], format_runs(variant_runs)
+
+
+def test_readings_share_a_twin_only_where_no_variant_hides_another():
+    """combine(): every (reading, profile) runs exactly once; readings on one twin override no method in common
+    (a mixin in front would hide the other's), and a shared twin plays one profile."""
+    from encoder_conformance.runs.variant_matrix import _overrides, combine
+
+    pairs = plan(REPRESENTATIVE_PROFILES)
+    runs = combine(pairs)
+    assert sorted((r.point, p) for p, readings in runs for r in readings) == sorted((r.point, p) for r, p in pairs)
+    for profile, readings in runs:
+        taken: set[tuple[str, str]] = set()
+        for reading in readings:
+            overridden = _overrides(reading.variant)
+            assert overridden, f"{reading.variant}: no mixin found (is every behaviour imported?)"
+            assert not overridden & taken, f"{reading.variant} on {profile} shares a method with another variant"
+            taken |= overridden
+    assert len(runs) < len(pairs), "no two readings ever share a twin"

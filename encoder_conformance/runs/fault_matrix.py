@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
+from encoder_conformance.plugin.hypothesis_profiles import PROFILE_ENV as HYPOTHESIS_PROFILE_ENV
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
@@ -97,6 +98,7 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     if select:
         command += ["-k", select]
     env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
+    env.setdefault(HYPOTHESIS_PROFILE_ENV, "ci")  # derandomized: the same fuzz examples in every matrix
     completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
     junit = folder / "junit.xml"
     outcomes = _parse_junit(junit) if junit.exists() else {}
@@ -158,7 +160,20 @@ def run_until_caught(profile: str, faults: list[str], workdir: Path, select: str
         assert result.fault is not None  # every run here was started with a fault
         return faults.index(result.fault)
 
-    return baseline, sorted(results, key=tried)  # in the order tried, not finished
+    return baseline, _as_if_one_at_a_time(sorted(results, key=tried), tests, must_try)
+
+
+def _as_if_one_at_a_time(results: list[RunResult], tests: set[str], must_try: frozenset[str]) -> list[RunResult]:
+    """The runs, in the order tried, up to where one worker would have stopped: runs started beside the one that
+    completed the matrix are dropped, so that the matrix is the same whatever the number of workers."""
+    caught: set[str] = set()
+    tried: set[str | None] = set()
+    for count, result in enumerate(results, start=1):
+        caught |= result.keys_with("failed") | result.keys_with("error")
+        tried.add(result.fault)
+        if tests <= caught and must_try <= tried:
+            return results[:count]
+    return results
 
 
 def format_matrix(baseline: RunResult, results: list[RunResult]) -> str:
