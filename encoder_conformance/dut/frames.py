@@ -164,7 +164,7 @@ class FrameLog(can.Listener):
                 self._raise_if_closed()
                 self._cond.wait(remaining)
             self._raise_if_closed()
-            return [m for s, m in self._frames if s > start.seq and predicate(m)]
+            return [m for m in self._after(start.seq) if predicate(m)]
 
 
 def format_frames(frames: list[can.Message]) -> str:

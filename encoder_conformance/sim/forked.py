@@ -5,6 +5,7 @@ line (measured: 0.33 s, three launches of the WDGA twin); a run's first test wai
 has imported most of that already, so a fork of it is serving in a fraction of that. The child is the same
 ``encoder-conformance sim`` command (its own session, stdin, stdout and log file, every other descriptor
 closed), started through multiprocessing's ``fork`` context, whose Process handle waits and signals it.
+The caller passes what the child runs (the simulator's ``serve``): this module imports nothing of it.
 
 Not used where forking is unsafe: another thread could hold a lock the child would inherit (only a process
 with one thread forks), and platforms whose system libraries break after fork (macOS) or that have none.
@@ -22,6 +23,7 @@ import signal
 import subprocess
 import sys
 import threading
+from collections.abc import Callable
 from typing import IO
 
 __all__ = ["ForkedProcess", "can_fork", "fork_simulator"]
@@ -65,12 +67,13 @@ class ForkedProcess:
         self._process.kill()
 
 
-def fork_simulator(args: list[str], log_path: str | None) -> ForkedProcess:
-    """``encoder-conformance sim ARGS`` in a fork of this process (call only where ``can_fork()``)."""
+def fork_simulator(run: Callable[[], int], log_path: str | None) -> ForkedProcess:
+    """``run()`` (which serves the simulator and prints its READY line) in a fork of this process, its exit code
+    the child's (call only where ``can_fork()``)."""
     stdin_read, stdin_write = os.pipe()
     stdout_read, stdout_write = os.pipe()
     context = multiprocessing.get_context("fork")
-    child = context.Process(target=_serve, args=(args, stdin_read, stdout_write, log_path), name="simulator",
+    child = context.Process(target=_serve, args=(run, stdin_read, stdout_write, log_path), name="simulator",
                             daemon=True)  # daemonic: multiprocessing stops it if this process exits normally
     child.start()
     os.close(stdin_read)
@@ -78,8 +81,8 @@ def fork_simulator(args: list[str], log_path: str | None) -> ForkedProcess:
     return ForkedProcess(child, stdin_write, stdout_read)
 
 
-def _serve(args: list[str], stdin_fd: int, stdout_fd: int, log_path: str | None) -> None:
-    """In the child: a session of its own, the three standard streams, nothing else inherited; then ``sim``."""
+def _serve(run: Callable[[], int], stdin_fd: int, stdout_fd: int, log_path: str | None) -> None:
+    """In the child: a session of its own, the three standard streams, nothing else inherited; then ``run``."""
     faulthandler.disable()  # pytest's writes to a descriptor of the parent's
     gc.freeze()  # the parent's heap (a whole pytest session) is never garbage: collections skip it
     os.setsid()  # the terminal's Ctrl-C reaches only the run, which gives the device back first
@@ -94,11 +97,13 @@ def _serve(args: list[str], stdin_fd: int, stdout_fd: int, log_path: str | None)
     sys.stdout = open(1, "w", encoding="utf-8", buffering=1, closefd=False)  # noqa: SIM115
     sys.stderr = open(2, "w", encoding="utf-8", buffering=1, closefd=False)  # noqa: SIM115
     logging.root.handlers.clear()  # the parent's (pytest's capture handlers) would swallow the simulator's log
-    from encoder_conformance.cli.main import main
-
     code = 1
     try:
-        code = main(["sim", *args])
+        code = run()
+    except BaseException:  # the log is the only place a failed start can be read
+        import traceback
+
+        traceback.print_exc()
     finally:
         sys.stdout.flush()
         sys.stderr.flush()

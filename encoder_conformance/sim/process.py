@@ -133,8 +133,14 @@ def launch_simulator(
     args += list(extra_args)
     command = [sys.executable, "-m", "encoder_conformance", "sim", *args]
     process: ProcessHandle
-    if fork and forked.can_fork():
-        process = forked.fork_simulator(args, str(log_path) if log_path else None)
+    if fork and not extra_args and forked.can_fork():
+        def serve_one() -> int:  # what ``sim`` with ``args`` does, less its usage checks (our own arguments)
+            from encoder_conformance.sim.serve import plan_nodes, serve
+
+            plan = plan_nodes([profile], [] if node_id is None else [node_id])
+            return serve(plan, "127.0.0.1:0", "127.0.0.1:0", list(faults or []), nvm_path, True)
+
+        process = forked.fork_simulator(serve_one, str(log_path) if log_path else None)
     else:
         stderr = open(log_path, "w", encoding="utf-8") if log_path else subprocess.DEVNULL  # noqa: SIM115
         env = {**os.environ, "PYTHONUNBUFFERED": "1"}
