@@ -9,9 +9,14 @@ from encoder_conformance.runs.suite_runner import SessionResult, run_pytest
 
 REPO = Path(__file__).resolve().parents[1]
 
-#: two runs at a time on two cores: with three, a twin itself (the device side) is sometimes stalled past its
-#: heartbeat tolerance (seen: a 40 ms late heartbeat and event-timer frame at once, in an EDS-draft twin)
-PARALLEL_RUNS = 3
+#: suite runs at a time on two cores. A run mostly waits for its twin (a WDGA run: ~5 s of CPU in 17 s; with four
+#: at a time the machine was 57 % idle on average over the twins, EDS, variant and fault matrices). Before the
+#: twin was forked from its run (sim/forked.py), every twin start was a 0.3 s burst of imports, and with three runs
+#: at a time a twin was sometimes stalled past its heartbeat tolerance (seen: a 40 ms late heartbeat)
+PARALLEL_RUNS = 4
+#: full runs against the shipped twins: half of their time is the POSITAL's 4 s boot-ups and the SIKO's execution
+#: times, spent idle (80 % idle with four at a time)
+FULL_RUN_PARALLEL = 6
 
 
 def run_suite(tmp_path: Path, *args: str) -> tuple[SessionResult, float]:

@@ -23,6 +23,7 @@ from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
+from tests.suite_session import PARALLEL_RUNS
 
 PROFILE = "wachendorff-wdga-mt"
 #: the suites' helpers beside their modules (a basis chosen there counts as the suites')
@@ -69,10 +70,10 @@ def _run(fault: str, strict: bool, workdir: Path) -> dict[str, str]:
 
 @pytest.fixture(scope="module")
 def walk(tmp_path_factory) -> dict[tuple[str, bool], dict[str, str]]:
-    """Every strictly judged fault, without and with --strict-inferred (two runs at a time)."""
+    """Every strictly judged fault, without and with --strict-inferred (a few runs at a time)."""
     workdir = tmp_path_factory.mktemp("inferred-walk")
     runs = [(fault, strict) for fault in sorted(JUDGED_STRICTLY) for strict in (False, True)]
-    with ThreadPoolExecutor(max_workers=2) as pool:
+    with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
         results = list(pool.map(lambda run: _run(*run, workdir), runs))
     return dict(zip(runs, results, strict=True))
 

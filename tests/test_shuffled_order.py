@@ -19,6 +19,7 @@ import pytest
 from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import TARGET_MODULES
+from tests.suite_session import PARALLEL_RUNS
 
 PROFILE = "wachendorff-wdga-mt"
 #: CI runs one order every time (replayable); set ENCODER_CONFORMANCE_SHUFFLE_SEED to try others
@@ -60,14 +61,14 @@ def _run(folder: Path, variant: str | None, shuffled: bool) -> dict[str, str]:
 
 @pytest.fixture(scope="module")
 def pairs(tmp_path_factory):
-    """(what, usual order, shuffled) for the twin and each variant; two suite sessions at a time."""
+    """(what, usual order, shuffled) for the twin and each variant; a few suite sessions at a time."""
     jobs = [(variant, shuffled) for variant in (None, *VARIANTS) for shuffled in (False, True)]
 
     def one(job: tuple[str | None, bool]) -> dict[str, str]:
         variant, shuffled = job
         return _run(tmp_path_factory.mktemp(f"{variant or 'twin'}-{'shuffled' if shuffled else 'usual'}"), *job)
 
-    with ThreadPoolExecutor(max_workers=2) as pool:
+    with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
         results = list(pool.map(one, jobs))
     return [(variant or "twin", results[2 * i], results[2 * i + 1]) for i, variant in enumerate((None, *VARIANTS))]
 
