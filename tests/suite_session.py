@@ -15,8 +15,9 @@ REPO = Path(__file__).resolve().parents[1]
 #: at a time a twin was sometimes stalled past its heartbeat tolerance (seen: a 40 ms late heartbeat)
 PARALLEL_RUNS = 4
 #: full runs against the shipped twins: half of their time is the POSITAL's 4 s boot-ups and the SIKO's execution
-#: times, spent idle (80 % idle with four at a time)
-FULL_RUN_PARALLEL = 6
+#: times, spent idle. Six at a time passed in two CI runs of three; in the third, two runs' SDO answers reached the
+#: tester 400 ms after the twin sent them (a host stall), and two WayCon twins failed: four, as the others
+FULL_RUN_PARALLEL = 4
 
 
 def run_suite(tmp_path: Path, *args: str) -> tuple[SessionResult, float]:
