@@ -13,11 +13,9 @@ REPO = Path(__file__).resolve().parents[1]
 #: at a time the machine was 57 % idle on average over the twins, EDS, variant and fault matrices). Before the
 #: twin was forked from its run (sim/forked.py), every twin start was a 0.3 s burst of imports, and with three runs
 #: at a time a twin was sometimes stalled past its heartbeat tolerance (seen: a 40 ms late heartbeat)
+#: The full twin runs take the same number: they idle through the POSITAL's boot-ups and the SIKO's execution
+#: times, yet six at a time stalled the host in one CI run of three (SDO answers reached the tester 400 ms late)
 PARALLEL_RUNS = 4
-#: full runs against the shipped twins: half of their time is the POSITAL's 4 s boot-ups and the SIKO's execution
-#: times, spent idle. Six at a time passed in two CI runs of three; in the third, two runs' SDO answers reached the
-#: tester 400 ms after the twin sent them (a host stall), and two WayCon twins failed: four, as the others
-FULL_RUN_PARALLEL = 4
 
 
 def run_suite(tmp_path: Path, *args: str) -> tuple[SessionResult, float]:

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.profile.loader import iter_profile_ids, load_profile
-from tests.suite_session import FULL_RUN_PARALLEL, REPO, run_suite
+from tests.suite_session import PARALLEL_RUNS, REPO, run_suite
 
 #: every shipped profile, and the self-test variants with the optional PDO features none of them has (inhibit
 #: time, SYNC start value, 1019h, dummy mapping) and with SDO block transfer, so that those checks pass against
@@ -34,7 +34,7 @@ def twin_runs(tmp_path_factory):
         folder = tmp_path_factory.mktemp(Path(profile).stem)
         return profile, folder, *run_suite(folder, "--device-profile", profile)
 
-    with ThreadPoolExecutor(max_workers=FULL_RUN_PARALLEL) as pool:
+    with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
         ordered = sorted(PROFILES, key=_expected_cost, reverse=True)
         results = {profile: rest for profile, *rest in pool.map(one, ordered)}
     return results
