@@ -57,6 +57,7 @@ def _run(fault: str, strict: bool, workdir: Path) -> dict[str, str]:
     result = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
     junit = folder / "junit.xml"
     assert junit.exists(), result.output[-3000:]
+    assert "could not test" not in result.output, f"{fault}: the run did not test the device\n{result.output[-3000:]}"
     outcomes = {}
     for case in ET.parse(junit).getroot().iter("testcase"):
         name = f"{case.get('classname', '').split('.')[-1]}::{case.get('name', '').split('[')[0]}"

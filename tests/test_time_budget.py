@@ -8,8 +8,11 @@ import threading
 import time
 from pathlib import Path
 
+import can
+
 from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.dut.time_budget import TimeBudget, difference
+from encoder_conformance.dut.tracing_bus import TracingBus
 from tests.suite_session import run_suite
 
 
@@ -44,6 +47,24 @@ def test_an_answer_wait_that_times_out_is_a_silence():
     booked = difference(time_budget.BUDGET.snapshot(), before)
     assert booked.keys() == {"silence"}
     assert booked["silence"] >= 0.03
+
+
+def test_a_frame_handed_to_the_bus_is_traffic_and_an_sdo_transfer_books_its_own_once():
+    """A raw frame's send is booked as ``send`` (the interface's time); inside a transfer it is the transfer's."""
+    from encoder_conformance.dut import time_budget
+
+    log = FrameLog()
+    bus = TracingBus(can.interface.Bus(interface="virtual", channel="budget-send"), log)
+    try:
+        before = time_budget.BUDGET.snapshot()
+        bus.send(can.Message(arbitration_id=0x80, data=b"", is_extended_id=False))
+        assert difference(time_budget.BUDGET.snapshot(), before).keys() == {"send"}
+        before = time_budget.BUDGET.snapshot()
+        with time_budget.BUDGET.booking("sdo"):
+            bus.send(can.Message(arbitration_id=0x605, data=bytes(8), is_extended_id=False))
+        assert difference(time_budget.BUDGET.snapshot(), before).keys() == {"sdo"}
+    finally:
+        bus.shutdown()
 
 
 def test_a_run_reports_its_budget(tmp_path: Path):

@@ -50,7 +50,7 @@ class DeviceIdentity:
 
 def _optional_u32(dut: DeviceUnderTest, index: int, sub: int, malformed: list[str]) -> int | None:
     try:
-        data = dut.read(index, sub)
+        data = dut.read_patiently(index, sub)
     except SdoAbortedError:
         return None
     if len(data) != 4:
@@ -70,7 +70,7 @@ def text_of(data: bytes) -> str:
 def read_identity(dut: DeviceUnderTest) -> DeviceIdentity:
     """Everything the device says about itself; absent objects read as None."""
     try:
-        name = text_of(dut.read(0x1008, 0))
+        name = text_of(dut.read_patiently(0x1008, 0))
     except SdoAbortedError:
         name = None
     malformed: list[str] = []

@@ -143,16 +143,10 @@ def read_values(dut: DeviceUnderTest, keys: list[Key]) -> dict[Key, bytes | None
     """
     values: dict[Key, bytes | None] = {}
     for index, sub in keys:
-        for attempt in range(2):
-            try:
-                values[(index, sub)] = dut.read(index, sub)
-                break
-            except SdoAbortedError:
-                values[(index, sub)] = None
-                break
-            except AssertionError:
-                if attempt or dut.lost:
-                    raise
+        try:
+            values[(index, sub)] = dut.read_patiently(index, sub)
+        except SdoAbortedError:
+            values[(index, sub)] = None
     return values
 
 

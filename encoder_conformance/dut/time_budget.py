@@ -1,11 +1,12 @@
 """What a run owes the device, measured: every wait the tester makes for it, booked to what it waits for.
 
-The categories: ``sdo`` (an SDO transfer through canopen, request to last answer), ``answer`` (a frame waited
-for that came: the device's answer time), ``silence`` (an observation window, or a wait that ended without the
-frame: owed in full), ``periodic`` (several periodic frames captured), ``boot-up`` (reset or power-on to the
-boot-up message), ``execution`` (a manual's execution time waited out) and ``generation`` (a fuzzing budget the
-user gave, ``--fuzz-budget``: owed by choice). What a run takes beyond their sum
-is the tester's own work: collection, evidence, reports, the plugin.
+The categories: ``sdo`` (an SDO transfer through canopen, request to last answer), ``send`` (a frame handed to the
+bus interface outside a transfer: the adapter's time to take it, bus traffic as an SDO transfer's own frames are),
+``answer`` (a frame waited for that came: the device's answer time), ``silence`` (an observation window, or a wait
+that ended without the frame: owed in full), ``periodic`` (several periodic frames captured), ``boot-up`` (reset
+or power-on to the boot-up message), ``execution`` (a manual's execution time waited out) and ``generation`` (a
+fuzzing budget the user gave, ``--fuzz-budget``: owed by choice). What a run takes beyond their sum is the
+tester's own work: collection, evidence, reports, the plugin.
 
 Only the thread that runs the tests books (a background capture's waits overlap the test's own), and nested
 waits count once, under the outermost booking (a boot-up wait made of frame waits is a boot-up).
@@ -19,7 +20,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
-CATEGORIES = ("sdo", "answer", "silence", "periodic", "boot-up", "execution", "generation")
+CATEGORIES = ("sdo", "send", "answer", "silence", "periodic", "boot-up", "execution", "generation")
 
 
 @dataclass

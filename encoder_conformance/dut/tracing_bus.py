@@ -22,6 +22,7 @@ from typing import Any
 import can
 
 from encoder_conformance.dut.frames import FrameLog
+from encoder_conformance.dut.time_budget import BUDGET
 from encoder_conformance.errors import BusLostError
 
 log = logging.getLogger(__name__)
@@ -54,7 +55,8 @@ class TracingBus:
         # returns, and the log and the traces keep the order the frames had on the bus
         self._log.record_sent(msg)
         try:
-            self._bus.send(msg, timeout)
+            with BUDGET.booking("send"):  # the interface's time to take the frame: bus traffic, not the tester's
+                self._bus.send(msg, timeout)
         except (can.CanError, OSError, ValueError, RuntimeError) as exc:
             reason = f"the CAN bus failed on send: {type(exc).__name__}: {exc}"
             self._log.close(reason)

@@ -10,7 +10,8 @@ import pytest
 
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.plugin.reporting import report_dir, runs_suites
-from encoder_conformance.sim.process import LaunchedSimulator, SimulatorControl, launch_simulator
+from encoder_conformance.sim.control import ControlApi
+from encoder_conformance.sim.process import LaunchedSimulator, launch_simulator
 
 LAUNCHED = pytest.StashKey[LaunchedSimulator]()
 
@@ -20,7 +21,7 @@ class SimulatorEndpoint:
     """How the test side reaches a simulator: bus arguments plus the control channel."""
 
     bus_kwargs: dict[str, Any]
-    control: SimulatorControl
+    control: ControlApi  # a separate process's socket, or the in-process host's LocalControl
     description: str
 
 
