@@ -19,6 +19,7 @@ from encoder_conformance.config.station import StationError, load_station
 from encoder_conformance.dut.custody import Custody, RestoreRecord
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.encoder_access import EncoderAccess
+from encoder_conformance.dut.patient_read import read_patiently
 from encoder_conformance.dut.persist import StoreCommand, persist_entry, store_commands_for
 from encoder_conformance.dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
 from encoder_conformance.dut.reference_custody import ReferenceCustody
@@ -424,9 +425,9 @@ def test_a_read_that_timed_out_is_asked_once_more_while_the_device_answers():
     test' (a fresh CI run lost the identity read 1008h this way, four suite runs at a time on two cores); a device
     that is gone is not asked again."""
     device = _late_once()
-    assert DeviceUnderTest.read_patiently(device, 0x1008, 0) == b"\x05"  # type: ignore[arg-type]
+    assert read_patiently(device, 0x1008, 0) == b"\x05"  # type: ignore[arg-type]
     assert device.calls == [(0x1008, 0), (0x1008, 0)]
     gone = _late_once(lost="no answer to SDO upload 1008h.00 nor to 3 probes of 1000h")
     with pytest.raises(AssertionError, match="No SDO response"):
-        DeviceUnderTest.read_patiently(gone, 0x1008, 0)  # type: ignore[arg-type]
+        read_patiently(gone, 0x1008, 0)  # type: ignore[arg-type]
     assert gone.calls == [(0x1008, 0)]

@@ -199,17 +199,6 @@ class DeviceUnderTest:
             code = exc.code
         raise SdoAborted(code)  # outside canopen's except block: see SdoAborted
 
-    def read_patiently(self, index: int, sub: int = 0) -> bytes:
-        """``read``, asked once more when it timed out while the device still answers: for what needs the value
-        (custody, identity), not for a verdict on the answer time, which the timing suites judge. A late answer
-        on a loaded tester host is far more often the host than the device."""
-        try:
-            return self.read(index, sub)
-        except AssertionError:
-            if self.lost:
-                raise
-        return self.read(index, sub)
-
     def write(self, index: int, sub: int, data: bytes) -> None:
         self._check_alive()
         mark = self.frames.mark()

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.patient_read import read_patiently
 from encoder_conformance.profile.model import DeviceProfile
 
 #: what a device without a serial number reads (SIKO WV58M manual p.37-38: 650Bh = FFFFFFFFh "not supported")
@@ -50,7 +51,7 @@ class DeviceIdentity:
 
 def _optional_u32(dut: DeviceUnderTest, index: int, sub: int, malformed: list[str]) -> int | None:
     try:
-        data = dut.read_patiently(index, sub)
+        data = read_patiently(dut, index, sub)
     except SdoAbortedError:
         return None
     if len(data) != 4:
@@ -70,7 +71,7 @@ def text_of(data: bytes) -> str:
 def read_identity(dut: DeviceUnderTest) -> DeviceIdentity:
     """Everything the device says about itself; absent objects read as None."""
     try:
-        name = text_of(dut.read_patiently(0x1008, 0))
+        name = text_of(read_patiently(dut, 0x1008, 0))
     except SdoAbortedError:
         name = None
     malformed: list[str] = []

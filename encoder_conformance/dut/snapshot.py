@@ -19,6 +19,7 @@ from pathlib import Path
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut.patient_read import read_patiently
 from encoder_conformance.dut.reference_point import ReferencePoint, preset_keys
 from encoder_conformance.dut.store_watch import store_command_objects
 from encoder_conformance.profile.model import DeviceProfile, EntrySpec
@@ -144,7 +145,7 @@ def read_values(dut: DeviceUnderTest, keys: list[Key]) -> dict[Key, bytes | None
     values: dict[Key, bytes | None] = {}
     for index, sub in keys:
         try:
-            values[(index, sub)] = dut.read_patiently(index, sub)
+            values[(index, sub)] = read_patiently(dut, index, sub)
         except SdoAbortedError:
             values[(index, sub)] = None
     return values
