@@ -7,9 +7,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from canopen.sdo.exceptions import SdoAbortedError
+
 from encoder_conformance.cia.cia301 import PDO_MAPPING_OFFSET
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.pdo_mapping import Entry, read_mapping
+from encoder_conformance.dut.sdo_frames import abort_name
 from encoder_conformance.dut.settings_journal import SettingsJournal
 from encoder_conformance.dut.tpdo_choice import TpdoChoice
 from encoder_conformance.dut.tpdo_while_invalid import WhileInvalid
@@ -56,7 +59,15 @@ class TpdoUnderTest:
         if cob_id is not None:
             self.journal.write(self.comm, 1, cob_id.to_bytes(4, "little"))
         if trans_type is not None and self.writable(2):
-            self.journal.write(self.comm, 2, bytes([trans_type]))
+            try:
+                self.journal.write(self.comm, 2, bytes([trans_type]))
+            except SdoAbortedError as exc:  # the profile's claim, not the test's subject: say which claim failed
+                if trans_type not in self.dut.profile.capabilities.tpdo_transmission_types:
+                    raise
+                raise AssertionError(
+                    f"{self.comm:04X}h.02 = {trans_type} refused with {abort_name(exc.code)}, although the profile "
+                    "lists it in capabilities.tpdo_transmission_types: the device differs from its profile (check "
+                    "the profile against the manual)") from None
         if event_timer is not None:
             self.journal.write(self.comm, 5, event_timer.to_bytes(2, "little"))
 
