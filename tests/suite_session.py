@@ -12,7 +12,7 @@ REPO = Path(__file__).resolve().parents[1]
 #: suite runs at a time on two cores. A run mostly waits for its twin (a WDGA run: ~5 s of CPU in 17 s; with four
 #: at a time the machine was 57 % idle on average over the twins, EDS, variant and fault matrices). Before the
 #: twin was forked from its run (sim/forked.py), every twin start was a 0.3 s burst of imports, and with three runs
-#: at a time a twin was sometimes stalled past its heartbeat tolerance (seen: a 40 ms late heartbeat)
+#: at a time a twin was sometimes stalled past its heartbeat tolerance (seen: a 40 ms late heartbeat).
 #: The full twin runs take the same number: they idle through the POSITAL's boot-ups and the SIKO's execution
 #: times, yet six at a time stalled the host in one CI run of three (SDO answers reached the tester 400 ms late)
 PARALLEL_RUNS = 4

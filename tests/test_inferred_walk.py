@@ -21,6 +21,7 @@ import pytest
 from encoder_conformance import suite_support
 from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
+from encoder_conformance.run_summary import RunSummary
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
 from tests.suite_session import PARALLEL_RUNS
@@ -57,7 +58,8 @@ def _run(fault: str, strict: bool, workdir: Path) -> dict[str, str]:
     result = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
     junit = folder / "junit.xml"
     assert junit.exists(), result.output[-3000:]
-    assert "could not test" not in result.output, f"{fault}: the run did not test the device\n{result.output[-3000:]}"
+    stopped = RunSummary.read(folder).could_not_test
+    assert stopped is None, f"{fault}: the run did not test the device: {stopped}\n{result.output[-3000:]}"
     outcomes = {}
     for case in ET.parse(junit).getroot().iter("testcase"):
         name = f"{case.get('classname', '').split('.')[-1]}::{case.get('name', '').split('[')[0]}"
