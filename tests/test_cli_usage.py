@@ -241,3 +241,16 @@ def test_run_help_documents_every_option_and_the_pytest_side(capsys):
         assert f"  {pytest_side} " in text
     assert "go to pytest" in text
     assert "default" in text
+
+
+@pytest.mark.parametrize(("passed_on", "allure_loaded"), [
+    ([], False), (["--allure"], True), (["--alluredir=out"], True), (["--alluredir", "out"], True),
+    (["-k", "x"], False),
+])
+def test_a_run_loads_allure_pytest_only_where_results_are_asked_for(passed_on, allure_loaded):
+    from encoder_conformance.cli.run import unused_plugins
+
+    blocked = unused_plugins(passed_on)
+    assert ("no:allure_pytest" not in blocked) == allure_loaded
+    assert "no:anyio" in blocked
+    assert all(a == "-p" for a in blocked[::2])

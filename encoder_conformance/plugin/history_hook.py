@@ -17,7 +17,6 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.history import spool
-from encoder_conformance.history.certificate import write_certificate
 from encoder_conformance.history.db import OFF, HistoryError, Target, history_path, record_new
 from encoder_conformance.history.sync import send_waiting
 from encoder_conformance.history.target import target_key
@@ -59,6 +58,8 @@ def _record(config: pytest.Config) -> None:
     certificate = None
     if summary.kind == "accept":
         try:
+            from encoder_conformance.history.certificate import write_certificate  # jinja2: acceptance runs only
+
             files = write_certificate(summary, Path(summary.report_dir))
         except OSError as exc:
             _say(config, f"certificate: not written ({exc}); make it later with 'encoder-conformance history show "

@@ -73,7 +73,7 @@ def allure_active(config: pytest.Config) -> bool:
 
 def start_background_writers(config: pytest.Config) -> None:
     """Allure's result files are written off the test thread (see allure_writer)."""
-    if report_dir(config) is not None and (writer := write_in_background()) is not None:
+    if report_dir(config) is not None and allure_active(config) and (writer := write_in_background()) is not None:
         config.stash[ALLURE_WRITER] = writer
 
 
