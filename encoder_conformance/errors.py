@@ -26,6 +26,8 @@ The exit code a class leads to is set where it is caught (``exit_codes.py`` name
           +-- PowerSwitchError          the bench's power switch failed (dut/power.py)
           +-- CannotPersist             the profile gives no way to store an entry (dut/persist.py)
           +-- NoUsableTpdo              no TPDO of the profile can serve a test: a skip (dut/tpdo_choice.py)
+          +-- HeldByPersistentError     an error no reset clears keeps the device out of the state a test needs:
+          |                             not testable, a skip (dut/persistent_error.py)
           |   the simulator (control flow of its SDO server, never seen by a test)
           +-- SdoAbort                  makes the twin's SDO server answer with an abort (sim/sdo_server.py)
           +-- SdoNoReply                makes the twin's SDO server send nothing (sim/sdo_server.py)
@@ -113,6 +115,11 @@ class NoUsableTpdo(EncoderConformanceError):
     def __init__(self, reason: str, deviations: list[tuple[str, str]]) -> None:
         super().__init__(reason)
         self.deviations = deviations
+
+
+class HeldByPersistentError(EncoderConformanceError):
+    """The device keeps an error that NMT reset communication does not clear and, as CiA 301 allows (1029h), stays
+    out of the state the test needs (operational): the test cannot be run; the message says why (a skip)."""
 
 
 class SdoAbort(EncoderConformanceError):

@@ -32,6 +32,7 @@ from encoder_conformance.dut.emcy_trigger import HeartbeatTimeout, SyncLengthErr
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
+from encoder_conformance.dut.persistent_error import raise_if_held_by_error
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import inconclusive_if_host_late
 
@@ -148,6 +149,7 @@ def test_error_reset_emcy_when_cause_goes_away(dut, emcy, evidence):
     loses bit 0."""
     evidence.rests_on("cia", "CiA 301 §7.2.7 (EMCY 0000h: error reset or no error)")
     trigger = emcy.trigger(clears=True)
+    raise_if_held_by_error(dut, "the error reset", "so bit 0 stays set whatever the test's error does")
     emcy.wait(trigger.fire(), trigger, f"after {trigger.name}")
     frame = emcy.wait(trigger.clear(), trigger, "after the cause went away", code=EmcyCode.ERROR_RESET)
     register = dut.read_uint(ERROR_REGISTER)

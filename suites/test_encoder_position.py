@@ -364,6 +364,7 @@ def _sync_or_timer(dut, comm: int) -> tuple[int, int | None] | None:
 
 
 @pytest.mark.requires("tpdos")
+@pytest.mark.usefixtures("no_error_left")  # NMT start: no error may hold the device out of operational
 def test_position_in_tpdo_equals_sdo(encoder, dut, settings_journal, back_to_preoperational, evidence, pytestconfig):
     """With the shaft at rest, the position a TPDO carries equals 6004h read by SDO before and after it (after a
     preset away from the raw counts, where destructive changes are allowed)."""
@@ -439,6 +440,7 @@ def test_speed_value_in_measuring_units_per_second(encoder, evidence):
 
 
 @pytest.mark.destructive
+@pytest.mark.usefixtures("no_error_left")  # NMT start: no error may hold the device out of operational
 def test_limit_switch_flags_in_the_process_value(encoder, dut, settings_journal, back_to_preoperational, evidence):
     """Documented quirk: enabled limit switches set their flag bit in the process value a TPDO carries while the
     position is beyond the limit (Min: below, Max: above), and clear it when the limit moves past the position."""

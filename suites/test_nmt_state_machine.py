@@ -41,6 +41,7 @@ from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, S
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver
+from encoder_conformance.dut.persistent_error import raise_if_held_by_error
 from encoder_conformance.dut.sdo_frames import upload_request
 from encoder_conformance.dut.settings_journal import SettingsJournal
 from encoder_conformance.models.nmt import NmtModel, Tracked
@@ -510,6 +511,8 @@ def test_nmt_sequences_follow_the_cia301_model(dut, settings_journal, back_to_pr
     values and the traffic CiA 301 gives for it (heartbeat byte, SDO and PDO per state, reloads on reset)."""
     evidence.rests_on("cia", "CiA 301 §7.3.2.2 (state diagram, initialisation reloads, services per state), "
                              "§7.2.8.3.1 (NMT addressing), §7.2.8.3.2.2 (heartbeat state byte)")
+    # the model knows no error behaviour: an error the device keeps may hold it out of operational at any step
+    raise_if_held_by_error(dut, "the NMT state model")
     found = DeviceValues(dut, evidence)
     run = NmtRun(dut, settings_journal, found, ResetBudget(RESET_BUDGET_S), _other_node(dut))
     evidence.note("followed values: " + (", ".join(f"{t.label} (stored {t.stored})" for t in found.stored.values())

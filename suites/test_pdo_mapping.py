@@ -179,6 +179,7 @@ def test_default_mapping_names_mappable_objects(dut: DeviceUnderTest, evidence: 
 
 # -- the procedure and the payload ---------------------------------------------------------------------------
 
+@pytest.mark.usefixtures("no_error_left")  # NMT start: no error may hold the device out of operational
 def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_journal, shaft,
                                                evidence: Evidence) -> None:
     """A new mapping written by the CiA 301 procedure is accepted and the TPDO carries the mapped objects in
@@ -377,6 +378,7 @@ def test_documented_procedure_with_pdo_valid(dut: DeviceUnderTest, variable_tpdo
 
 # -- dummy entries and fixed mappings ---------------------------------------------------------------------
 
+@pytest.mark.usefixtures("no_error_left")  # NMT start: no error may hold the device out of operational
 def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: Evidence) -> None:
     """Where the profile declares dummy mapping (capabilities.pdo_dummy_mapping, EDS [DummyUsage]), a dummy entry
     is accepted and takes its data type's bytes in the TPDO: the next object follows it (CiA 301 §7.4.7.1,

@@ -11,6 +11,7 @@ import pytest
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid
 from encoder_conformance.dut.frames import Mark, format_frames
+from encoder_conformance.dut.persistent_error import raise_if_held_by_error
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
@@ -46,7 +47,9 @@ def _start(dut, request) -> None:
     period = request.getfixturevalue("heartbeat")
     mark = dut.nmt("start")
     window = (dut.profile.timing.nmt_settle_ms + 2 * period) / 1000
-    assert dut.wait_heartbeat(mark, window, state=0x05) is not None, "no heartbeat 05h after NMT start"
+    if dut.wait_heartbeat(mark, window, state=0x05) is None:
+        raise_if_held_by_error(dut, "NMT start")  # an error the device keeps may hold it in pre-operational
+        raise AssertionError("no heartbeat 05h after NMT start")
 
 
 def _window(dut) -> float:

@@ -70,6 +70,7 @@ class EmcyCode(IntEnum):
     """EMCY error codes (CiA 301 §7.2.7.1 table 21) the simulator and the suites name."""
 
     ERROR_RESET = 0x0000  # error reset or no error
+    DEVICE_HARDWARE = 0x5000  # device hardware (CANopenNode's code for a failed non-volatile memory at start-up)
     COMMUNICATION = 0x8100  # communication, generic (CANopenNode's code for a SYNC time-out)
     HEARTBEAT = 0x8130  # life guard error or heartbeat error
     SYNC_LENGTH = 0x8240  # unexpected SYNC data length

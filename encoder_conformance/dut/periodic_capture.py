@@ -22,6 +22,7 @@ from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark
 from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe, TwinLateness
 from encoder_conformance.dut.nmt_preconditions import error_register, return_to_preoperational
+from encoder_conformance.dut.persistent_error import describe_hold, persisting_error
 from encoder_conformance.dut.settings_journal import SettingsJournal
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
@@ -55,6 +56,7 @@ class PeriodicCapture:
     host: HostLatency | None = None  # how late the tester's host ran during the capture
     started: bool = False  # the node was started (NMT operational) for the TPDO stream
     clock: str = ""  # which clock stamped the frames (FrameLog.clock)
+    kept_error: int = 0  # 1001h after the reset communication that was to clear an error left before the capture
 
     @classmethod
     def at_test_period(cls, dut: DeviceUnderTest, count: int) -> PeriodicCapture:
@@ -103,7 +105,10 @@ class PeriodicCapture:
             self.started = True
             started = dut.nmt("start")
             problem = _not_operational(dut, started, beat) if beat in streams else None
-            if problem is not None:
+            if problem is not None and self.kept_error:  # an error no reset clears may hold it in pre-operational
+                timer.skip = describe_hold(dut, "the event-timer TPDO stream", self.kept_error)
+                streams.remove(timer)
+            elif problem is not None:
                 timer.error = problem
                 streams.remove(timer)
         mark = dut.frames.mark()
@@ -122,15 +127,16 @@ class PeriodicCapture:
 
     def _no_error_left(self, dut: DeviceUnderTest) -> None:
         """1001h = 0 before the capture; an error left active by an earlier test is cleared by NMT reset
-        communication (its boot-up waited for), and both streams say so."""
+        communication (its boot-up waited for), and both streams say so. An error the reset does not clear is
+        kept (``kept_error``): where it holds the device out of operational, the TPDO stream is not testable."""
         found = error_register(dut)
         if not found:
             return
-        mark = dut.nmt("reset-communication")
-        booted = dut.wait_bootup(mark) is not None
-        note = (f"1001h = {found:02X}h before the capture (an earlier test left an error active): NMT reset "
-                f"communication {'cleared it' if booted else 'sent, but no boot-up came'} (1001h now "
-                f"{error_register(dut) if booted else found:02X}h)")
+        self.kept_error = persisting_error(dut) or 0  # NMT reset communication, unless it survived one already
+        note = (f"1001h = {found:02X}h before the capture: "
+                + (f"the device keeps it after NMT reset communication (1001h = {self.kept_error:02X}h)"
+                   if self.kept_error else f"NMT reset communication sent to clear it (1001h now "
+                                           f"{error_register(dut):02X}h)"))
         self.heartbeat.notes.append(note)
         self.event_timer.notes.append(note)
 

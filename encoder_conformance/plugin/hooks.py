@@ -18,7 +18,13 @@ from typing import Any
 
 import pytest
 
-from encoder_conformance.errors import BusLostError, BusSetupError, DutLostError, ProfileError
+from encoder_conformance.errors import (
+    BusLostError,
+    BusSetupError,
+    DutLostError,
+    HeldByPersistentError,
+    ProfileError,
+)
 from encoder_conformance.paths import CONTENT_ROOT
 from encoder_conformance.plugin import (
     bus_trace,
@@ -143,6 +149,10 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
         # the tester lost its bus: not the device's failure, and the test did not run to its end
         report.outcome = "skipped"
         report.longrepr = (str(item.path), item.location[1] or 0, f"not run to the end: {exc}")
+    elif isinstance(exc, HeldByPersistentError):
+        # the device keeps an error that holds it out of the state the test needs: not testable, not a verdict
+        report.outcome = "skipped"
+        report.longrepr = (str(item.path), item.location[1] or 0, str(exc))
     elif isinstance(exc, DutLostError):
         report.longrepr = str(exc)  # one line: the device is gone (note_loss adds the last frames sent)
     outcomes.classify(item, call, report)  # no finding about the device: an internal error of the tool

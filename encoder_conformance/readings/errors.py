@@ -71,6 +71,26 @@ READINGS: list[OpenReading] = [
         requires=("emcy",),
     ),
     OpenReading(
+        point="persistent-error-holds-pre-operational",
+        question="The device finds a failure at every start-up that no reset clears (e.g. its non-volatile memory "
+                 "cannot be read): may it refuse to stay in operational?",
+        source=ERROR_BEHAVIOUR + '; §7.2.7.1 table 21: 5000h (device hardware). CANopenNode\'s Linux demo device '
+               'started without its storage files reports EMCY 5000h with 1001h = 01h after every boot-up and '
+               'leaves operational at once (its default NMT control: no operational while 1001h is set)',
+        readings=("no failure at start-up: NMT start reaches operational",
+                  "a failure found at every start-up (1001h set again after each reset communication) keeps the "
+                  "device in pre-operational: a test that needs operational, or a device without an error, is not "
+                  "testable and says so (a skip naming 1001h and the newest 1003h entry), never a failure"),
+        variant="device_error_at_start",
+        variant_text="after every boot-up the twin reports EMCY 5000h with 1001h bit 0, which no reset clears (an "
+                     "error reset EMCY keeps it in 1001h), and NMT start leaves it in pre-operational",
+        # one module per way a test meets the kept error: NMT observers, start_operational and the error reset
+        # precondition, the periodic capture and no_error_left, the state model, the LSS state check
+        modules=("test_nmt", "test_emcy", "test_pdo_timing", "test_nmt_state_machine", "test_lss"),
+        requires=("emcy", "heartbeat_producer"),
+        shares_twin=False,
+    ),
+    OpenReading(
         point="sync-processing-cycle",
         question="Two SYNCs come closer together than the device takes to process one: must it count both?",
         source="CiA 301 v4.2.0 §7.2.5 (SYNC protocol) gives no shortest SYNC interval a consumer must resolve; "

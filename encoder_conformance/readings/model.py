@@ -20,6 +20,9 @@ class OpenReading:
     requires: tuple[str, ...] = ()  #: profile capabilities the point needs (all of them); "lss:SERVICE" an LSS service
     excluded_by_effects: tuple[str, ...] = ()  #: quirk effects whose documented behaviour the variant would break
     requires_effects: tuple[str, ...] = ()  #: quirk effects (all of them) whose manual sentence opens the point
+    #: False: the variant runs on a twin of its own (one that keeps the device out of operational would leave the
+    #: tests of another reading on the same twin untested)
+    shares_twin: bool = True
 
     def applies_to(self, capabilities: Iterable[str], effects: Iterable[str]) -> bool:
         """Whether a profile with these (truthy) capabilities and quirk effects can play this reading."""

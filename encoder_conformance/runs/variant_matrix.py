@@ -97,11 +97,13 @@ def combine(pairs: list[tuple[OpenReading, str]]) -> list[tuple[str, list[OpenRe
     """The pairs as runs: per profile, readings whose variants override no method in common share one twin
     (and one run of the union of their modules). Readings of different points are independent choices, so a
     conformant device may take them all at once; a variant whose method another one overrides would be hidden
-    behind it, so those two never share a twin."""
+    behind it, so those two never share a twin, and neither does a reading that says it hides others
+    (``shares_twin``)."""
     runs: list[tuple[str, list[OpenReading], set[tuple[str, str]]]] = []
     for reading, profile in pairs:
         taken = _overrides(reading.variant)
-        home = next((run for run in runs if run[0] == profile and not run[2] & taken), None)
+        home = next((run for run in runs if run[0] == profile and not run[2] & taken
+                     and reading.shares_twin and all(r.shares_twin for r in run[1])), None)
         if home is None:
             runs.append((profile, [reading], set(taken)))
         else:

@@ -254,3 +254,13 @@ class ErrorHistoryAnyValueAccepted(EmcyProducer):
 class EmcyInStoppedState(EmcyProducer):
     def may_send(self) -> bool:
         return True  # also in stopped
+
+
+@breaks(EmcyProducer, "device_error_at_start")
+class KeepsStartUpFailure(EmcyProducer):
+    """A variant, not a fault (with sim/nmt_error_behaviour.FailsAtEveryStart): the failure found at start-up stays
+    when another error goes away; the error reset EMCY carries it in its error register, as CANopenNode's does."""
+
+    def clear(self) -> None:
+        self._set_register(ERROR_REGISTER_GENERIC)
+        self._emit(EmcyCode.ERROR_RESET, ERROR_REGISTER_GENERIC, b"")

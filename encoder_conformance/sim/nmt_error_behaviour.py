@@ -1,4 +1,4 @@
-"""What a communication error does to the NMT state (CiA 301 v4.2.0 §7.2.8.3.1 error behaviour; object 1029h).
+"""What an error does to the NMT state (CiA 301 v4.2.0 §7.2.8.3.1 error behaviour; object 1029h).
 
 A behaviour that the default twin keeps idle: an error with the communication bit of 1001h (bit 4: a heartbeat
 consumer time-out 8130h, a SYNC of the wrong length 8240h, a SYNC time-out 8100h) leaves the NMT state as it is.
@@ -6,14 +6,20 @@ Its variants play the other reading CiA 301 allows (its default error behaviour:
 pre-operational), as CANopenNode does: while the error is active the node leaves operational within a millisecond,
 also at an NMT start (the node stays in pre-operational: the heartbeat never shows operational); a reset
 (communication or node) clears 1001h and with it the error.
+
+``StartUpFailure``: what the node finds wrong when it starts: nothing on the default twin. Its variant plays a
+device failure present at every start (CANopenNode's Linux demo without its storage files): after each boot-up an
+EMCY 5000h with 1001h bit 0, which no reset clears, and while it is there the node does not enter operational (CiA
+301's default error behaviour for a device failure; the heartbeat never shows operational).
 """
 
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from typing import Protocol
 
-from encoder_conformance.cia.cia301 import ERROR_REGISTER
+from encoder_conformance.cia.cia301 import ERROR_REGISTER, ERROR_REGISTER_GENERIC, EmcyCode
 from encoder_conformance.sim.faults import breaks
 from encoder_conformance.sim.hooks import NodeHooks
 from encoder_conformance.sim.nmt import NmtState
@@ -73,3 +79,35 @@ class CommErrorEntersPreoperational(CommErrorBehaviour):
     def leaves_operational(self) -> bool:
         return True
 
+
+
+class StartUpFailure:
+    """A device failure found at each start-up: none (the default twin); see the module's docstring."""
+
+    def __init__(self, raise_error: Callable[[int, int], None], nmt: Nmt) -> None:
+        self._raise_error = raise_error
+        self._nmt = nmt
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.booted.append(self.after_boot)
+        self._nmt.admit.append(self.admit)
+
+    def failed_at_start(self) -> bool:
+        return False
+
+    def after_boot(self) -> None:
+        """Right after the boot-up: the failure's EMCY and 1001h, at every start (power-on and both resets)."""
+        if self.failed_at_start():
+            self._raise_error(EmcyCode.DEVICE_HARDWARE, ERROR_REGISTER_GENERIC)
+
+    def admit(self, state: NmtState) -> NmtState:
+        """While the failure is there, NMT start leaves the node in pre-operational."""
+        return NmtState.PRE_OPERATIONAL if state is NmtState.OPERATIONAL and self.failed_at_start() else state
+
+
+@breaks(StartUpFailure, "device_error_at_start")
+class FailsAtEveryStart(StartUpFailure):
+    """A variant, not a fault: a device failure at every start-up that no reset clears."""
+
+    def failed_at_start(self) -> bool:
+        return True

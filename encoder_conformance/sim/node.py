@@ -39,7 +39,7 @@ from encoder_conformance.sim.hooks import NodeHooks, ReloadEvent
 from encoder_conformance.sim.lss_behaviour import LssBehaviour
 from encoder_conformance.sim.lss_configuration import usable_node_id
 from encoder_conformance.sim.nmt import NmtState
-from encoder_conformance.sim.nmt_error_behaviour import CommErrorBehaviour
+from encoder_conformance.sim.nmt_error_behaviour import CommErrorBehaviour, StartUpFailure
 from encoder_conformance.sim.nmt_slave import NmtSlave
 from encoder_conformance.sim.nvm import Key, NonVolatileMemory
 from encoder_conformance.sim.object_store import ObjectStore
@@ -160,12 +160,12 @@ class SimulatedNode:
             assemble(SyncProducer, faults)(self.scheduler, self.read_int, self.send, lambda: self.state, self.lock),
             assemble(SyncTimeoutMonitor, faults)(self.scheduler, self.read_int, self.nmt, self._raise_error, self.lock),
             self.error_behaviour,
+            assemble(StartUpFailure, faults)(self._raise_error, self.nmt),
             assemble(MappingRules, faults)(self.profile, self.read_int, codes),
             store_commands,
             self.emcy,
             *self._emcy_triggers(),
-            # the encoder function (position, speed, preset) only where the profile is an encoder: a drive or an
-            # I/O module keeps whatever its 6004h/6030h/6500h hold
+            # the encoder function only where the profile is an encoder (a drive keeps its 6004h/6030h/6500h)
             _EncoderBehaviour(self.encoder, self.nvm) if self.profile.capabilities.encoder else None,
             self._built(fx.ZeroingObject, lambda p: assemble(Zeroing, faults)(
                 p, lambda: self.encoder.apply_preset(0), self._preset_is_zero)),
