@@ -248,9 +248,19 @@ def test_run_help_documents_every_option_and_the_pytest_side(capsys):
     (["-k", "x"], False),
 ])
 def test_a_run_loads_allure_pytest_only_where_results_are_asked_for(passed_on, allure_loaded):
-    from encoder_conformance.cli.run import unused_plugins
+    from encoder_conformance.plugin.option_table import unused_plugins
 
     blocked = unused_plugins(passed_on)
     assert ("no:allure_pytest" not in blocked) == allure_loaded
     assert "no:anyio" in blocked
     assert all(a == "-p" for a in blocked[::2])
+
+
+def test_a_module_imported_before_pytest_on_purpose_gives_no_warning_line():
+    """The command line imports this package before pytest: pytest's cannot-rewrite warning about it is filtered,
+    one literal -W per module (pytest escapes a -W message)."""
+    from encoder_conformance.plugin.option_table import imported_before_pytest
+
+    message = "ignore:Module already imported so cannot be rewritten; {}:pytest.PytestAssertRewriteWarning"
+    assert imported_before_pytest(("encoder_conformance", "hypothesis")) == [
+        "-W", message.format("encoder_conformance"), "-W", message.format("hypothesis")]

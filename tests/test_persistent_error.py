@@ -9,6 +9,7 @@ import pytest
 from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_REGISTER, EmcyCode, NmtCommand
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.nmt_preconditions import start_operational
+from encoder_conformance.dut.periodic_capture import PeriodicCapture
 from encoder_conformance.dut.persistent_error import kept_error, persisting_error
 from encoder_conformance.dut.settings_journal import SettingsJournal
 from encoder_conformance.errors import HeldByPersistentError
@@ -94,3 +95,17 @@ def test_an_error_a_reset_clears_leaves_the_verdict_to_the_test(rig):
     assert persisting_error(dut) is None
     assert dut.read_uint(ERROR_REGISTER) == 0
     assert kept_error(dut) == 0
+
+
+def test_the_periodic_capture_does_not_count_a_tpdo_stream_a_kept_error_holds_back(rig):
+    """The heartbeat stream is captured in pre-operational; the event-timer TPDO stream, which needs operational,
+    is not testable (a skip reason), not a failure."""
+    dut, _node = _dut(rig, (VARIANT,))
+    capture = PeriodicCapture.at_test_period(dut, 3)
+    capture.take(dut, None)
+    assert capture.kept_error == 0x01
+    assert capture.event_timer.error is None
+    assert capture.event_timer.skip is not None
+    assert capture.event_timer.skip.startswith("not testable: the event-timer TPDO stream")
+    assert capture.heartbeat.error is None
+    assert len(capture.heartbeat.timestamps) == 3

@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from encoder_conformance.cli.run import unused_plugins
 from encoder_conformance.cli.usage import command_arguments
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.plugin import option_table
@@ -39,8 +38,8 @@ def _pytest_argv(args: argparse.Namespace) -> list[str]:
 
     # --assert=plain: the suites' assertions carry their own messages, and rewriting ~120 modules costs ~2 s
     # where no bytecode cache is written (PYTHONDONTWRITEBYTECODE)
-    argv = [*pytest_args(), KIND_OPTION, KIND, "-p", "no:cacheprovider", *unused_plugins([]), "--assert=plain",
-            *option_table.pytest_argv("accept", vars(args))]
+    argv = [*pytest_args(), KIND_OPTION, KIND, "-p", "no:cacheprovider", *option_table.unused_plugins([]),
+            "--assert=plain", *option_table.pytest_argv("accept", vars(args))]
     if not args.verbose:
         argv += ["-p", "no:terminal"]
     return argv

@@ -24,20 +24,6 @@ def pytest_arguments(extra: list[str]) -> list[str]:
     return [arg for arg in extra if arg != "--"]
 
 
-#: entry-point plugins a conformance run never uses: anyio's (no async tests), allure-pytest's unless asked for
-_UNUSED_PLUGINS = ("anyio",)
-_ALLURE_PLUGIN = "allure_pytest"
-
-
-def unused_plugins(extra: list[str]) -> list[str]:
-    """``-p no:...`` for the installed pytest plugins this run does not use: importing allure-pytest (and the attrs
-    it brings) cost ~60 ms of every run's start-up, anyio's ~10 ms (measured with ``-X importtime``). allure-pytest
-    stays where ``--allure`` or its own ``--alluredir`` (among the arguments passed on to pytest) asks for results."""
-    wants_allure = any(arg == "--allure" or arg.startswith("--alluredir") for arg in extra)
-    names = [*_UNUSED_PLUGINS, *(() if wants_allure else (_ALLURE_PLUGIN,))]
-    return [arg for name in names for arg in ("-p", f"no:{name}")]
-
-
 def check_run(args: argparse.Namespace) -> None:
     """What a run can be told is wrong before pytest starts (UsageError): the profile, the report folder, the
     station files, the faults. The plugin checks the same for plain ``pytest suites``."""
@@ -62,7 +48,8 @@ def cmd_run(args: argparse.Namespace, extra: list[str]) -> int:
     import pytest
 
     passed_on = pytest_arguments(extra)
-    argv = [str(SUITES_DIR), "-p", "no:cacheprovider", *unused_plugins(passed_on),
+    argv = [str(SUITES_DIR), "-p", "no:cacheprovider", *option_table.unused_plugins(passed_on),
+            *option_table.imported_before_pytest(("encoder_conformance",)),  # the command line imported it
             *option_table.pytest_argv("run", vars(args))]
     status = int(pytest.main(argv + passed_on))
     # pytest's own 'interrupted' (2) comes only from a Ctrl-C before the run's signal handling was set up

@@ -221,3 +221,25 @@ def pytest_argv(command: Command, given: Mapping[str, object]) -> list[str]:
         elif value is not None:
             argv += [entry.name, str(value)]
     return argv
+
+
+#: entry-point plugins a conformance run never uses: anyio's (no async tests), allure-pytest's unless asked for
+_UNUSED_PLUGINS = ("anyio",)
+_ALLURE_PLUGIN = "allure_pytest"
+
+
+def unused_plugins(extra: list[str]) -> list[str]:
+    """``-p no:...`` for the installed pytest plugins this run does not use: importing allure-pytest (and the attrs
+    it brings) cost ~60 ms of every run's start-up, anyio's ~10 ms (measured with ``-X importtime``). allure-pytest
+    stays where ``--allure`` or its own ``--alluredir`` (among the arguments passed on to pytest) asks for results."""
+    wants_allure = any(arg == "--allure" or arg.startswith("--alluredir") for arg in extra)
+    names = [*_UNUSED_PLUGINS, *(() if wants_allure else (_ALLURE_PLUGIN,))]
+    return [arg for name in names for arg in ("-p", f"no:{name}")]
+
+
+def imported_before_pytest(modules: tuple[str, ...]) -> list[str]:
+    """``-W`` filters for pytest's warning that it cannot rewrite the asserts of ``modules``, imported before the
+    session on purpose (the command line imports this package first; the self-tests' fork server preloads more):
+    noise in every run's summary otherwise. pytest takes a -W message literally: one filter per module."""
+    return [arg for name in modules for arg in (
+        "-W", f"ignore:Module already imported so cannot be rewritten; {name}:pytest.PytestAssertRewriteWarning")]

@@ -84,9 +84,10 @@ READINGS: list[OpenReading] = [
         variant="device_error_at_start",
         variant_text="after every boot-up the twin reports EMCY 5000h with 1001h bit 0, which no reset clears (an "
                      "error reset EMCY keeps it in 1001h), and NMT start leaves it in pre-operational",
-        # one module per way a test meets the kept error: NMT observers, start_operational and the error reset
-        # precondition, the periodic capture and no_error_left, the state model, the LSS state check
-        modules=("test_nmt", "test_emcy", "test_pdo_timing", "test_nmt_state_machine", "test_lss"),
+        # one module per way a test meets the kept error: the NMT observers, start_operational and the error reset
+        # precondition, no_error_left, the state model, the LSS state check (the periodic capture's event-timer
+        # stream: tests/test_persistent_error.py, without a whole capture per profile)
+        modules=("test_nmt", "test_emcy", "test_pdo", "test_nmt_state_machine", "test_lss"),
         requires=("emcy", "heartbeat_producer"),
         shares_twin=False,
     ),
