@@ -61,9 +61,11 @@ class EmcyProducer:
         self._waiting: list[bytes] = []  # EMCYs held back by the inhibit time
         self._flush: JobHandle | None = None
         self._lock = threading.RLock()  # the scheduler's thread sends the waiting EMCYs
+        self._present: list[Callable[[], int]] = []  # 1001h bits of errors still present (NodeHooks.present_errors)
 
     def register(self, hooks: NodeHooks) -> None:
         hooks.commands.append(self._clear_history_command)
+        self._present = hooks.present_errors
         hooks.reload.append(self._on_reload)
         hooks.halted.append(self._forget_waiting)
 
@@ -103,9 +105,14 @@ class EmcyProducer:
         return register_bits if self._without_generic_bit else register_bits | ERROR_REGISTER_GENERIC
 
     def clear(self) -> None:
-        """All errors gone: error register 0 and an EMCY 0000h (error reset)."""
-        self._set_register(0)
-        self._emit(EmcyCode.ERROR_RESET, 0, b"")
+        """The error went away: error register 0 and an EMCY 0000h (error reset), or, where others are still
+        present (``NodeHooks.present_errors``), their bits in both, as CANopenNode's error reset carries them."""
+        present = 0
+        for bits in self._present:
+            present |= bits()
+        register = self.register_value(present) if present else 0
+        self._set_register(register)
+        self._emit(EmcyCode.ERROR_RESET, register, b"")
 
     def _set_register(self, value: int) -> None:
         if self._store.has((ERROR_REGISTER, 0)):
@@ -255,12 +262,3 @@ class EmcyInStoppedState(EmcyProducer):
     def may_send(self) -> bool:
         return True  # also in stopped
 
-
-@breaks(EmcyProducer, "device_error_at_start")
-class KeepsStartUpFailure(EmcyProducer):
-    """A variant, not a fault (with sim/nmt_error_behaviour.FailsAtEveryStart): the failure found at start-up stays
-    when another error goes away; the error reset EMCY carries it in its error register, as CANopenNode's does."""
-
-    def clear(self) -> None:
-        self._set_register(ERROR_REGISTER_GENERIC)
-        self._emit(EmcyCode.ERROR_RESET, ERROR_REGISTER_GENERIC, b"")

@@ -65,6 +65,8 @@ class NodeHooks:
     remote_frame: list[Callable[[int], None]] = field(default_factory=list)
     #: LSS master frames (7E5h), whatever the NMT state
     lss: list[Callable[[bytes], None]] = field(default_factory=list)
+    #: 1001h bits of errors still present: an error reset (another error going away) keeps them
+    present_errors: list[Callable[[], int]] = field(default_factory=list)
 
     def on_written(self, reaction: Reaction, indices: Iterable[int] | None = None) -> None:
         """``reaction`` runs after a write to one of ``indices`` (None: any object) was stored."""

@@ -9,8 +9,9 @@ also at an NMT start (the node stays in pre-operational: the heartbeat never sho
 
 ``StartUpFailure``: what the node finds wrong when it starts: nothing on the default twin. Its variant plays a
 device failure present at every start (CANopenNode's Linux demo without its storage files): after each boot-up an
-EMCY 5000h with 1001h bit 0, which no reset clears, and while it is there the node does not enter operational (CiA
-301's default error behaviour for a device failure; the heartbeat never shows operational).
+EMCY 5000h with 1001h bit 0, which no reset clears (another error going away leaves it in 1001h and in the error
+reset EMCY), and while it is there the node does not enter operational (CiA 301's default error behaviour for a
+device failure; the heartbeat never shows operational).
 """
 
 from __future__ import annotations
@@ -90,10 +91,15 @@ class StartUpFailure:
 
     def register(self, hooks: NodeHooks) -> None:
         hooks.booted.append(self.after_boot)
+        hooks.present_errors.append(self.present)
         self._nmt.admit.append(self.admit)
 
     def failed_at_start(self) -> bool:
         return False
+
+    def present(self) -> int:
+        """1001h bits of the failure while it is there (an error reset keeps them)."""
+        return ERROR_REGISTER_GENERIC if self.failed_at_start() else 0
 
     def after_boot(self) -> None:
         """Right after the boot-up: the failure's EMCY and 1001h, at every start (power-on and both resets)."""
