@@ -17,7 +17,7 @@ from contextlib import nullcontext
 import pytest
 
 from encoder_conformance.cia import cia305
-from encoder_conformance.cia.cia301 import HEARTBEAT_BASE, NmtState
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
 from encoder_conformance.cia.cia305 import (
     AUTO_BIT_RATE_INDEX,
     FASTSCAN_RESET_BIT,
@@ -36,7 +36,7 @@ from encoder_conformance.dut.lss_steps import (
     manual_excludes,
     stored_node_id_survives_power_cycle,
 )
-from encoder_conformance.dut.persistent_error import raise_if_held_by_error
+from encoder_conformance.dut.persistent_error import raise_if_held_out_of
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
 from encoder_conformance.suite_support.lss import destructive_if_self_stored, require_service
@@ -119,8 +119,7 @@ def test_lss_in_nmt_state(lss: LssDevice, state: str, evidence, request: pytest.
     settle = lss.dut.profile.timing.nmt_settle_ms / 1000
     if beats:  # the state is reached when the heartbeat says so
         if lss.dut.wait_heartbeat(mark, settle + 2 * period, state=code) is None:
-            if code == NmtState.OPERATIONAL:  # an error the device keeps may hold it in pre-operational
-                raise_if_held_by_error(lss.dut, f"LSS in NMT {state}")
+            raise_if_held_out_of(lss.dut, code, f"LSS in NMT {state}")  # a kept error may hold it in pre-op
             raise AssertionError(f"NMT {command}: no heartbeat with {code:02X}h ({state}) within "
                                  f"{(settle + 2 * period) * 1000:.0f} ms, so LSS in {state} cannot be judged")
     else:

@@ -9,7 +9,7 @@ from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
-from encoder_conformance.dut.persistent_error import raise_if_held_by_error
+from encoder_conformance.dut.persistent_error import raise_if_held_out_of
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.profile import quirk_effects as fx
@@ -271,7 +271,7 @@ def test_autostart_object_starts_device_after_reset(dut, settings_journal, evide
         evidence.note(f"{index:04X}h.{sub:02X} = {operational.hex(' ').upper()}, stored with {how}")
         state = _boots_into(dut, settings_journal, evidence)
         if state != 0x05:
-            raise_if_held_by_error(dut, "the autostart object")
+            raise_if_held_out_of(dut, 0x05, "the autostart object")
         assert state == 0x05, (
             f"documented: {index:04X}h = {params.operational_value} starts the device after boot-up; "
             f"the heartbeat reports {state:02X}h ({STATE_NAMES.get(state, '?')}) instead of 05h (operational)"

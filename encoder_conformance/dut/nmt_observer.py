@@ -11,16 +11,10 @@ import time
 from collections.abc import Callable
 from typing import Protocol
 
-from encoder_conformance.cia.cia301 import (
-    HEARTBEAT_BASE,
-    NMT_COMMAND_NAMES,
-    NMT_COMMAND_TARGET,
-    STATE_NAMES,
-    NmtState,
-)
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE, NMT_COMMAND_NAMES, NMT_COMMAND_TARGET, STATE_NAMES
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.persistent_error import raise_if_held_by_error
+from encoder_conformance.dut.persistent_error import raise_if_held_out_of
 from encoder_conformance.dut.sdo_frames import upload_request
 
 #: the state each state-changing command leads to, by the suites' names for the commands
@@ -59,12 +53,6 @@ class _Commands:
         self.expect_state(mark, COMMAND_TARGET[command], f"entering {state_name}")
 
 
-def _not_operational(dut: DeviceUnderTest, expected: int, why: str) -> None:
-    """Operational expected but not reached: not testable where an error the device keeps holds it out."""
-    if expected == NmtState.OPERATIONAL:
-        raise_if_held_by_error(dut, why)
-
-
 class HeartbeatObserver(_Commands):
     """Waits until the heartbeat reports the expected state."""
 
@@ -84,7 +72,7 @@ class HeartbeatObserver(_Commands):
             seen = self.dut.frames.since(after, lambda m: m.arbitration_id == HEARTBEAT_BASE + self.dut.node_id)
             problem = (f"{why}: expected heartbeat state {state:02X}h ({STATE_NAMES.get(state)}) within "
                        f"{self.window_s * 1000:.0f} ms; heartbeats seen:\n{format_frames(seen[-6:]) or '  none'}")
-            _not_operational(self.dut, state, why)
+            raise_if_held_out_of(self.dut, state, why)
             raise AssertionError(problem)
 
     def expect_not_state(self, after: Mark, state: int, why: str) -> None:
@@ -133,7 +121,7 @@ class ServiceObserver(_Commands):
     def expect_state(self, after: Mark, state: int, why: str) -> None:
         observed = self._observe_until(state)
         if observed != state:
-            _not_operational(self.dut, state, why)
+            raise_if_held_out_of(self.dut, state, why)
         assert observed == state, (
             f"{why}: expected {state:02X}h ({STATE_NAMES.get(state)}), the device behaves as "
             f"{observed:02X}h ({STATE_NAMES.get(observed)}) (observed by {self.method})"

@@ -135,8 +135,7 @@ class PeriodicCapture:
         self.kept_error = persisting_error(dut) or 0  # NMT reset communication, unless it survived one already
         note = (f"1001h = {found:02X}h before the capture: "
                 + (f"the device keeps it after NMT reset communication (1001h = {self.kept_error:02X}h)"
-                   if self.kept_error else f"NMT reset communication sent to clear it (1001h now "
-                                           f"{error_register(dut):02X}h)"))
+                   if self.kept_error else "NMT reset communication sent to clear it"))
         self.heartbeat.notes.append(note)
         self.event_timer.notes.append(note)
 

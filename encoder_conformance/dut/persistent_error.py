@@ -13,8 +13,9 @@ from __future__ import annotations
 
 from weakref import WeakKeyDictionary
 
-from encoder_conformance.cia.cia301 import ERROR_HISTORY, ERROR_REGISTER
+from encoder_conformance.cia.cia301 import ERROR_HISTORY, ERROR_REGISTER, NmtState
 from encoder_conformance.dut.device import DeviceUnderTest, SdoAborted
+from encoder_conformance.dut.frames import Mark
 from encoder_conformance.errors import HeldByPersistentError
 
 CLAUSE = ("CiA 301 v4.2.0 object 1029h (error behaviour, §7.5.2.32): a device failure sends the device from "
@@ -50,12 +51,18 @@ def kept_error(dut: DeviceUnderTest) -> int:
     return _KEPT.get(dut, 0)
 
 
-def note_after_reset(dut: DeviceUnderTest, register: int) -> None:
-    """1001h read after a reset communication and its boot-up: set, the device keeps that error."""
-    if register:
-        _KEPT[dut] = register
+def reset_and_read(dut: DeviceUnderTest) -> tuple[Mark, int | None]:
+    """NMT reset communication, its boot-up, then 1001h (remembered: ``kept_error``); None where no boot-up came.
+    Returns the mark before the reset too, for a caller that names the frames after it."""
+    mark = dut.nmt("reset-communication")
+    if dut.wait_bootup(mark) is None:
+        return mark, None
+    after = error_register(dut)
+    if after:
+        _KEPT[dut] = after
     else:
         _KEPT.pop(dut, None)
+    return mark, after
 
 
 def persisting_error(dut: DeviceUnderTest) -> int | None:
@@ -69,12 +76,7 @@ def persisting_error(dut: DeviceUnderTest) -> int | None:
         return None
     if register == kept_error(dut):
         return register
-    mark = dut.nmt("reset-communication")
-    if dut.wait_bootup(mark) is None:
-        return None
-    after = error_register(dut)
-    note_after_reset(dut, after)
-    return after or None
+    return reset_and_read(dut)[1] or None
 
 
 def describe_hold(dut: DeviceUnderTest, what: str, register: int, consequence: str = OUT_OF_OPERATIONAL) -> str:
@@ -90,3 +92,10 @@ def raise_if_held_by_error(dut: DeviceUnderTest, what: str, consequence: str = O
     register = persisting_error(dut)
     if register is not None:
         raise HeldByPersistentError(describe_hold(dut, what, register, consequence))
+
+
+def raise_if_held_out_of(dut: DeviceUnderTest, expected: int, what: str) -> None:
+    """A state was expected and not reached: where it was operational, ``HeldByPersistentError`` if an error the
+    device keeps explains it (the caller raises its own verdict otherwise)."""
+    if expected == NmtState.OPERATIONAL:
+        raise_if_held_by_error(dut, what)
