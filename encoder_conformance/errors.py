@@ -26,8 +26,10 @@ The exit code a class leads to is set where it is caught (``exit_codes.py`` name
           +-- PowerSwitchError          the bench's power switch failed (dut/power.py)
           +-- CannotPersist             the profile gives no way to store an entry (dut/persist.py)
           +-- NoUsableTpdo              no TPDO of the profile can serve a test: a skip (dut/tpdo_choice.py)
-          +-- HeldByPersistentError     an error no reset clears keeps the device out of the state a test needs:
-          |                             not testable, a skip (dut/persistent_error.py)
+          +-- NotJudged                 a check in scope could not judge the device (coverage.Hold says why): a
+          |    |                        skip that makes the verdict INCOMPLETE or at most PASS WITH WARNINGS
+          |    +-- HeldByPersistentError  an error no reset clears keeps the device out of the state a test needs
+          |                             (dut/persistent_error.py)
           |   the simulator (control flow of its SDO server, never seen by a test)
           +-- SdoAbort                  makes the twin's SDO server answer with an abort (sim/sdo_server.py)
           +-- SdoNoReply                makes the twin's SDO server send nothing (sim/sdo_server.py)
@@ -45,6 +47,8 @@ The exit code a class leads to is set where it is caught (``exit_codes.py`` name
 """
 
 from __future__ import annotations
+
+from encoder_conformance.coverage import Hold
 
 
 class EncoderConformanceError(Exception):
@@ -117,9 +121,23 @@ class NoUsableTpdo(EncoderConformanceError):
         self.deviations = deviations
 
 
-class HeldByPersistentError(EncoderConformanceError):
+class NotJudged(EncoderConformanceError):
+    """A check in scope could not judge the device; ``hold`` says why (a closed set, ``coverage.Hold``). The test
+    becomes a skip that makes its area INCOMPLETE (not testable) or at most PASS WITH WARNINGS (inconclusive): never
+    a pass, never a finding."""
+
+    def __init__(self, hold: Hold, detail: str) -> None:
+        self.hold = hold
+        prefix = f"{hold.kind.value}: "
+        super().__init__(detail if detail.startswith(prefix) else prefix + detail)
+
+
+class HeldByPersistentError(NotJudged):
     """The device keeps an error that NMT reset communication does not clear and, as CiA 301 allows (1029h), stays
     out of the state the test needs (operational): the test cannot be run; the message says why (a skip)."""
+
+    def __init__(self, detail: str) -> None:
+        super().__init__(Hold.PERSISTENT_ERROR, detail)
 
 
 class SdoAbort(EncoderConformanceError):

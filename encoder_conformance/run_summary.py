@@ -6,7 +6,9 @@ Pure data (no pytest): the plugin fills it (plugin/run_record.py), everything el
 
 Outcomes: "failed" is a finding about the device; "error" is an internal error of the tool (an exception that
 is no finding about the device: plugin/outcomes.py), counted in no area and no verdict but the overall
-INTERNAL ERROR of a run where nothing failed.
+INTERNAL ERROR of a run where nothing failed. A "skipped" result keeps its kind (coverage.Kind): out of scope (not
+applicable, not available, not selected) it is only listed; in scope it is not testable (the area is INCOMPLETE) or
+inconclusive (the area is at most PASS WITH WARNINGS). PASS means every check in scope ran and passed.
 """
 
 from __future__ import annotations
@@ -15,6 +17,8 @@ import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal
+
+from encoder_conformance.coverage import Kind, kind_of
 
 SUMMARY_FILE = "run-summary.json"
 
@@ -55,7 +59,7 @@ MODULE_AREAS: dict[str, str] = {
 SERIAL_KEYS = ("serial number (1018h.4)", "serial number (650Bh)", "serial number (label)")
 
 Outcome = Literal["passed", "failed", "warning", "skipped", "error"]
-Verdict = Literal["PASS", "FAIL", "PASS WITH WARNINGS", "COULD NOT TEST", "INTERNAL ERROR", "NOT RUN"]
+Verdict = Literal["PASS", "FAIL", "PASS WITH WARNINGS", "INCOMPLETE", "COULD NOT TEST", "INTERNAL ERROR", "NOT RUN"]
 INTERNAL_ERROR_TEXT = "internal error of the tool: please report it"
 
 
@@ -79,6 +83,15 @@ class TestResult:
     message: str = ""  # the failure (expected vs observed), the skip reason, the warning
     duration_s: float = 0.0
     trace: str | None = None  # the frame trace, relative to the report folder
+    skip_kind: str | None = None  # a skip's coverage.Kind value ("not applicable", "not testable", ...)
+    hold: str | None = None  # in scope: the coverage.Hold that kept the check from judging
+
+    @property
+    def kind(self) -> Kind | None:
+        """Why a skipped check did not judge (read from its message where an older summary kept no kind)."""
+        if self.outcome != "skipped":
+            return None
+        return Kind(self.skip_kind) if self.skip_kind else kind_of(self.message)
 
 
 @dataclass
@@ -89,21 +102,32 @@ class AreaVerdict:
     passed: int = 0
     failed: int = 0
     warnings: int = 0
-    skipped: int = 0
+    skipped: int = 0  # every skip; of them:
+    not_testable: int = 0  # in scope, the device's state kept the check from judging
+    inconclusive: int = 0  # in scope, the tester's host was late
+    out_of_scope: int = 0  # not applicable, not available, not selected: listed, never counted
 
     @property
     def verdict(self) -> Verdict:
+        """FAIL outranks INCOMPLETE (a check in scope not testable), which outranks PASS WITH WARNINGS (a warning or
+        an inconclusive check); PASS only where every check in scope ran and passed."""
         if self.failed:
             return "FAIL"
-        if self.warnings:
+        if self.not_testable:
+            return "INCOMPLETE"
+        if self.warnings or self.inconclusive:
             return "PASS WITH WARNINGS"
         return "PASS" if self.passed else "NOT RUN"
 
-    def count(self, outcome: Outcome) -> None:
+    def count(self, result: TestResult) -> None:
         """Count a test's outcome; an internal error of the tool ("error") is no verdict about the device."""
-        name = {"passed": "passed", "failed": "failed", "warning": "warnings", "skipped": "skipped"}.get(outcome)
+        name = {"passed": "passed", "failed": "failed", "warning": "warnings", "skipped": "skipped"}.get(result.outcome)
         if name is not None:
             setattr(self, name, getattr(self, name) + 1)
+        kind = result.kind
+        if kind is not None:
+            which = {Kind.NOT_TESTABLE: "not_testable", Kind.INCONCLUSIVE: "inconclusive"}.get(kind, "out_of_scope")
+            setattr(self, which, getattr(self, which) + 1)
 
 
 @dataclass
@@ -127,6 +151,9 @@ class RunSummary:
     device_restored: bool | None = None
     report_dir: str | None = None
     time_budget: dict[str, Any] | None = None  # where the run's time went (plugin/time_budget.py)
+    scope: dict[str, str] = field(default_factory=dict)  # what the station and the options left out, declared up front
+    deselected: int = 0  # tests the selection (-k, -m) left out: scope, not counted
+    startup_errors: list[str] = field(default_factory=list)  # errors the device reported at start-up, no test's
 
     @property
     def serial(self) -> str | None:
@@ -147,7 +174,7 @@ class RunSummary:
         """The verdict per area, in AREAS order; areas with no test left out."""
         by_area = {area: AreaVerdict(area) for area in AREAS}
         for result in self.results:
-            by_area.setdefault(result.area, AreaVerdict(result.area)).count(result.outcome)
+            by_area.setdefault(result.area, AreaVerdict(result.area)).count(result)
         return [v for v in by_area.values() if v.passed or v.failed or v.warnings or v.skipped]
 
     @property
@@ -159,6 +186,8 @@ class RunSummary:
             return "FAIL"
         if self.internal_errors:
             return "INTERNAL ERROR"  # the run did not judge what those tests check: no PASS
+        if "INCOMPLETE" in verdicts:
+            return "INCOMPLETE"  # a check in scope did not judge the device: no PASS either
         if not verdicts - {"NOT RUN"}:
             return "NOT RUN"
         return "PASS WITH WARNINGS" if "PASS WITH WARNINGS" in verdicts else "PASS"
@@ -171,14 +200,36 @@ class RunSummary:
     def failing_areas(self) -> list[str]:
         return [area.area for area in self.areas() if area.verdict == "FAIL"]
 
+    def incomplete_areas(self) -> list[str]:
+        return [area.area for area in self.areas() if area.verdict == "INCOMPLETE"]
+
+    def with_kind(self, *kinds: Kind) -> list[TestResult]:
+        """The skipped results of those kinds (e.g. every check not testable)."""
+        return [r for r in self.results if r.kind in kinds]
+
     def with_outcome(self, *outcomes: Outcome) -> list[TestResult]:
         return [r for r in self.results if r.outcome in outcomes]
+
+    def coverage(self) -> dict[str, Any]:
+        """What the run checked, what it could not and why (counts per kind, and per hold in scope)."""
+        kinds: dict[str, int] = {}
+        holds: dict[str, int] = {}
+        for result in self.with_outcome("skipped"):
+            kind = result.kind
+            if kind is not None:
+                kinds[kind.value] = kinds.get(kind.value, 0) + 1
+            if result.hold:
+                holds[result.hold] = holds.get(result.hold, 0) + 1
+        checked = len(self.with_outcome("passed", "failed", "warning"))
+        return {"checked": checked, "skipped_by_kind": kinds, "holds": holds, "deselected": self.deselected,
+                "scope": self.scope}
 
     def to_json(self) -> str:
         data = asdict(self)
         data["overall"] = self.overall
         data["serial"] = self.serial
         data["areas"] = [{**asdict(a), "verdict": a.verdict} for a in self.areas()]
+        data["coverage"] = self.coverage()
         return json.dumps(data, indent=1)
 
     @classmethod
@@ -187,6 +238,7 @@ class RunSummary:
         for derived in ("overall", "serial", "areas"):
             data.pop(derived, None)
         data["results"] = [TestResult(**r) for r in data.get("results", [])]
+        data.pop("coverage", None)
         return cls(**data)
 
     def write(self, folder: Path) -> Path:

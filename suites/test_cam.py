@@ -34,6 +34,7 @@ from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.cam import Cam
 from encoder_conformance.models.encoder.position import units_per_rev
 from encoder_conformance.plugin.evidence import Evidence
+from encoder_conformance.plugin.skips import not_applicable, skip_text
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.cam import CHANNEL, WINDOW_RULE, CamChannel, Findings, Remapped, cam_names
 from encoder_conformance.suite_support.checks import abort_accepted
@@ -91,11 +92,11 @@ def test_several_cams_together_manual_example(cam_channel: CamChannel, evidence:
     """The manual's example (CAM1 0..180°, CAM2 180°..360°, CAM3 0..60°, enable 07h) in the current units per
     revolution: the state byte combines the cams (WDGA M §7.5, T 8.67-8.74; CiA 406 6300h)."""
     if cam_channel.count < 3:
-        pytest.skip(f"not applicable: the example needs 3 cams, the channel has {cam_channel.count}")
+        not_applicable(f"the example needs 3 cams, the channel has {cam_channel.count}")
     settings = cam_channel.encoder.access.settings()
     rev = units_per_rev(settings.geometry, settings.scaling)
     if rev < 12:
-        pytest.skip(f"not applicable: {rev} units per revolution cannot carry the example's 60° and 180° points")
+        not_applicable(f"{rev} units per revolution cannot carry the example's 60° and 180° points")
     half, sixth = rev * 2048 // 4096, rev * 682 // 4096  # 2048 and 682 of the manual's 4096 units
     cams = {0: Cam(0, half), 1: Cam(half + 1, rev - 1), 2: Cam(0, sixth)}
     reference = cam_channel.configure(cams, enable=0x07)
@@ -353,7 +354,7 @@ def test_low_limit_before_high_limit_refused(cam_channel: CamChannel, evidence: 
     high limit first, then low limit, is accepted (WDGA M §7.5.4, §8.11)."""
     found = cam_channel.dut.profile.quirk_with_effect(fx.CamLowBelowHigh.effect)
     if found is None:
-        pytest.skip("not applicable: CiA 406 CAM limits are independent objects (no quirk cam_low_below_high)")
+        not_applicable("CiA 406 CAM limits are independent objects (no quirk cam_low_below_high)")
     quirk_id, quirk = found
     evidence.deviation(quirk_id, quirk.title)
     cams = cam_channel.windows()
@@ -387,18 +388,18 @@ def cam_tpdo(cam_channel: CamChannel, evidence: Evidence) -> Iterator[Remapped]:
     dut, journal = cam_channel.dut, cam_channel.encoder.journal
     state = dut.profile.entry(od.CAM_STATE, CHANNEL)
     if state is None or not state.pdo_mappable:
-        pytest.skip(f"not applicable: 6300h.{CHANNEL:02X} is not PDO-mappable in the profile")
+        not_applicable(f"6300h.{CHANNEL:02X} is not PDO-mappable in the profile")
     if 1 not in dut.profile.capabilities.tpdo_transmission_types:
-        pytest.skip("not applicable: the profile does not list TPDO transmission type 1")
+        not_applicable("the profile does not list TPDO transmission type 1")
     try:
         choice = choose_tpdo(dut, 2, [1])
     except NoUsableTpdo as exc:
-        pytest.skip(str(exc))
+        skip_text(str(exc))
     tpdo = TpdoUnderTest(dut, journal, choice.comm, choice.transmission_type)
     comm, mapping = tpdo.comm, tpdo.mapping_index
     entries = [dut.profile.entry(mapping, sub) for sub in (0, 1)] + [dut.profile.entry(comm, 1)]
     if any(e is None or not e.writable for e in entries):
-        pytest.skip(f"not applicable: {mapping:04X}h sub 0/1 or {comm:04X}h.01 not writable")
+        not_applicable(f"{mapping:04X}h sub 0/1 or {comm:04X}h.01 not writable")
     for note in choice.notes:
         evidence.note(note)
     with MappingCustody(dut, comm):

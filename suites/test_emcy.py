@@ -28,11 +28,13 @@ from encoder_conformance.cia.cia301 import (
     HEARTBEAT_BASE,
     EmcyCode,
 )
+from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.emcy_trigger import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
 from encoder_conformance.dut.persistent_error import raise_if_held_by_error
+from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import inconclusive_if_host_late
 
@@ -46,7 +48,7 @@ INHIBIT_SAMPLES = 20  # intervals measured (each error adds an entry to a real d
 def _writable(dut, index: int, what: str) -> None:
     entry = dut.profile.entry(index, 0)
     if entry is None or not entry.writable:
-        pytest.skip(f"not applicable: the profile has no writable {index:04X}h ({what})")
+        not_applicable(f"the profile has no writable {index:04X}h ({what})")
 
 
 def test_emcy_frame_on_error(dut, emcy, evidence):
@@ -67,7 +69,7 @@ def test_error_register_generic_bit(dut, emcy, evidence):
     found = dut.profile.quirk_of(fx.ErrorRegisterWithoutGenericBit)
     if found is not None:
         evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
-        pytest.skip(f"not applicable: quirk {found[0]} documents 1001h without bit 0 (deviation recorded)")
+        not_applicable(f"quirk {found[0]} documents 1001h without bit 0 (deviation recorded)")
     trigger = emcy.trigger()
     frame = emcy.wait(trigger.fire(), trigger, f"after {trigger.name}")
     register = dut.read_uint(ERROR_REGISTER)
@@ -133,7 +135,7 @@ def test_emcy_inhibit_time_spaces_emcys(dut, emcy, settings_journal, back_to_pre
                     judged="every interval at least the band's low limit")
     evidence.note(f"tester host during the capture: {host.describe()}")
     if len(spacing) < INHIBIT_SAMPLES:
-        pytest.skip(f"not measurable: {len(frames)} EMCYs for {trigger.name} repeated (wanted "
+        not_judged(Hold.EMCY_NOT_REPEATED, f"{len(frames)} EMCYs for {trigger.name} repeated (wanted "
                     f"{INHIBIT_SAMPLES + 1}); the device signals a repeated error less often")
     close = [(n, ms) for n, ms in enumerate(spacing) if ms < INHIBIT_MS - tolerance]
     if close:
@@ -190,7 +192,7 @@ def _bus_trigger(kind, dut, settings_journal, evidence):
     """A trigger the tester fires on the bus, with what its verdict rests on; skips where the device lacks it."""
     why = kind.available(dut)
     if why is not None:
-        pytest.skip(f"not applicable: {why}")
+        not_applicable(f"{why}")
     trigger = kind(dut, settings_journal.write)
     evidence.rests_on(*trigger.basis)
     return trigger

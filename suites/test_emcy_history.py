@@ -17,6 +17,7 @@ from encoder_conformance.cia.cia301 import ERROR_HISTORY, SdoAbortCode
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.emcy_trigger import BENCH_OTHER_CODE, BenchError
 from encoder_conformance.dut.sdo_frames import abort_name
+from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import abort_accepted
 
@@ -31,7 +32,7 @@ def depth(dut) -> int:
     entry = dut.profile.objects.get(ERROR_HISTORY)
     subs = [sub for sub in (entry.subs if entry is not None and entry.subs else {}) if sub > 0]
     if not subs:
-        pytest.skip("not applicable: the profile has no error history 1003h")
+        not_applicable("the profile has no error history 1003h")
     return len(subs)
 
 
@@ -64,7 +65,7 @@ def test_error_history_records_newest_first(dut, emcy, depth, evidence):
     found = dut.profile.quirk_of(fx.ErrorHistoryKeepsFirst)
     if found is not None:
         evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
-        pytest.skip(f"not applicable: quirk {found[0]}: the manual's list keeps the first errors, not the newest")
+        not_applicable(f"quirk {found[0]}: the manual's list keeps the first errors, not the newest")
     before = _history(dut)
     codes = _errors(emcy, 2)
     after = _history(dut)
@@ -90,7 +91,7 @@ def test_error_history_cleared_by_zero_only(dut, emcy, depth, evidence):
     (sub 0 reads 0), and the next error is entered again. This test clears the device's history on purpose."""
     evidence.rests_on("cia", CLAUSE + ": writing 0 to sub 0 deletes the history, other values abort 06090030h")
     if not dut.profile.entry(ERROR_HISTORY, 0).writable:
-        pytest.skip("not applicable: the profile declares 1003h sub 0 read-only")
+        not_applicable("the profile declares 1003h sub 0 read-only")
     found = _history(dut)
     if not found:
         _errors(emcy, 1)

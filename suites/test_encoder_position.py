@@ -21,6 +21,7 @@ from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.position import position_limits, units_per_rev, unsigned_in_span
 from encoder_conformance.plugin.options import settings_of
+from encoder_conformance.plugin.skips import not_applicable, not_equipped
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
 
@@ -42,7 +43,7 @@ def _signed_distance(before: int, after: int, span: int) -> int:
 def _rotation(encoder):
     """The shaft drive; skips the test where the bench has none (it needs real rotation)."""
     if encoder.shaft is None:
-        pytest.skip(f"not available: needs real rotation: {encoder.why_no_shaft}")
+        not_equipped(f"needs real rotation: {encoder.why_no_shaft}")
     return encoder.shaft
 
 
@@ -127,7 +128,7 @@ def test_preset_sets_position_and_offset(encoder, evidence, where: str, ccw: boo
     low, high = position_limits(settings.span, settings.signed)
     target = {"zero": 0, "middle": settings.shown(settings.span // 3), "top": high, "bottom": low}[where]
     if where == "bottom" and low == 0:
-        pytest.skip("not applicable: the range starts at 0 (the 'zero' case)")
+        not_applicable("the range starts at 0 (the 'zero' case)")
     if access.position() == target:  # already there: move away first, or a preset that does nothing would pass
         away = settings.shown(unsigned_in_span(target + settings.span // 7, settings.span))
         moved = encoder.preset(away)
@@ -199,7 +200,7 @@ def test_code_sequence_sets_the_counting_direction(encoder, evidence):
     else:
         evidence.rests_on("cia", "CiA 406 6000h bit 0 (code sequence)")
     if encoder.access.dut.profile.entry(objects.operating, 0) is None:
-        pytest.skip(f"not applicable: the profile has no operating parameters object {objects.operating:04X}h")
+        not_applicable(f"the profile has no operating parameters object {objects.operating:04X}h")
     shaft = _rotation(encoder)
     for ccw in (False, True):
         _set_code_sequence(encoder, ccw)
@@ -295,7 +296,7 @@ def test_module_identification_follows_the_range(encoder, evidence):
     profile = access.dut.profile
     entries = [profile.entry(od.MODULE_IDENTIFICATION, sub) for sub in (2, 3)]
     if any(e is None or e.access != "ro" for e in entries) or access.objects.relocated:
-        pytest.skip("not applicable: 650Ah sub 2/3 are absent or constant in the profile")
+        not_applicable("650Ah sub 2/3 are absent or constant in the profile")
     source = profile.objects[od.MODULE_IDENTIFICATION].manual
     if source:
         evidence.rests_on("manual", f"650Ah ({source}): min/max position follow the measuring range")
@@ -321,7 +322,7 @@ def test_operating_status_mirrors_operating_parameters(encoder, evidence):
     access = encoder.access
     if access.objects.relocated or None in (access.dut.profile.entry(od.OPERATING_STATUS, 0),
                                             access.dut.profile.entry(0x6000, 0)):
-        pytest.skip("not applicable: the profile lacks 6500h (operating status) or 6000h (operating parameters)")
+        not_applicable("the profile lacks 6500h (operating status) or 6000h (operating parameters)")
     evidence.rests_on("cia", "CiA 406 6500h (operating status: the 6000h settings in use)")
     mask = 0x01 | (1 << access.objects.scaling_bit if access.objects.scaling_bit is not None else 0)
     for ccw in (True, False):
@@ -376,14 +377,14 @@ def test_position_in_tpdo_equals_sdo(encoder, dut, settings_journal, back_to_pre
     candidates = [(c, o, b, how) for c, o, b in _position_tpdos(dut, encoder.access.objects.position)
                   if (how := _sync_or_timer(dut, c)) is not None]
     if not candidates:
-        pytest.skip("not applicable: no TPDO maps the position object with a SYNC type or a settable event timer")
+        not_applicable("no TPDO maps the position object with a SYNC type or a settable event timer")
     comm, offset, bits, (kind, timer) = candidates[0]
     tpdo = TpdoUnderTest(dut, settings_journal, comm, kind)
     cob_id = tpdo.cob_id()
     enable = None
     if cob_id & 0x80000000:
         if not tpdo.writable(1):
-            pytest.skip(f"not applicable: {comm:04X}h is disabled and its COB-ID is read-only")
+            not_applicable(f"{comm:04X}h is disabled and its COB-ID is read-only")
         enable = cob_id & 0x7FFFFFFF
     tpdo.configure(cob_id=enable, trans_type=kind, event_timer=timer)
     before = encoder.access.position()
@@ -448,7 +449,7 @@ def test_limit_switch_flags_in_the_process_value(encoder, dut, settings_journal,
     mapping = dut.profile.params_of(fx.FixedTpdoMapping)
     sync = mapping.sync_tpdos[0] if mapping is not None and mapping.sync_tpdos else None
     if sync is None or "tpdo" not in params.applies_to:
-        pytest.skip("not applicable: no fixed SYNC TPDO carries the process value")
+        not_applicable("no fixed SYNC TPDO carries the process value")
     evidence.rests_on("manual", "the manual's limit switches (quirk limit_switch_flags)")
     access = encoder.access
     cob_id = dut.read_uint(sync.tpdo, 1) & 0x7FF
@@ -458,7 +459,7 @@ def test_limit_switch_flags_in_the_process_value(encoder, dut, settings_journal,
         position = encoder.preset(settings.shown(settings.span // 2))
     position = access.position()
     if not 100 <= position < settings.span - 100:
-        pytest.skip(f"not applicable: the position {position} leaves no room for a limit on both sides (no preset)")
+        not_applicable(f"the position {position} leaves no room for a limit on both sides (no preset)")
     enable = dut.read_uint(params.enable_object, 0)
     switches = [(s, below) for s, below in ((params.min, True), (params.max, False)) if s is not None]
     for switch, _ in switches:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.dut.identity import NO_SERIAL, read_identity, serial_650b_key
+from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import datatypes
 from encoder_conformance.suite_support.checks import describe_value
 
@@ -13,7 +14,7 @@ pytestmark = pytest.mark.spec("CiA 301 §7.5.2")
 
 def _expect(value, what: str, reason: str):
     if value is None:
-        pytest.skip(f"not applicable: the profile gives no {what} ({reason})")
+        not_applicable(f"the profile gives no {what} ({reason})")
     return value
 
 
@@ -67,7 +68,7 @@ def test_identity_record_size(dut):
     """1018h sub 0 equals the highest identity sub-index the profile declares."""
     entry = dut.profile.entry(0x1018, 0)
     if entry is None or entry.default is None:
-        pytest.skip("not applicable: the profile declares no 1018h sub 0 value")
+        not_applicable("the profile declares no 1018h sub 0 value")
     observed = dut.read_uint(0x1018, 0)
     assert observed == entry.default, f"1018h.00: expected {entry.default}, observed {observed}"
 
@@ -77,12 +78,12 @@ def test_serial_number_consistent(dut, evidence):
     """The serial number in 1018h sub 4 equals the one in 650Bh where the device has both."""
     profile = dut.profile
     if profile.entry(0x1018, 4) is None:
-        pytest.skip("not applicable: the profile declares no 1018h sub 4 serial number")
+        not_applicable("the profile declares no 1018h sub 4 serial number")
     serial = dut.read_uint(0x1018, 4)
     evidence.note(f"serial number {serial}")
     other = serial_650b_key(profile)
     if not other:
-        pytest.skip("not applicable: the profile declares no 650Bh serial number to compare with")
+        not_applicable("the profile declares no 650Bh serial number to compare with")
     observed = dut.read_uint(*other)
     assert observed == serial, f"650Bh.{other[1]:02X} = {observed} but 1018h.04 = {serial}"
 
@@ -94,7 +95,7 @@ def test_serial_number_format(dut, evidence):
     """1018h sub 4 has the format the manual states (identity.serial_format); where it states none, a value a
     device without a serial number would not show (neither 0 nor FFFFFFFFh: our reading, a warning only)."""
     if dut.profile.entry(0x1018, 4) is None:
-        pytest.skip("not applicable: the profile declares no 1018h sub 4 serial number")
+        not_applicable("the profile declares no 1018h sub 4 serial number")
     serial = dut.read_uint(0x1018, 4)
     evidence.note(f"serial number {serial} (0x{serial:08X})")
     wanted = dut.profile.identity.serial_format
@@ -113,11 +114,11 @@ def test_serial_number_matches_label(dut, evidence, label_serial):
     """The unit reports the serial number printed on its label (1018h sub 4, else 650Bh): goods-in checks that
     the device on the bench is the unit it books in."""
     if label_serial is None:
-        pytest.skip("not applicable: no label serial number given (--label-serial)")
+        not_applicable("no label serial number given (--label-serial)")
     label, source = label_serial
     identity = read_identity(dut)
     if identity.unit_serial is None:
-        pytest.skip("not applicable: the device reports no serial number (no 1018h sub 4, no 650Bh); "
+        not_applicable("the device reports no serial number (no 1018h sub 4, no 650Bh); "
                     f"label {label} ({source})")
     where = "1018h.04" if identity.serial is not None else "650Bh"
     evidence.note(f"label {label} ({source}); device {where} = {identity.unit_serial}")

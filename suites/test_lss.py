@@ -37,6 +37,7 @@ from encoder_conformance.dut.lss_steps import (
     stored_node_id_survives_power_cycle,
 )
 from encoder_conformance.dut.persistent_error import raise_if_held_out_of
+from encoder_conformance.plugin.skips import not_applicable, not_equipped
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
 from encoder_conformance.suite_support.lss import destructive_if_self_stored, require_service
@@ -146,7 +147,7 @@ def test_configure_node_id_range(lss: LssDevice, node_id: int, error: int, pytes
     require_service(lss, "configure_node_id")
     manual_range = lss.dut.profile.params_of(fx.LssNodeIdRange)
     if manual_range is not None and (manual_excludes(lss, node_id) is None) != (error == 0):
-        pytest.skip(f"not judged: the manual's node-ID range {manual_range.node_id_range} and CiA 305 disagree "
+        not_applicable(f"not judged here: the manual's node-ID range {manual_range.node_id_range} and CiA 305 disagree "
                     f"on node-ID {node_id} (quirk lss_node_id_range)")
     if error == 0 and node_id != lss.node_id:
         destructive_if_self_stored(lss, pytestconfig, "node_id")
@@ -173,7 +174,7 @@ def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence, pyte
     if expected_ok and index != lss.bit_index:
         destructive_if_self_stored(lss, pytestconfig, "bit_timing")
     if expected_ok and lss.bit_index is None and "bit_timing" in lss.auto_stored:
-        pytest.skip("the bit rate in use is unknown and the device stores a configured bit rate by itself")
+        not_equipped("the bit rate in use is unknown and the device stores a configured bit rate by itself")
     assert lss.select()
     answer = lss.master.configure_bit_timing(index)  # the lss fixture configures the rate in use again
     assert answer is not None, f"configure bit timing {index}: no answer"
@@ -196,7 +197,7 @@ def test_activate_bit_timing_silent_for_the_switch_delay(lss: LssDevice, heartbe
     within the LSS response window after it) is not held against the device (``sent_after_request``)."""
     require_service(lss, "configure_bit_timing", "activate_bit_timing")
     if lss.bit_index is None:
-        pytest.skip("the bit rate in use is unknown: activating a configured one could move the device off the bus")
+        not_equipped("the bit rate in use is unknown: activating a configured one could move the device off the bus")
     mark, delay = activate(lss, lss.bit_index)
     silent = lss.sent_after_request(mark, 2 * delay * 0.9)
     beat = lss.dut.wait_heartbeat(mark, 2 * delay + 3 * heartbeat / 1000)
@@ -214,7 +215,7 @@ def test_activated_bit_rate_leaves_the_old_rate(lss: LssDevice, heartbeat: int, 
     destructive_if_self_stored(lss, pytestconfig, "bit_timing")
     others = sorted(lss.dut.profile.bus.lss_bit_indices() - {lss.bit_index, AUTO_BIT_RATE_INDEX})
     if lss.bit_index is None or not others:
-        pytest.skip("the bit rate in use is unknown, or the device has no other bit rate")
+        not_applicable("the bit rate in use is unknown, or the device has no other bit rate")
     mark, delay = activate(lss, others[0])
     heard = lss.sent_after_request(mark, 2 * delay + 3 * heartbeat / 1000)
     power_cycle()
@@ -408,5 +409,5 @@ def test_self_stored_node_id_survives_power_cycle(lss: LssDevice, power_cycle, e
     require_service(lss, "configure_node_id")
     documented_quirk(lss.dut, fx.LssConfigAutoStored, evidence, "the device stores by store configuration only")
     if "node_id" not in lss.auto_stored:
-        pytest.skip("not applicable: the device stores its bit rate by itself, not its node-ID")
+        not_applicable("the device stores its bit rate by itself, not its node-ID")
     stored_node_id_survives_power_cycle(lss, store=False)

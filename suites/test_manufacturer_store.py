@@ -11,6 +11,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.dut import sdo_frames
+from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
 from encoder_conformance.suite_support.parameters import changeable_parameter, other_valid_value
@@ -26,7 +27,7 @@ def reboot_store(dut):
     """The (id, params) of a device that stores through a manufacturer object and reboots instead of replying."""
     found = dut.profile.quirk_of(fx.StoreRebootsWithoutReply)
     if found is None:
-        pytest.skip("not applicable: the device has no store-by-reboot command (quirk store_reboots_without_reply)")
+        not_applicable("the device has no store-by-reboot command (quirk store_reboots_without_reply)")
     return found
 
 
@@ -52,7 +53,7 @@ def test_store_by_reboot_keeps_value(dut, reboot_store, evidence):
     evidence.deviation(quirk_id, dut.profile.quirks[quirk_id].title)
     found = changeable_parameter(dut.profile, lambda i, e: e.persisted_by == "manufacturer_store")
     if found is None:
-        pytest.skip("not applicable: no parameter is declared persisted_by: manufacturer_store")
+        not_applicable("no parameter is declared persisted_by: manufacturer_store")
     original = dut.read(found.index, found.sub)
     dut.write(found.index, found.sub, found.new_value.to_bytes(len(original), "little"))
     try:

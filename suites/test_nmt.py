@@ -12,6 +12,7 @@ from encoder_conformance.dut.persist import CannotPersist, persist_entry
 from encoder_conformance.dut.persistent_error import raise_if_held_out_of
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
 from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
@@ -35,7 +36,7 @@ def nmt(dut, settings_journal, back_to_preoperational, request, evidence) -> Nmt
         return HeartbeatObserver(dut, request.getfixturevalue("state_heartbeat"))
     comm = request.getfixturevalue("sync_tpdo")
     if comm is None:
-        pytest.skip("not applicable: no heartbeat and no SYNC-driven TPDO to observe the NMT state with")
+        not_applicable("no heartbeat and no SYNC-driven TPDO to observe the NMT state with")
     evidence.note(f"NMT state observed through {ServiceObserver.method} (the profile has no heartbeat producer)")
     return ServiceObserver(dut, comm)
 
@@ -148,10 +149,10 @@ def _shaft_moves_a_tpdo(profile) -> bool:
 def _skip_without_trigger(dut, sync_tpdo, shaft) -> None:
     """Skip where neither a SYNC nor the shaft can make a TPDO go out (its silence would prove nothing)."""
     if not _complete_tpdos(dut.profile):
-        pytest.skip("not applicable: no TPDO of the profile has both a transmission type (18xxh sub 2) and a "
+        not_applicable("no TPDO of the profile has both a transmission type (18xxh sub 2) and a "
                     "mapping (1Axxh): what would make it send is not declared")
     if sync_tpdo is None and not (shaft is not None and _shaft_moves_a_tpdo(dut.profile)):
-        pytest.skip("not applicable: no TPDO can be made to transmit on SYNC (18xxh sub 2 fixed, or type 1 not "
+        not_applicable("no TPDO can be made to transmit on SYNC (18xxh sub 2 fixed, or type 1 not "
                     "accepted) and the device is no encoder whose shaft the bench turns: its event-driven TPDOs "
                     "wait for a manufacturer event this bench cannot cause")
 
@@ -215,7 +216,7 @@ def test_reset_node_reloads_application_parameters(dut, settings_journal, eviden
     found, stored = _unstored_change(dut, settings_journal, lambda index, e: index >= 0x2000
                                      and e.persisted_by in STORE_GROUPS)
     if found is None:
-        pytest.skip("not applicable: the profile declares no writable application parameter with a default")
+        not_applicable("the profile declares no writable application parameter with a default")
     dut.reset_node_and_wait()
     observed = dut.read_uint(found.index, found.sub)
     evidence.note(f"{found.label}: stored {stored}, changed without storing, {observed} after reset node")
@@ -228,7 +229,7 @@ def test_reset_communication_reloads_communication_parameters(dut, settings_jour
     found, stored = _unstored_change(dut, settings_journal, lambda index, e: index < 0x2000
                                      and e.persisted_by in STORE_GROUPS, prefer=(0x1017,))
     if found is None:
-        pytest.skip("not applicable: no communication parameter is stored on command (all persisted_by auto/none)")
+        not_applicable("no communication parameter is stored on command (all persisted_by auto/none)")
     mark = dut.nmt("reset-communication")
     assert dut.wait_bootup(mark) is not None, "no boot-up after reset communication"
     observed = dut.read_uint(found.index, found.sub)
@@ -267,7 +268,7 @@ def test_autostart_object_starts_device_after_reset(dut, settings_journal, evide
         try:
             how = persist_entry(dut, index, sub)
         except CannotPersist as exc:
-            pytest.skip(f"not applicable: {exc}")
+            not_applicable(f"{exc}")
         evidence.note(f"{index:04X}h.{sub:02X} = {operational.hex(' ').upper()}, stored with {how}")
         state = _boots_into(dut, settings_journal, evidence)
         if state != 0x05:

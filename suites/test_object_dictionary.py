@@ -10,6 +10,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import ERROR_HISTORY, SdoAbortCode
 from encoder_conformance.dut import sdo_frames
+from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.model import resolve_node_id_expression
@@ -143,7 +144,7 @@ def test_factory_default(dut, default_entry, factory_state, evidence):
     evidence.rests_on("cia" if source.startswith("CiA") else "manual", source)
     excluded = dut.profile.quirk_objects(fx.RestoreExcludes)
     if excluded is not None and index in excluded[1]:
-        pytest.skip(f"not applicable: restore-defaults leaves {index:04X}h as it was (quirk {excluded[0]})")
+        not_applicable(f"restore-defaults leaves {index:04X}h as it was (quirk {excluded[0]})")
     expected = _expected(entry, dut.node_id)
     observed = _decode(entry, _read_or_fail(dut, index, sub))
     if _zero_padded(observed, expected):
@@ -169,7 +170,7 @@ def test_heartbeat_time_reads_back_written_value(dut, settings_journal):
     """A value written to a rw entry (1017h) reads back unchanged (CTT OD 09)."""
     entry = dut.profile.entry(0x1017, 0)
     if entry is None or not entry.writable:
-        pytest.skip("not applicable: the profile declares no writable 1017h")
+        not_applicable("the profile declares no writable 1017h")
     value = 1234 if entry.max is None or entry.max >= 1234 else entry.max
     settings_journal.write(0x1017, 0, value.to_bytes(2, "little"))
     observed = dut.read_uint(0x1017)

@@ -29,12 +29,14 @@ from encoder_conformance.cia.cia301 import (
     cob_id_valid,
     is_restricted_can_id,
 )
+from encoder_conformance.coverage import Hold
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
 from encoder_conformance.dut.sdo_frames import abort_name
 from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
 from encoder_conformance.suite_support.checks import abort_accepted, expected_aborts
@@ -85,7 +87,7 @@ def _syncs(dut, count: int, cob_id: int, until_first: bool = False) -> list[can.
 
 def _need_shaft(shaft, what: str) -> None:
     if shaft is None:
-        pytest.skip(f"not applicable: {what} needs a turning shaft (the twin, or --shaft-drive)")
+        not_applicable(f"{what} needs a turning shaft (the twin, or --shaft-drive)")
 
 
 def _event_tpdo(dut, evidence, settings_journal, shaft) -> TpdoUnderTest:
@@ -93,7 +95,7 @@ def _event_tpdo(dut, evidence, settings_journal, shaft) -> TpdoUnderTest:
     its value), set up; skips where the profile has none or a quirk decides its change-driven sending."""
     _need_shaft(shaft, "a change of state")
     if not dut.profile.capabilities.encoder:
-        pytest.skip("not applicable: not an encoder; a change of its mapped values is not the bench's to cause")
+        not_applicable("not an encoder; a change of its mapped values is not the bench's to cause")
     found = dut.profile.quirk_with_effect(fx.TransmissionType255Timer0Disables.effect)
     types = EVENT_TYPES
     if found is not None:
@@ -104,10 +106,10 @@ def _event_tpdo(dut, evidence, settings_journal, shaft) -> TpdoUnderTest:
     repeat = dut.profile.quirk_of(fx.PdoSendRepeatCounters)
     if repeat is not None and comm in repeat[1].per_change:
         evidence.deviation(repeat[0], dut.profile.quirks[repeat[0]].title)
-        pytest.skip(f"not applicable: {comm:04X}h's change-driven sending is set by a send-repeat counter "
+        not_applicable(f"{comm:04X}h's change-driven sending is set by a send-repeat counter "
                     f"(quirk {repeat[0]}; test_pdo_repeat checks it)")
     if not tpdo.maps_position():
-        pytest.skip(f"not applicable: {comm:04X}h maps no position value the shaft could change")
+        not_applicable(f"{comm:04X}h maps no position value the shaft could change")
     tpdo.configure(trans_type=tpdo.trans_type, event_timer=0)
     return tpdo
 
@@ -149,7 +151,7 @@ def _writable_cob_id(dut, comm: int | None = None) -> int:
         entry = dut.profile.entry(index, 1)
         if entry is not None and entry.writable and (comm is None or index == comm):
             return index
-    pytest.skip("not applicable: no TPDO COB-ID (18xxh sub 1) is writable")
+    not_applicable("no TPDO COB-ID (18xxh sub 1) is writable")
 
 
 # -- COB-ID: valid bit, changes, restricted CAN-IDs -------------------------------------------------------
@@ -275,11 +277,11 @@ def _rtr_tpdo(dut, evidence, settings_journal) -> tuple[int, str]:
     tpdo = tpdo_under_test(dut, 2, evidence, settings_journal, [253])
     comm = tpdo.comm
     if not tpdo.writable(2):
-        pytest.skip(f"not applicable: {comm:04X}h.02 is fixed")
+        not_applicable(f"{comm:04X}h.02 is fixed")
     tpdo.configure(trans_type=253)
     evidence.rests_on("cia", "CiA 301 §7.5.2.37 (transmission type 253: sent on RTR only)")
     if tpdo.cob_id() & COB_ID_NO_RTR:
-        pytest.skip(f"not applicable: {comm:04X}h.01 bit 30 is set (no RTR allowed) although type 253 is accepted")
+        not_applicable(f"{comm:04X}h.01 bit 30 is set (no RTR allowed) although type 253 is accepted")
     return comm, "type 253"
 
 
@@ -314,7 +316,7 @@ def test_rtr_not_answered_without_rtr_bit(dut, settings_journal, back_to_preoper
     tpdo = _sync_tpdo(dut, evidence, settings_journal)
     comm, cob = tpdo.comm, tpdo.cob_id()
     if not cob & COB_ID_NO_RTR:
-        pytest.skip(f"not applicable: {comm:04X}h.01 = {cob:08X}h allows RTR (bit 30 clear)")
+        not_applicable(f"{comm:04X}h.01 = {cob:08X}h allows RTR (bit 30 clear)")
     cob_id = cob & 0x7FF
     _start(dut, settings_journal, evidence)
     mark = dut.send(cob_id, bytes(_rtr_dlc(dut, comm)), remote=True)
@@ -331,7 +333,7 @@ def test_type_0_sends_on_sync_only_after_change(dut, settings_journal, back_to_p
     tpdo = _sync_tpdo(dut, evidence, settings_journal, [0])
     comm = tpdo.comm
     if not tpdo.maps_position():
-        pytest.skip(f"not applicable: {comm:04X}h maps no position value the shaft could change")
+        not_applicable(f"{comm:04X}h maps no position value the shaft could change")
     cob_id = tpdo.can_id()
     _start(dut, settings_journal, evidence)
     _syncs(dut, 1, cob_id)  # whether the first SYNC after start sends is not this test's business
@@ -375,7 +377,7 @@ def test_change_of_state_sends_event_tpdo(dut, settings_journal, back_to_preoper
 # -- SYNC start value and the SYNC counter 1019h ----------------------------------------------------------
 def _sync_counter(dut) -> None:
     if dut.profile.entry(SYNC_COUNTER_OVERFLOW, 0) is None:
-        pytest.skip("not applicable: the profile has no 1019h (SYNC counter overflow value)")
+        not_applicable("the profile has no 1019h (SYNC counter overflow value)")
 
 
 def test_sync_start_value(dut, settings_journal, tpdo_while_invalid, back_to_preoperational, evidence):
@@ -478,7 +480,7 @@ def test_tpdo_parameters_writable_in_preoperational_only(dut, settings_journal, 
                   else expected_aborts(dut, "wrong_state", evidence))
         changes += [(*change, wanted) for change in found]
     if not changes:
-        pytest.skip("not applicable: no quirk writes_preop_only covers a writable TPDO communication entry the test "
+        not_applicable("no quirk writes_preop_only covers a writable TPDO communication entry the test "
                     "may change")
     for comm, sub, _, _, _ in changes:
         settings_journal.remember(comm, sub)
@@ -534,7 +536,7 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
     _start(dut, settings_journal, evidence)
     running = stimulate()
     if trigger != "SYNC" and not running:
-        pytest.skip(f"inconclusive: {comm:04X}h sent nothing on a change in operational (see "
+        not_judged(Hold.NO_TPDO_ON_CHANGE, f"{comm:04X}h sent nothing on a change in operational (see "
                     "test_change_of_state_sends_event_tpdo), so its silence outside operational proves nothing")
     assert running, f"{comm:04X}h: no TPDO on {cob_id:03X}h on {trigger} in operational"
     dut.nmt(state)

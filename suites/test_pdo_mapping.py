@@ -26,6 +26,7 @@ from encoder_conformance.cia.cia301 import (
     cob_id_valid,
     mapping_word,
 )
+from encoder_conformance.coverage import Hold
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import format_frames
@@ -41,6 +42,7 @@ from encoder_conformance.dut.pdo_mapping import (
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.evidence import Evidence
+from encoder_conformance.plugin.skips import not_applicable, not_judged, skip_text
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import assert_abort, documented_quirk, expected_aborts
@@ -92,7 +94,7 @@ def _first_variable(dut: DeviceUnderTest, slots: int = 1) -> VariableMapping:
         if found is not None and found.slots >= slots:
             return found
     fixed = "" if _mapping_objects(dut) else " (the profile has no mapping objects)"
-    pytest.skip(f"not applicable: no TPDO with a writable COB-ID, sub 0 and {slots} writable mapping entries{fixed}")
+    not_applicable(f"no TPDO with a writable COB-ID, sub 0 and {slots} writable mapping entries{fixed}")
 
 
 def _mappable(dut: DeviceUnderTest) -> list[Entry]:
@@ -147,7 +149,7 @@ def test_default_mapping_names_mappable_objects(dut: DeviceUnderTest, evidence: 
     if not objects:
         found = dut.profile.quirk_of(fx.FixedTpdoMapping)
         reason = f" (fixed payload, quirk {found[0]})" if found else ""
-        pytest.skip(f"not applicable: the profile has no TPDO mapping objects{reason}")
+        not_applicable(f"the profile has no TPDO mapping objects{reason}")
     lengths = dut.profile.quirk_of(fx.MappingLengthDiffers)
     problems = []
     for mapping in objects:
@@ -188,14 +190,14 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
     try:
         choice = choose_tpdo(dut, 1, [1])
     except NoUsableTpdo as exc:
-        pytest.skip(str(exc))
+        skip_text(str(exc))
     tpdo = _variable(dut, choice.comm)
     if tpdo is None:
         fixed = "is fixed (sub 0 or entries read-only)" if _mapping_objects(dut) else "has no object"
-        pytest.skip(f"not applicable: the mapping of {choice.comm:04X}h {fixed}")
+        not_applicable(f"the mapping of {choice.comm:04X}h {fixed}")
     plan = _plan(dut, tpdo.slots)
     if not plan:
-        pytest.skip("not applicable: the profile names no readable PDO-mappable object of at most 32 bits")
+        not_applicable("the profile names no readable PDO-mappable object of at most 32 bits")
     if shaft is not None:
         shaft.turn_by(0.37)  # a position other than 0, which a shifted entry's zeros would match
     evidence.rests_on("cia", "CiA 301 §7.5.2.38 (procedure), §7.2.2 (a PDO carries the mapped objects in order)")
@@ -272,7 +274,7 @@ def test_mapping_of_unmappable_object_refused(dut: DeviceUnderTest, variable_tpd
     target = next(((i, s, b) for i, s, _, e in dut.profile.iter_entries() if not e.pdo_mappable and e.readable
                    and i >= 0x1000 and (b := _object_bits(dut, i, s)) and b <= 32), None)
     if target is None:
-        pytest.skip("not applicable: every object of the profile is PDO-mappable")
+        not_applicable("every object of the profile is PDO-mappable")
     _opened(dut, tpdo)
     entries = _raw_entries(dut, tpdo)
     response = _write(dut, tpdo.mapping, 1, mapping_word(*target), 4)
@@ -287,7 +289,7 @@ def test_mapping_longer_than_64_bits_refused(dut: DeviceUnderTest, evidence: Evi
     tpdo = _first_variable(dut, slots=2)
     widest = max(_mappable(dut), key=lambda c: c[2], default=None)
     if widest is None or widest[2] * tpdo.slots <= PDO_MAX_BITS:
-        pytest.skip(f"not applicable: {tpdo.slots} entries of mappable objects cannot exceed {PDO_MAX_BITS} bits")
+        not_applicable(f"{tpdo.slots} entries of mappable objects cannot exceed {PDO_MAX_BITS} bits")
     count = PDO_MAX_BITS // widest[2] + 1
     evidence.rests_on("cia", "CiA 301 §7.5.2.38 (06040042h: the mapped objects exceed the PDO length)")
     with MappingCustody(dut, tpdo.comm):
@@ -313,7 +315,7 @@ def test_mapping_entry_refused_while_sub0_not_zero(dut: DeviceUnderTest, variabl
     tpdo, _ = variable_tpdo
     before = read_mapping(dut, tpdo.comm)
     if not before:
-        pytest.skip(f"not applicable: {tpdo.mapping:04X}h maps nothing (sub 0 = 0)")
+        not_applicable(f"{tpdo.mapping:04X}h maps nothing (sub 0 = 0)")
     invalidate(dut, tpdo.comm)
     other = next((c for c in _mappable(dut) if c != before[0]), before[0])
     response = _write(dut, tpdo.mapping, 1, mapping_word(*other), 4)
@@ -331,7 +333,7 @@ def test_mapping_refused_while_pdo_valid(dut: DeviceUnderTest, variable_tpdo, ev
     found = dut.profile.quirk_with_effect(fx.MappingChangeWhileValid.effect)
     if found is not None:
         evidence.deviation(found[0], found[1].title)
-        pytest.skip(f"not applicable: the manual's procedure changes the mapping with the PDO valid (quirk "
+        not_applicable(f"the manual's procedure changes the mapping with the PDO valid (quirk "
                     f"{found[0]}; test_documented_procedure_with_pdo_valid checks it)")
     tpdo, _ = variable_tpdo
     before = read_mapping(dut, tpdo.comm)
@@ -348,7 +350,7 @@ def _make_valid(dut: DeviceUnderTest, tpdo: VariableMapping, before: list[Entry]
     cob_id = dut.read_uint(tpdo.comm, 1)
     if cob_id & COB_ID_INVALID:
         if not before:
-            pytest.skip(f"not applicable: {tpdo.comm:04X}h is invalid and maps nothing")
+            not_applicable(f"{tpdo.comm:04X}h is invalid and maps nothing")
         dut.write_uint(tpdo.comm, 1, cob_id_valid(cob_id), 4)
         evidence.note(f"{tpdo.comm:04X}h.01 bit 31 cleared (PDO valid) for the test")
 
@@ -385,15 +387,15 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
     §7.5.2.38; CTT PDO 33). The dummy's own bytes are not judged."""
     dummies = dut.profile.capabilities.pdo_dummy_mapping
     if not dummies:
-        pytest.skip("not applicable: the profile declares no dummy mapping (capabilities.pdo_dummy_mapping)")
+        not_applicable("the profile declares no dummy mapping (capabilities.pdo_dummy_mapping)")
     try:
         choice = choose_tpdo(dut, 1, [1])
     except NoUsableTpdo as exc:
-        pytest.skip(str(exc))
+        skip_text(str(exc))
     tpdo = _variable(dut, choice.comm)
     objects = [c for c in _mappable(dut) if c[2] <= 32]
     if tpdo is None or tpdo.slots < 2 or not objects:
-        pytest.skip("not applicable: no TPDO with two writable mapping entries and a mappable object")
+        not_applicable("no TPDO with two writable mapping entries and a mappable object")
     dummy = max(dummies, key=lambda d: (DUMMY_BITS[d] % 8 == 0, DUMMY_BITS[d]))
     target = next((c for c in objects if c[0] == POSITION), objects[0])
     plan = [(dummy, 0, DUMMY_BITS[dummy]), target]
@@ -421,7 +423,7 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
     carried = bytes(frame.data)[start:start + target[2] // 8]
     evidence.note(f"{describe(plan)}: {format_frames([frame])}")
     if expected != again:
-        pytest.skip(f"inconclusive: {target[0]:04X}h changed between the SDO reads")
+        not_judged(Hold.VALUES_CHANGED, f"{target[0]:04X}h changed between the SDO reads")
     assert carried == expected, (f"{describe(plan)}: bytes {start}.. carry {carried.hex(' ').upper()}, "
                                  f"{target[0]:04X}h reads {expected.hex(' ').upper()}")
 
@@ -433,7 +435,7 @@ def test_fixed_mapping_refuses_changes(dut: DeviceUnderTest, evidence: Evidence)
     if not objects:
         found = dut.profile.quirk_of(fx.FixedTpdoMapping)
         if found is None:
-            pytest.skip("not applicable: the profile has no mapping objects and documents no fixed payload")
+            not_applicable("the profile has no mapping objects and documents no fixed payload")
         evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
         evidence.rests_on("manual", f"{dut.profile.quirks[found[0]].manual} (quirk {found[0]}: no 1A00h)")
         response = _write(dut, 0x1A00, 0, 0, 1)
@@ -441,7 +443,7 @@ def test_fixed_mapping_refuses_changes(dut: DeviceUnderTest, evidence: Evidence)
         return
     fixed = [(m, s, e) for m in objects for s, e in dut.profile.objects[m].entries().items() if not e.writable]
     if not fixed:
-        pytest.skip("not applicable: every mapping entry is writable (variable mapping)")
+        not_applicable("every mapping entry is writable (variable mapping)")
     evidence.rests_on("manual", f"{dut.profile.objects[fixed[0][0]].manual} (mapping read-only); CiA 301 §7.2.4.3.17")
     problems = []
     for mapping, sub, _ in fixed:

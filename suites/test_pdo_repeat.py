@@ -13,6 +13,7 @@ from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.persistent_error import raise_if_held_by_error
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.plugin.skips import not_applicable, not_equipped
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
 
@@ -26,7 +27,7 @@ def _quirk_params(dut, effect: type[fx.P], evidence) -> fx.P:
 def _counter_spec(counters: dict[int, int], key: str) -> tuple[int, int]:
     """(comm index, counter object) of the quirk's ``tpdo1``/``tpdo2`` entry."""
     if not counters:
-        pytest.skip(f"not applicable: the quirk names no {key} counter")
+        not_applicable(f"the quirk names no {key} counter")
     return next(iter(counters.items()))
 
 
@@ -69,7 +70,7 @@ def test_send_repeat_counter_sends_each_change_n_times(
     params = _quirk_params(dut, fx.PdoSendRepeatCounters, evidence)
     comm, counter = _counter_spec(params.per_change, "tpdo1")
     if shaft is None:
-        pytest.skip("needs a turning shaft: the simulator's shaft control (no bench drive configured)")
+        not_equipped("needs a turning shaft: the simulator's shaft control (no bench drive configured)")
     repeats = min(3, params.counter_max)
     cob_id = _valid_cob_id(dut, comm, settings_journal)
     settings_journal.write(comm, 5, (0).to_bytes(2, "little"))
@@ -132,7 +133,7 @@ def test_bits_forced_again_at_init(dut, settings_journal, back_to_preoperational
     """The forced bits (SIKO: 1801h sub 1 bit 31, PDO2 disabled) are set again after NMT reset."""
     params = _quirk_params(dut, fx.BitsForcedAtInit, evidence)
     if RESET_EVENTS[reset] not in params.at:
-        pytest.skip(f"not applicable: the quirk does not force the bits at {reset}")
+        not_applicable(f"the quirk does not force the bits at {reset}")
     index, sub, bits = params.index, params.subindex, params.forced_bits
     label = f"{index:04X}h.{sub:02X}"
     size = len(dut.read(index, sub))

@@ -17,10 +17,12 @@ import can
 import pytest
 
 from encoder_conformance.cia.cia301 import SYNC_COB_ID
+from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
 from encoder_conformance.suite_support.checks import inconclusive_if_host_late
 from encoder_conformance.suite_support.periodic import judge_stream
 from encoder_conformance.suite_support.tpdo import tpdo_under_test
@@ -79,7 +81,7 @@ def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, twi
                     judged="every latency within the band (the k-th TPDO answers the k-th SYNC)")
     evidence.note(f"tester host during the capture: {host.describe()}")
     if clock.hardware and min(latencies) < 0:
-        pytest.skip("inconclusive: the SYNCs carry the host's clock and the TPDOs the adapter's, and the two "
+        not_judged(Hold.CLOCKS_APART, "the SYNCs carry the host's clock and the TPDOs the adapter's, and the two "
                     f"disagree (a TPDO {-min(latencies):.1f} ms before its SYNC); latency needs one clock")
     early = [(n, ms) for n, ms in enumerate(latencies) if ms < 0]
     assert not early, "TPDOs before the SYNC they answer (an unprompted TPDO shifts the pairing): " + ", ".join(
@@ -102,9 +104,9 @@ def _inhibited_tpdo(dut, settings_journal, tpdo_while_invalid, evidence, shaft,
     tpdo = tpdo_under_test(dut, 3, evidence, settings_journal, [254, 255])
     comm, kind = tpdo.comm, tpdo.trans_type
     if shaft is None:
-        pytest.skip("not available: no shaft drive (--shaft-drive) to change the position inside the inhibit time")
+        not_equipped("no shaft drive (--shaft-drive) to change the position inside the inhibit time")
     if not dut.profile.capabilities.encoder or not tpdo.maps_position():
-        pytest.skip(f"not applicable: {comm:04X}h maps no position value a turning shaft could change (the changes "
+        not_applicable(f"{comm:04X}h maps no position value a turning shaft could change (the changes "
                     "inside the inhibit time come from the shaft)")
     cob_id = tpdo.can_id()
     timer = dut.profile.entry(comm, 5)
@@ -178,7 +180,7 @@ def test_inhibit_time_delays_events_not_drops(dut, settings_journal, tpdo_while_
     comm = tpdo.comm
     where = tpdo.mapped_bytes_of(POSITION)
     if where is None:
-        pytest.skip(f"not applicable: {comm:04X}h does not map the position value {POSITION:04X}h on byte bounds")
+        not_applicable(f"{comm:04X}h does not map the position value {POSITION:04X}h on byte bounds")
     window = (HOLD_INHIBIT_MS + dut.profile.timing.pdo_response_max_ms) / 1000 + dut.pdo_silence_s
 
     def is_tpdo(msg: can.Message) -> bool:
@@ -212,7 +214,7 @@ def test_inhibit_time_delays_events_not_drops(dut, settings_journal, tpdo_while_
             f"{position.hex(' ').upper()}: the change inside the inhibit time was not sent\n"
             f"{format_frames(dut.frames.since(mark, is_tpdo))}")
     if not judged:
-        pytest.skip(f"inconclusive: the tester never changed the position within {HOLD_INHIBIT_MS / 2:g} ms of a "
+        not_judged(Hold.STIMULUS_LATE, f"the tester never changed the position within {HOLD_INHIBIT_MS / 2:g} ms of a "
                     "TPDO (host too slow)")
 
 

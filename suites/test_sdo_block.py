@@ -19,6 +19,7 @@ import pytest
 
 from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
 from encoder_conformance.dut.sdo_client import SdoProtocolClient
+from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import judge_refusal
@@ -68,7 +69,7 @@ def _target(dut) -> tuple[int, int]:
         entry = dut.profile.entry(*key)
         if entry is not None and entry.writable and entry.readable and datatypes.size_bytes(entry.type) == 2:
             return key
-    pytest.skip("not applicable: the profile declares no harmless writable 16-bit entry (1017h, 100Ch, 6200h)")
+    not_applicable("the profile declares no harmless writable 16-bit entry (1017h, 100Ch, 6200h)")
 
 
 def _other_value(current: bytes) -> bytes:
@@ -205,7 +206,7 @@ def test_block_initiate_refused_without_block_transfer(dut, sdo, evidence):
     05040001h (CTT SDO 19/22) echoing the entry; a device whose manual leaves block transfer unconfirmed may
     serve them instead (recorded)."""
     if dut.profile.capabilities.block_sdo:
-        pytest.skip("not applicable: the profile declares block transfer (test_block_upload and others check it)")
+        not_applicable("the profile declares block transfer (test_block_upload and others check it)")
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 05040001h (client/server command specifier not valid or unknown)")
     unconfirmed = dut.profile.quirk_with_effect(fx.BlockTransferUnconfirmed.effect)
     if unconfirmed is not None:

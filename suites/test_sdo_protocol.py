@@ -13,9 +13,11 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import SDO_ABORT, SdoAbortCode
+from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.device import SdoAborted
 from encoder_conformance.dut.sdo_client import SdoProtocolClient, echoes
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name, upload_request
+from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import datatypes
 from encoder_conformance.suite_support.checks import expected_aborts, judge_refusal
 
@@ -49,7 +51,7 @@ def _target(dut) -> tuple[int, int]:
     """A harmless 16-bit entry to write (1017h where declared), or skip."""
     found = _harmless(dut.profile, 2)
     if found is None:
-        pytest.skip("not applicable: the profile declares no harmless writable 16-bit entry (1017h, 100Ch, ...)")
+        not_applicable("the profile declares no harmless writable 16-bit entry (1017h, 100Ch, ...)")
     return found
 
 
@@ -78,7 +80,7 @@ def _long_entries(profile) -> list[tuple[int, int, int | None]]:
 def _longest(dut) -> tuple[int, int]:
     longest = [(i, s) for i, s, _ in _long_entries(dut.profile)]
     if not longest:
-        pytest.skip("not applicable: every object the profile declares fits an expedited transfer (4 bytes)")
+        not_applicable("every object the profile declares fits an expedited transfer (4 bytes)")
     sizes = {}
     for key in longest:
         try:
@@ -86,7 +88,7 @@ def _longest(dut) -> tuple[int, int]:
         except SdoAborted:  # the entry's own verdict: test_segmented_upload_of_every_long_entry
             continue
     if not sizes:
-        pytest.skip("could not test: the read of every entry over 4 bytes aborts (judged by "
+        not_judged(Hold.NO_READABLE_LONG_ENTRY, "the read of every entry over 4 bytes aborts (judged by "
                     "test_segmented_upload_of_every_long_entry)")
     return max(sizes, key=lambda key: sizes[key])
 
@@ -127,7 +129,7 @@ def test_expedited_download_byte_exact(dut, sdo, settings_journal, evidence):
     evidence.rests_on("cia", EXPEDITED)
     keys = {size: key for size in (1, 2, 4) if (key := _harmless(dut.profile, size)) is not None}
     if not keys:
-        pytest.skip("not applicable: no harmless writable entry of 1, 2 or 4 bytes (see HARMLESS)")
+        not_applicable("no harmless writable entry of 1, 2 or 4 bytes (see HARMLESS)")
     problems = []
     for size, key in keys.items():
         current = dut.read(*key)
@@ -173,7 +175,7 @@ def _mismatch_target(dut, longer: bool) -> tuple[tuple[int, int], int]:
         size = datatypes.size_bytes(entry.type) if entry is not None and entry.writable and entry.readable else None
         if size is not None and 1 <= size + (1 if longer else -1) <= 4:
             return (index, sub), size + (1 if longer else -1)
-    pytest.skip("not applicable: no harmless writable entry of a size the test can miss by one byte (see HARMLESS)")
+    not_applicable("no harmless writable entry of a size the test can miss by one byte (see HARMLESS)")
 
 
 @pytest.mark.parametrize("longer", [False, True], ids=["too-short", "too-long"])
@@ -199,7 +201,7 @@ def test_segmented_upload_of_every_long_entry(dut, sdo, evidence):
     evidence.rests_on("cia", SEGMENTED)
     entries = _long_entries(dut.profile)
     if not entries:
-        pytest.skip("not applicable: every object the profile declares fits an expedited transfer (4 bytes)")
+        not_applicable("every object the profile declares fits an expedited transfer (4 bytes)")
     problems = []
     for index, sub, size in entries:
         result = sdo.upload(index, sub)
@@ -219,7 +221,7 @@ def test_segmented_upload_wrong_toggle_aborts(dut, sdo, evidence):
     key = _longest(dut)
     first = sdo.initiate_upload(*key)
     if first is None or first.is_abort or first.raw[0] & 0x02:
-        pytest.skip(f"not applicable: {key[0]:04X}h.{key[1]:02X} came expedited")
+        not_applicable(f"{key[0]:04X}h.{key[1]:02X} came expedited")
     response = sdo.upload_segment(toggle=1)
     judge_refusal(dut, response, {SdoAbortCode.TOGGLE_BIT}, set(), "upload segment with toggle bit 1 first", evidence)
     assert response is not None
@@ -278,7 +280,7 @@ def _open_upload(dut, sdo) -> tuple[int, int]:
     first = sdo.initiate_upload(*key)
     assert first is not None, f"no response to the upload of {key[0]:04X}h.{key[1]:02X}"
     if first.is_abort or first.raw[0] & 0x02:
-        pytest.skip(f"not applicable: {key[0]:04X}h.{key[1]:02X} came as {first.describe()}")
+        not_applicable(f"{key[0]:04X}h.{key[1]:02X} came as {first.describe()}")
     segment = sdo.upload_segment(toggle=0)
     assert segment is not None, "no response to the first upload segment request"
     return key

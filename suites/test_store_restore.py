@@ -7,6 +7,7 @@ import pytest
 from encoder_conformance.cia.cia301 import LOAD, SAVE
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
+from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import assert_abort, documented_quirk, expected_aborts
 from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
@@ -29,14 +30,14 @@ def stored_change(dut, settings_journal, evidence):
     """Change one storable parameter and store it; afterwards put the old value back and store again."""
     found = changeable_parameter(dut.profile, lambda i, e: e.persisted_by in (*STORE_GROUPS, "auto"), prefer=(0x1017,))
     if found is None:
-        pytest.skip("not applicable: the profile declares no storable parameter with a default")
+        not_applicable("the profile declares no storable parameter with a default")
     index, sub, entry, value = found.index, found.sub, found.entry, found.new_value
     original = dut.read(index, sub)
     settings_journal.write(index, sub, value.to_bytes(len(original), "little"))
     try:
         how = _store(dut, index, sub)
     except CannotPersist as exc:
-        pytest.skip(f"not applicable: {exc}")
+        not_applicable(f"{exc}")
     evidence.note(f"{found.label} = {value}, stored with {how}")
     yield index, sub, entry, value
     if dut.usable:
@@ -66,7 +67,7 @@ def test_restore_defaults_effective_after_reset(dut, stored_change):
     index, sub, entry, _ = stored_change
     excluded = dut.profile.quirk_objects(fx.RestoreExcludes)
     if excluded is not None and index in excluded[1]:
-        pytest.skip(f"not applicable: restore leaves {index:04X}h unchanged (quirk {excluded[0]})")
+        not_applicable(f"restore leaves {index:04X}h unchanged (quirk {excluded[0]})")
     dut.write(0x1011, 1, LOAD)
     dut.reset_node_and_wait()
     observed = dut.read_uint(index, sub)
@@ -83,7 +84,7 @@ def test_wrong_signature_refused(dut, index, name, evidence):
     capabilities = dut.profile.capabilities
     subs = capabilities.store_subindices if index == 0x1010 else capabilities.restore_subindices
     if not subs:
-        pytest.skip(f"not applicable: the profile declares no {name} sub-indices")
+        not_applicable(f"the profile declares no {name} sub-indices")
     response = dut.expect_abort(sdo_frames.expedited_download_request(index, subs[0], b"SAVE"))
     assert_abort(dut, response, expected_aborts(dut, "store_signature", evidence),
                  f"{name} {index:04X}h.{subs[0]:02X} with signature 'SAVE'")

@@ -27,6 +27,7 @@ from encoder_conformance.cia.cia301 import (
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
+from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
 from encoder_conformance.suite_support.checks import abort_accepted
@@ -49,7 +50,7 @@ def sync_cob_id(dut, settings_journal) -> int:
     """1005h as found (put back after the test); skips where it cannot be written."""
     entry = dut.profile.entry(SYNC_COB_ID_OBJECT, 0)
     if entry is None or not entry.writable:
-        pytest.skip("not applicable: the profile has no writable 1005h")
+        not_applicable("the profile has no writable 1005h")
     found = dut.read_uint(SYNC_COB_ID_OBJECT)
     settings_journal.remember(SYNC_COB_ID_OBJECT, 0, found.to_bytes(4, "little"))
     return found
@@ -97,15 +98,15 @@ def test_sync_producer_sends_every_cycle(dut, sync_cob_id, settings_journal, evi
     evidence.rests_on("cia", "CiA 301 v4.2.0 §7.5.2.5 (1005h bit 30: the device generates SYNC), §7.5.2.6 (1006h: "
                              "the SYNC period in µs; 0 = no SYNC transmitted)")
     if not dut.profile.capabilities.sync_producer:
-        pytest.skip("not applicable: the profile declares no SYNC producer (capabilities.sync_producer)")
+        not_applicable("the profile declares no SYNC producer (capabilities.sync_producer)")
     cycle = dut.profile.entry(COMMUNICATION_CYCLE_PERIOD, 0)
     if cycle is None or not cycle.writable:
-        pytest.skip("not applicable: the profile has no writable 1006h (communication cycle period)")
+        not_applicable("the profile has no writable 1006h (communication cycle period)")
     if dut.read_uint(COMMUNICATION_CYCLE_PERIOD):
-        pytest.skip("not applicable: 1006h is not 0 as found (the bus's SYNC may be this device's)")
+        not_applicable("1006h is not 0 as found (the bus's SYNC may be this device's)")
     generating = sync_cob_id | COB_ID_SYNC_GENERATE
     if _write(dut, generating).is_abort:
-        pytest.skip(f"not applicable: 1005h = {generating:08X}h refused (the device does not generate SYNC)")
+        not_applicable(f"1005h = {generating:08X}h refused (the device does not generate SYNC)")
     can_id = sync_cob_id & 0x7FF
 
     def is_own_sync(msg) -> bool:
@@ -167,10 +168,10 @@ def test_sync_taken_on_its_cob_id(dut, sync_cob_id, settings_journal, back_to_pr
     other = (sync_cob_id & ~0x7FF) | OTHER_SYNC_CAN_ID
     domain = declared_domain(dut.profile, SYNC_COB_ID_OBJECT, 0)
     if domain is not None and other not in domain:
-        pytest.skip(f"not applicable: the profile declares 1005h in {domain}, without {other:08X}h")
+        not_applicable(f"the profile declares 1005h in {domain}, without {other:08X}h")
     chosen = tpdo_under_test(dut, 2, evidence, settings_journal, [1, *range(2, 241)])
     if chosen.trans_type != 1:
-        pytest.skip(f"not applicable: {chosen.comm:04X}h is sent on every {chosen.trans_type}th SYNC only (fixed), "
+        not_applicable(f"{chosen.comm:04X}h is sent on every {chosen.trans_type}th SYNC only (fixed), "
                     "not on each")
     chosen.configure(trans_type=1)
     tpdo = chosen.can_id()

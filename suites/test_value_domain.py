@@ -15,6 +15,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import SdoAbortCode
 from encoder_conformance.dut import sdo_frames
+from encoder_conformance.plugin.skips import skip_text
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain, probe_values, refusal_basis
@@ -83,7 +84,7 @@ def test_write_outside_declared_domain_is_refused(dut, value_domain_entry, setti
     index, sub, _, entry = value_domain_entry
     reason = _skip_reason(dut.profile, index, entry)
     if reason:
-        pytest.skip(reason)
+        skip_text(reason)
     domain = declared_domain(dut.profile, index, sub)
     probes = probe_values(dut.profile, index, sub)
     assert domain, "the parametrisation only selects entries with probe values"

@@ -13,6 +13,7 @@ import pytest
 
 from encoder_conformance.dut.encoder_bench import EncoderBench
 from encoder_conformance.plugin.evidence import Evidence
+from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.suite_support.work_area import WorkArea
 
 # the position is put by preset (capability preset), so the tests run on a bench without a motor
@@ -25,7 +26,7 @@ def work_area(encoder: EncoderBench) -> WorkArea:
     """Work-area channel 1 (limits put back after the test by the encoder fixture)."""
     settings = encoder.access.settings()
     if settings.span < 64:
-        pytest.skip(f"not applicable: a position range of {settings.span} is too small for the work-area layout")
+        not_applicable(f"a position range of {settings.span} is too small for the work-area layout")
     return WorkArea(encoder, settings.span, settings.limits()[0])
 
 

@@ -151,7 +151,7 @@ def test_every_package_has_a_layer_and_says_what_it_holds():
 def test_root_holds_only_the_bottom_layer():
     """The package root keeps the modules every layer may use; each concern has a folder."""
     root_modules = sorted(p.stem for p in LIBRARY.glob("*.py"))
-    assert root_modules == ["__init__", "__main__", "basis", "errors", "exit_codes", "paths", "run_summary"]
+    assert root_modules == ["__init__", "__main__", "basis", "coverage", "errors", "exit_codes", "paths", "run_summary"]
 
 
 def test_packages_import_only_lower_layers():
@@ -340,3 +340,15 @@ def test_suites_and_fixtures_do_not_import_fixture_modules():
                  for path in (REPO / folder).glob("*.py")
                  if any(i == "fixtures" or i.startswith("fixtures.") for i in _imports(path))]
     assert offenders == []
+
+
+def test_suites_skip_only_with_a_typed_reason():
+    """A test ends without a verdict only through plugin/skips.py (a scope kind or a coverage.Hold): a bare
+    ``pytest.skip`` in the suites, fixtures or the suites' helpers would be an untyped reason."""
+    bare = []
+    for folder in (REPO / "suites", REPO / "fixtures", LIBRARY / "suite_support", LIBRARY / "dut"):
+        for path in folder.rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+                if isinstance(node, ast.Call) and ast.unparse(node.func) in ("pytest.skip", "skip"):
+                    bare.append(f"{path.relative_to(REPO)}:{node.lineno}")
+    assert bare == []

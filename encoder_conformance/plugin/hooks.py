@@ -22,7 +22,7 @@ from encoder_conformance.errors import (
     BusLostError,
     BusSetupError,
     DutLostError,
-    HeldByPersistentError,
+    NotJudged,
     ProfileError,
 )
 from encoder_conformance.paths import CONTENT_ROOT
@@ -35,6 +35,7 @@ from encoder_conformance.plugin import (
     run_record,
     selection,
     shuffle,
+    skips,
     time_budget,
     twin_launch,
     verdicts,
@@ -149,12 +150,14 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
         # the tester lost its bus: not the device's failure, and the test did not run to its end
         report.outcome = "skipped"
         report.longrepr = (str(item.path), item.location[1] or 0, f"not run to the end: {exc}")
-    elif isinstance(exc, HeldByPersistentError):
-        # the device keeps an error that holds it out of the state the test needs: not testable, not a verdict
+    elif isinstance(exc, NotJudged):
+        # in scope, but the device's state or answers left nothing to judge: not testable (or inconclusive)
         report.outcome = "skipped"
         report.longrepr = (str(item.path), item.location[1] or 0, str(exc))
     elif isinstance(exc, DutLostError):
         report.longrepr = str(exc)  # one line: the device is gone (note_loss adds the last frames sent)
+    if report.skipped:
+        skips.book(report, exc)  # why it did not judge: out of scope, not testable, inconclusive
     outcomes.classify(item, call, report)  # no finding about the device: an internal error of the tool
     lifecycle.note_loss(item, report)  # the device stopped answering in this test: it fails, naming the frames
     verdicts.judge(item, report, exc)  # a broken inferred rule: a warning, or a failure with --strict-inferred

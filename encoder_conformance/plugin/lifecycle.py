@@ -15,15 +15,18 @@ exit_codes.RunExit, and tells the three outcomes apart (shared DESIGN §8):
 from __future__ import annotations
 
 import json
+from collections import Counter
 from dataclasses import dataclass, field
 
 import pytest
 
+from encoder_conformance.coverage import Kind
 from encoder_conformance.dut.custody import Custody, RestoreRecord
 from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit
 from encoder_conformance.plugin.interrupt import InterruptGuard
 from encoder_conformance.plugin.outcomes import is_internal_error
 from encoder_conformance.plugin.reporting import report_dir, runs_suites
+from encoder_conformance.plugin.skips import booked
 
 
 @dataclass(frozen=True)
@@ -56,6 +59,7 @@ class RunState:
     reported: set[str] = field(default_factory=set)  # test ids with a call-phase report
     failed_tests: set[str] = field(default_factory=set)  # test ids with a failure about the device (any phase)
     internal_errors: set[str] = field(default_factory=set)  # test ids with an internal error of the tool
+    not_testable: dict[str, str] = field(default_factory=dict)  # test id -> the hold that kept it from judging
 
     @property
     def record(self) -> RestoreRecord | None:
@@ -236,11 +240,16 @@ def note_report(config: pytest.Config, report: pytest.TestReport) -> None:
         state.reported.add(report.nodeid)
     if report.failed:
         (state.internal_errors if is_internal_error(report) else state.failed_tests).add(report.nodeid)
+    elif report.skipped:
+        kind, hold = booked(report)
+        if kind is Kind.NOT_TESTABLE:
+            state.not_testable[report.nodeid] = hold.meaning if hold else Kind.NOT_TESTABLE.value
 
 
 def final_exit_status(session: pytest.Session) -> None:
     """Interrupted > could not test > a FAIL that stopped the run > device not restored > a device failure >
-    an internal error of the tool (3, only where nothing else failed) > pytest's own verdict."""
+    an internal error of the tool (3, only where nothing else failed) > incomplete (6: a check in scope was not
+    testable) > pytest's own verdict."""
     state = state_of(session.config)
     if state is None:
         return
@@ -260,6 +269,8 @@ def final_exit_status(session: pytest.Session) -> None:
         session.exitstatus = RunExit.NON_CONFORMANT
     elif state.internal_errors and session.exitstatus == pytest.ExitCode.TESTS_FAILED:
         session.exitstatus = RunExit.INTERNAL_ERROR
+    elif state.not_testable and session.exitstatus == pytest.ExitCode.OK:
+        session.exitstatus = RunExit.INCOMPLETE
     _write_outcome(session, state)
 
 
@@ -321,6 +332,10 @@ def summary_lines(config: pytest.Config) -> list[tuple[str, bool]]:
     if state.internal_errors:
         lines.append((f"{len(state.internal_errors)} internal error(s) of the tool: please report them (not counted "
                       "in any verdict): " + ", ".join(sorted(state.internal_errors)[:5]), True))
+    if state.not_testable:
+        why = Counter(state.not_testable.values()).most_common()
+        lines.append((f"INCOMPLETE: {len(state.not_testable)} check(s) in scope were not testable, so no PASS ("
+                      + "; ".join(f"{count} x {meaning}" for meaning, count in why) + ")", True))
     record = state.record
     if record is None:
         return lines

@@ -12,8 +12,9 @@ A **finding about the device** (the test fails; it counts in its area and its ba
   wrong answer);
 - an exception group (hypothesis's several failures, its ``FlakyFailure``) whose every member is one of these.
 
-**Not run** (skipped, never a verdict): ``BusLostError``, the tester lost its bus; ``HeldByPersistentError``, the
-device keeps an error that holds it out of the state the test needs (not testable, see dut/persistent_error.py).
+**Not run** (skipped, never a verdict): ``BusLostError``, the tester lost its bus; ``NotJudged``, a check in scope
+could not judge the device (e.g. ``HeldByPersistentError``: it keeps an error that holds it out of the state the
+test needs; not testable, see coverage.py and plugin/skips.py).
 
 Everything else is an **internal error of the tool**: ``AttributeError``, ``TypeError``, ``KeyError``,
 ``NameError``, ``ValueError``, an error raised inside a library, hypothesis's health checks and usage errors.
@@ -29,7 +30,7 @@ from pathlib import Path
 import pytest
 from canopen.sdo.exceptions import SdoError
 
-from encoder_conformance.errors import BusLostError, DutLostError, HeldByPersistentError
+from encoder_conformance.errors import BusLostError, DutLostError, NotJudged
 
 #: the exception types that are findings about the device (see the module's docstring)
 DEVICE_FINDINGS: tuple[type[BaseException], ...] = (AssertionError, pytest.fail.Exception, DutLostError,
@@ -41,7 +42,7 @@ INTERNAL = ("verdict", "internal error")
 
 def is_device_finding(exc: BaseException) -> bool:
     """True where ``exc`` is a finding about the device (a group: every member is one)."""
-    if isinstance(exc, BusLostError | HeldByPersistentError):
+    if isinstance(exc, BusLostError | NotJudged):
         return False
     if isinstance(exc, BaseExceptionGroup):
         return all(is_device_finding(member) for member in exc.exceptions)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import html
 import time
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -15,6 +16,7 @@ from encoder_conformance.plugin.allure_writer import BackgroundWriter, write_in_
 from encoder_conformance.plugin.evidence import EVIDENCE
 from encoder_conformance.plugin.glance import Deviation, PageContext, render, skip_reason_key
 from encoder_conformance.plugin.options import bench_settings, settings_of, trace_policy
+from encoder_conformance.plugin.skips import booked, skip_reason
 from encoder_conformance.plugin.verdicts import STRICT_OPTION, add_property, terminal_lines
 from encoder_conformance.plugin.verdicts import strict as verdicts_strict
 from encoder_conformance.run_summary import RunSummary
@@ -238,13 +240,6 @@ class HtmlTable:
             data[0] = html.escape(skip_reason(report)) + "\n"
 
 
-def skip_reason(report: pytest.TestReport) -> str:
-    """The reason text of a skip report (pytest keeps it as (file, line, 'Skipped: reason'))."""
-    longrepr = report.longrepr
-    text = str(longrepr[2]) if isinstance(longrepr, tuple) else str(longrepr)
-    return text.removeprefix("Skipped: ")
-
-
 def deviations_relied_on(config: pytest.Config) -> dict[str, int]:
     """How many verdicts of this run relied on each documented deviation (quirk id -> tests)."""
     reporter = config.pluginmanager.get_plugin("terminalreporter")
@@ -299,21 +294,33 @@ def terminal_summary(terminalreporter, config: pytest.Config,  # noqa: ANN001 - 
     budget_line = time_budget.terminal_line(config)
     if budget_line:
         terminalreporter.write_line(budget_line)
-    skipped = terminalreporter.stats.get("skipped", [])
-    if skipped:
-        reasons: dict[str, int] = {}
-        for rep in skipped:
-            key = skip_reason_key(skip_reason(rep))
-            reasons[key] = reasons.get(key, 0) + 1
-        terminalreporter.write_sep("-", "skipped, by reason")
-        for reason, count in sorted(reasons.items(), key=lambda kv: -kv[1]):
-            terminalreporter.write_line(f"{count:4d}  {reason}")
+    _skips_by_reason(terminalreporter, terminalreporter.stats.get("skipped", []))
     deviations = deviations_relied_on(config)
     if deviations:
         terminalreporter.write_sep("-", "documented deviations relied on")
         for quirk_id, count in sorted(deviations.items()):
             terminalreporter.write_line(f"{count:4d}  {quirk_id}")
     terminalreporter.write_sep("-", f"reports in {config.stash[REPORT_DIR]}")
+
+
+def _skips_by_reason(terminalreporter: pytest.TerminalReporter, skipped: list[pytest.TestReport]) -> None:
+    """The checks that gave no verdict, by reason: first those in scope (not testable: the verdict is INCOMPLETE;
+    inconclusive: at most PASS WITH WARNINGS), then the run's scope (not applicable, not available, not selected)."""
+    in_scope: Counter[str] = Counter()
+    scope: Counter[str] = Counter()
+    for rep in skipped:
+        kind, _ = booked(rep)
+        key = skip_reason_key(skip_reason(rep))
+        (in_scope if kind is None or kind.in_scope else scope)[key] += 1
+    if in_scope:
+        terminalreporter.write_sep("-", "in scope but not judged (not testable: INCOMPLETE; inconclusive: host late)",
+                                   red=True)
+        for reason, count in in_scope.most_common():
+            terminalreporter.write_line(f"{count:4d}  {reason}", red=True)
+    if scope:
+        terminalreporter.write_sep("-", "out of scope: not applicable, not available, not selected (not counted)")
+        for reason, count in scope.most_common():
+            terminalreporter.write_line(f"{count:4d}  {reason}")
 
 
 def fail_all_skipped(session: pytest.Session) -> None:

@@ -12,7 +12,8 @@ from encoder_conformance.plugin import acceptance, lifecycle, time_budget
 from encoder_conformance.plugin.evidence import EVIDENCE
 from encoder_conformance.plugin.options import bench_settings, settings_of
 from encoder_conformance.plugin.outcomes import is_internal_error
-from encoder_conformance.plugin.reporting import IDENTITY, report_dir, skip_reason
+from encoder_conformance.plugin.reporting import IDENTITY, report_dir
+from encoder_conformance.plugin.skips import booked, skip_reason
 from encoder_conformance.run_summary import Outcome, RunSummary, TestResult, area_of
 
 SUMMARY = pytest.StashKey[RunSummary]()
@@ -44,7 +45,24 @@ def start(config: pytest.Config) -> None:
         started=datetime.now().astimezone().isoformat(timespec="seconds"),
         profile_id=loaded.profile.id, profile_sha256=loaded.sha256, settings=values,
         station=getattr(station, "station", None), operator=getattr(station, "operator", None),
-        report_dir=str(folder))
+        report_dir=str(folder), scope=scope_of(config, values))
+
+
+def scope_of(config: pytest.Config, settings: dict[str, str]) -> dict[str, str]:
+    """What the station is equipped with and what the run selected, declared before the first test: the checks these
+    leave out are listed as scope, never counted against the device."""
+    scope = {
+        "power switch": settings.get("power switch", "none: the power-cycle checks are out of scope"),
+        "shaft drive": settings.get("shaft drive", "the twin's shaft" if config.getoption("--can-interface", None)
+                                    is None else "none: the checks that need rotation are out of scope"),
+        "destructive checks": ("allowed" if settings_of(config).allow_destructive
+                               else "left out: run with --allow-destructive"),
+    }
+    for option, name in (("keyword", "-k"), ("markexpr", "-m")):
+        expression = getattr(config.option, option, "")
+        if expression:
+            scope[f"selection {name}"] = expression
+    return scope
 
 
 def _stop_verdict(verdict: lifecycle.StopVerdict) -> TestResult:
@@ -116,8 +134,10 @@ def note_report(item: pytest.Item, report: pytest.TestReport) -> None:
         elif lost and lost not in existing.message:  # the device went silent: the frames sent last
             existing.message = f"{existing.message[:MESSAGE_LIMIT // 2]}\n{lost}"
         return
+    kind, hold = booked(report) if outcome == "skipped" else (None, None)
     result = TestResult(item.nodeid, area_of(item.nodeid), outcome, basis,
-                        source or (evidence.spec if evidence else None), message, round(report.duration, 3), trace)
+                        source or (evidence.spec if evidence else None), message, round(report.duration, 3), trace,
+                        kind.value if kind else None, hold.name if hold else None)
     item.stash[_RESULT] = result
     summary.results.append(result)
 
@@ -139,6 +159,8 @@ def completed(session: pytest.Session) -> RunSummary | None:
     summary.duration_s = round(time.monotonic() - config.stash[_STARTED], 2)
     summary.time_budget = time_budget.budget(config)
     summary.exit_code = int(session.exitstatus)
+    reporter = config.pluginmanager.get_plugin("terminalreporter")
+    summary.deselected = len(getattr(reporter, "stats", {}).get("deselected", [])) if reporter else 0
     state = lifecycle.state_of(config)
     if state is not None:
         # an interrupted run has no verdict either: no PASS (nor a certificate) for what was not run

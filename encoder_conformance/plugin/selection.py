@@ -6,7 +6,9 @@ from collections.abc import Callable
 
 import pytest
 
+from encoder_conformance.coverage import Kind
 from encoder_conformance.plugin.options import settings_of
+from encoder_conformance.plugin.skips import not_selected
 from encoder_conformance.profile.model import Capabilities, DeviceProfile, EntrySpec
 from encoder_conformance.profile.value_domain import probe_values
 
@@ -53,7 +55,8 @@ def parametrize_from_profile(metafunc: pytest.Metafunc) -> None:
             if wanted(profile, index, sub, entry)
         ]
         if not params:
-            params = [pytest.param(None, id="none", marks=pytest.mark.skip(reason=EMPTY_REASON[fixture]))]
+            reason = f"{Kind.NOT_APPLICABLE.value}: {EMPTY_REASON[fixture]}"
+            params = [pytest.param(None, id="none", marks=pytest.mark.skip(reason=reason))]
         metafunc.parametrize(fixture, params)
 
 
@@ -100,5 +103,5 @@ def check_gates(item: pytest.Item) -> None:
     """Destructive tests need --allow-destructive on hardware."""
     settings = settings_of(item.config)
     if item.get_closest_marker("destructive") and not settings.allow_destructive:
-        pytest.skip("destructive (changes what the device remembers): run with --allow-destructive")
+        not_selected("destructive (changes what the device remembers): run with --allow-destructive")
 

@@ -7,8 +7,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
-import pytest
-
 from encoder_conformance.basis import Basis
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.encoder_bench import EncoderBench
@@ -16,6 +14,7 @@ from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.cam import Cam
 from encoder_conformance.models.encoder.reference import EncoderReference
 from encoder_conformance.plugin.evidence import Evidence
+from encoder_conformance.plugin.skips import not_applicable
 
 CHANNEL = 1  # the tests use CAM channel 1 (sub-index 1 of every CAM object)
 WINDOW_RULE = "CiA 406 6300h-6302h, 6310h-6327h (CAM state, enable, polarity, limits)"
@@ -139,7 +138,7 @@ class CamChannel:
         range: valid positions on signed devices too), with room for ``hysteresis`` between them."""
         pitch = min(self.span // 2, ROOM) // (self.count + 2)
         if pitch < 8:
-            pytest.skip(f"not applicable: a position range of {self.span} leaves no room for {self.count} windows")
+            not_applicable(f"a position range of {self.span} leaves no room for {self.count} windows")
         width = pitch // 2
         return {n: Cam(self.lowest + pitch * (n + 1), self.lowest + pitch * (n + 1) + width, hysteresis)
                 for n in range(self.count)}

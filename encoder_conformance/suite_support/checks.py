@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-import pytest
-
 from encoder_conformance.cia.cia301 import ABORT_FOR_SITUATION
+from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import HostLatency
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
 from encoder_conformance.models.timing import interval_stats, schedule_fit
 from encoder_conformance.plugin.evidence import Evidence
+from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile.model import HeartbeatTolerance
 from encoder_conformance.profile.quirk_effects import AbortCode, P
 
@@ -141,7 +141,7 @@ def _inconclusive_if_host_explains(timestamps: list[float], period_ms: float, al
         return  # the period itself is off while the host kept time: the device's
     if unexplained and not period_off:
         return  # a frame off the schedule while the host was on time: the device's
-    pytest.skip(f"inconclusive: {what} timing cannot be judged, the tester's host was overloaded: "
+    not_judged(Hold.HOST_LATE, f"{what} timing cannot be judged, the tester's host was overloaded: "
                 f"{host.describe()}; tolerance {allowed:.1f} ms. Frames off the schedule: "
                 + (", ".join(f"#{n}: {o:+.1f} ms" for n, o in late[:8]) or "none"))
 
@@ -149,7 +149,7 @@ def _inconclusive_if_host_explains(timestamps: list[float], period_ms: float, al
 def inconclusive_if_host_late(when: list[float], excess_ms: list[float], host: HostLatency, what: str) -> None:
     """Skip as inconclusive where the tester's host was itself that late at each moment a figure is off."""
     if all(host.worst_near(t, 0.05) >= ms for t, ms in zip(when, excess_ms, strict=True)):
-        pytest.skip(f"inconclusive: {what} cannot be judged, the tester's host was overloaded at each sample "
+        not_judged(Hold.HOST_LATE, f"{what} cannot be judged, the tester's host was overloaded at each sample "
                     f"off the limit: {host.describe()}")
 
 
@@ -168,10 +168,10 @@ def documented_quirk(dut: DeviceUnderTest, effect: type[P], evidence: Evidence, 
     """
     found = dut.profile.quirk_with_effect(effect.effect)
     if found is None:
-        pytest.skip(f"not applicable: {otherwise} (no quirk {effect.effect})")
+        not_applicable(f"{otherwise} (no quirk {effect.effect})")
     quirk_id, quirk = found
     missing = [name for name in needs if getattr(quirk.params, name, None) is None]
     if missing:
-        pytest.skip(f"not applicable: quirk {quirk_id} names no {', '.join(missing)} the suite may use")
+        not_applicable(f"quirk {quirk_id} names no {', '.join(missing)} the suite may use")
     evidence.deviation(quirk_id, quirk.title)
     return quirk.params

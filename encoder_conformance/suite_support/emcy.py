@@ -5,14 +5,15 @@ the trigger causes one). Settings a trigger needs (1019h, 1016h) go through the 
 from __future__ import annotations
 
 import can
-import pytest
 
+from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.actuator import BenchActuator
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.emcy_trigger import EmcyCobId, EmcyTrigger, choose_trigger, emcy_code
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.settings_journal import SettingsJournal
 from encoder_conformance.plugin.evidence import Evidence
+from encoder_conformance.plugin.skips import not_equipped, not_judged
 
 
 class EmcyAccess:
@@ -30,7 +31,7 @@ class EmcyAccess:
         """A trigger that can do what the test needs, noted in the evidence; skips where the bench has none."""
         found = choose_trigger(self.dut, self._bench, self._journal.write, repeatable, clears)
         if isinstance(found, str):
-            pytest.skip(f"not available: {found}")
+            not_equipped(f"{found}")
         self.used_bench = self.used_bench or found.clears
         self._evidence.note(f"EMCY trigger: {found.name} (EMCY {found.code:04X}h expected; a bench run adds an entry "
                             "to the error history 1003h each time)")
@@ -52,7 +53,8 @@ class EmcyAccess:
             return frame
         seen = format_frames(self.dut.frames.since(mark))
         if trigger.basis[0] == "inferred" and code is None and not judged:
-            pytest.skip(f"inconclusive: no EMCY {wanted:04X}h within {trigger.answer_s() * 1000:.0f} ms after "
-                        f"{trigger.name}; only our reading says it causes one ({trigger.basis[1]})\n{seen}")
+            not_judged(Hold.NO_EMCY_FROM_TRIGGER,
+                       f"no EMCY {wanted:04X}h within {trigger.answer_s() * 1000:.0f} ms after {trigger.name}; only "
+                       f"our reading says it causes one ({trigger.basis[1]})\n{seen}")
         raise AssertionError(f"{what}: no EMCY {wanted:04X}h on {cob_id.can_id or 0:03X}h within "
                              f"{trigger.answer_s() * 1000:.0f} ms\n{seen}")

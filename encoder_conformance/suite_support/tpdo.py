@@ -3,13 +3,12 @@ the test is skipped where the profile has none that qualifies."""
 
 from __future__ import annotations
 
-import pytest
-
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.settings_journal import SettingsJournal
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.evidence import Evidence
+from encoder_conformance.plugin.skips import skip_text
 
 
 def tpdo_under_test(dut: DeviceUnderTest, sub: int, evidence: Evidence, journal: SettingsJournal,
@@ -21,7 +20,7 @@ def tpdo_under_test(dut: DeviceUnderTest, sub: int, evidence: Evidence, journal:
     except NoUsableTpdo as exc:
         for quirk_id, text in exc.deviations:
             evidence.deviation(quirk_id, text)
-        pytest.skip(str(exc))
+        skip_text(str(exc))
     for quirk_id, text in choice.deviations:
         evidence.deviation(quirk_id, text)
     tpdo = TpdoUnderTest.chosen(dut, journal, choice)
