@@ -23,12 +23,13 @@ from encoder_conformance.coverage import Kind, kind_of
 SUMMARY_FILE = "run-summary.json"
 
 #: the areas of a report, in the order a reader expects them
-AREAS: tuple[str, ...] = ("identity", "object dictionary", "SDO", "NMT", "error control", "EMCY", "PDO",
-                          "store/restore", "LSS", "encoder function", "CAM", "other")
+AREAS: tuple[str, ...] = ("identity", "working order", "object dictionary", "SDO", "NMT", "error control", "EMCY",
+                          "PDO", "store/restore", "LSS", "encoder function", "CAM", "other")
 
 #: suite module -> area (a module not named here is "other")
 MODULE_AREAS: dict[str, str] = {
     "test_identity": "identity",
+    "test_working_order": "working order",  # goods-in only: an error at start-up, NMT start
     "test_object_dictionary": "object dictionary",
     "test_value_domain": "object dictionary",
     "test_sdo_protocol": "SDO",

@@ -29,6 +29,7 @@ from encoder_conformance.paths import CONTENT_ROOT
 from encoder_conformance.plugin import (
     bus_trace,
     hypothesis_profiles,
+    junit_coverage,
     lifecycle,
     outcomes,
     reporting,
@@ -210,7 +211,9 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> Generator[
     if not lifecycle.ended_early(session.config):
         reporting.fail_all_skipped(session)
     lifecycle.final_exit_status(session)
-    run_record.finish(session)
+    summary = run_record.finish(session)
+    if xmlpath and summary is not None:
+        junit_coverage.add(Path(xmlpath), summary)  # a CI reading only JUnit sees an INCOMPLETE run as not green
     history.record(session)  # the history entry, and an acceptance run's certificate
     reporting.finish_background_writers(session.config)
     return result
