@@ -60,11 +60,11 @@ class Hold(Enum):
 PREFIXES: dict[str, Kind] = {kind.value: kind for kind in Kind}
 
 
-def kind_of(message: str) -> Kind:
-    """The kind a skip's message names by its first words; a message that names none is not testable (an untyped
-    skip must never count as out of scope)."""
+def kind_of(message: str, unnamed: Kind = Kind.NOT_TESTABLE) -> Kind:
+    """The kind a skip's message names by its first words; a message that names none is ``unnamed``: not testable
+    for a skip in a run (an untyped skip must never count as out of scope)."""
     head = message.split(":", 1)[0].strip().lower()
-    return PREFIXES.get(head, Kind.NOT_TESTABLE)
+    return PREFIXES.get(head, unnamed)
 
 
 def hold_named(name: str | None) -> Hold | None:

@@ -41,6 +41,8 @@ The exit code a class leads to is set where it is caught (``exit_codes.py`` name
           +-- HubStop                   SIGTERM/SIGINT: the hub process leaves its loop (vcan/hub.py)
 
     BaseException
+     +-- TypedSkip                      pytest's skip (its Skipped, an outcome, not an error) that says why: a scope
+     |                                  kind or a coverage.Hold (plugin/skips.py)
      +-- KeyboardInterrupt
           +-- RunInterrupted            device calls once the run is stopping (Ctrl-C, SIGTERM); by design not an
                                         EncoderConformanceError: ``except Exception`` must not swallow it

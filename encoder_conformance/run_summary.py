@@ -89,10 +89,12 @@ class TestResult:
 
     @property
     def kind(self) -> Kind | None:
-        """Why a skipped check did not judge (read from its message where an older summary kept no kind)."""
+        """Why a skipped check did not judge. A summary written before skips were typed kept no kind: read from the
+        message's first words, any other skip out of scope, as that version counted it (its record keeps its
+        verdict)."""
         if self.outcome != "skipped":
             return None
-        return Kind(self.skip_kind) if self.skip_kind else kind_of(self.message)
+        return Kind(self.skip_kind) if self.skip_kind else kind_of(self.message, Kind.NOT_APPLICABLE)
 
 
 @dataclass

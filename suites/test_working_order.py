@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.cia.cia301 import ERROR_HISTORY, NmtState, emcy_meaning
+from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_HISTORY, NmtState, emcy_meaning
 from encoder_conformance.dut.emcy_trigger import emcy_code
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
@@ -29,8 +29,8 @@ from encoder_conformance.profile import quirk_effects as fx
 ERROR_CLAUSE = ("CiA 301 v4.2.0 §7.5.2.2 (1001h error register: a set bit is an error present) and §7.2.7 "
                 "(EMCY: the device signals an error; table 21 names its code)")
 START_CLAUSE = "CiA 301 v4.2.0 §7.3.2.2 (NMT start: the device enters operational)"
-EMCY_BASE = 0x80
-RUN_START = Mark(0, 0.0)  # every frame the tester has seen since it opened the bus
+RUN_START = Mark(0, 0.0)
+pytestmark: list[pytest.MarkDecorator] = []  # each test names its clause  # every frame the tester has seen since it opened the bus
 
 
 @pytest.fixture

@@ -20,7 +20,7 @@ KIND_PROPERTY = "skip_kind"
 HOLD_PROPERTY = "hold"
 
 
-class TypedSkip(pytest.skip.Exception):  # type: ignore[name-defined,misc]
+class TypedSkip(pytest.skip.Exception):  # type: ignore[name-defined]
     """pytest's skip, carrying why (a scope kind, or a hold for a check in scope)."""
 
     def __init__(self, kind: Kind, detail: str, hold: Hold | None = None) -> None:
@@ -88,6 +88,6 @@ def book(report: pytest.TestReport, exc: BaseException | None) -> None:
 
 def booked(report: pytest.TestReport) -> tuple[Kind | None, Hold | None]:
     """The kind and hold ``book`` gave a skipped report (None, None where it has none)."""
-    props = dict(report.user_properties)
+    props = {str(name): str(value) for name, value in report.user_properties}
     kind = props.get(KIND_PROPERTY)
-    return (Kind(kind) if kind else None), Hold.__members__.get(str(props.get(HOLD_PROPERTY, "")))
+    return (Kind(kind) if kind else None), Hold.__members__.get(props.get(HOLD_PROPERTY, ""))
