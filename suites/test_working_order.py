@@ -29,8 +29,8 @@ from encoder_conformance.profile import quirk_effects as fx
 ERROR_CLAUSE = ("CiA 301 v4.2.0 §7.5.2.2 (1001h error register: a set bit is an error present) and §7.2.7 "
                 "(EMCY: the device signals an error; table 21 names its code)")
 START_CLAUSE = "CiA 301 v4.2.0 §7.3.2.2 (NMT start: the device enters operational)"
-RUN_START = Mark(0, 0.0)
-pytestmark: list[pytest.MarkDecorator] = []  # each test names its clause  # every frame the tester has seen since it opened the bus
+RUN_START = Mark(0, 0.0)  # every frame the tester has seen since it opened the bus
+pytestmark: list[pytest.MarkDecorator] = []  # each test names its clause
 
 
 @pytest.fixture

@@ -81,8 +81,8 @@ def test_first_screen_order_verdict_identity_areas_failures_warnings():
 def test_areas_in_reading_order_with_counts():
     page = render(_summary(PASSED, FAILED, WARNED, *SKIPPED))
     areas = page[page.index("id='areas'"):page.index("id='failures'")]
-    names = ["identity", "working order", "object dictionary", "SDO", "NMT", "error control", "EMCY", "PDO", "store/restore", "LSS",
-             "encoder function", "CAM"]
+    names = ["identity", "working order", "object dictionary", "SDO", "NMT", "error control", "EMCY", "PDO",
+             "store/restore", "LSS", "encoder function", "CAM"]
     assert _positions(areas, *(f"<td>{n}</td>" for n in names)) == sorted(_positions(areas, *(f"<td>{n}</td>"
                                                                                               for n in names)))
     assert "<td>LSS</td><td class='g-v-none'>NOT RUN</td><td class='n'>0</td><td class='n'>0</td>" \

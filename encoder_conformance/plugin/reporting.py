@@ -68,9 +68,15 @@ def configure_outputs(config: pytest.Config) -> None:
         option.clean_alluredir = True
 
 
+def allure_results(config: pytest.Config) -> Path | None:
+    """The folder allure-pytest writes results into in this run (--allure, or its own --alluredir), if any."""
+    folder = getattr(config.option, "allure_report_dir", None)
+    return Path(folder) if folder else None
+
+
 def allure_active(config: pytest.Config) -> bool:
-    """Whether allure-pytest writes results in this run (--allure, or its own --alluredir)."""
-    return bool(getattr(config.option, "allure_report_dir", None))
+    """Whether allure-pytest writes results in this run."""
+    return allure_results(config) is not None
 
 
 def start_background_writers(config: pytest.Config) -> None:
