@@ -37,8 +37,8 @@ SYNTHETIC = [
     ("synthetic_could_not_test", "skipped", "could not test: the read of every entry overran"),
     ("synthetic_bus_lost", "skipped", "not run to the end: the bus is gone"),
     ("synthetic_not_available", "skipped", "not available: no shaft drive (--shaft-drive)"),
-    ("synthetic_destructive", "skipped", "destructive (changes what the device remembers): run with "
-                                         "--allow-destructive"),
+    ("synthetic_destructive", "skipped", "not selected: destructive (changes what the device remembers): run "
+                                         "with --allow-destructive"),
 ]
 EXPECTED_CATEGORY = {
     "synthetic_warning": "warning: a rule we inferred was broken",
@@ -48,7 +48,7 @@ EXPECTED_CATEGORY = {
     "synthetic_could_not_test": "could not test",
     "synthetic_bus_lost": "could not test",
     "synthetic_not_available": "bench equipment not available",
-    "synthetic_destructive": "destructive: not run without --allow-destructive",
+    "synthetic_destructive": "not selected (e.g. destructive: not run without --allow-destructive)",
 }
 
 

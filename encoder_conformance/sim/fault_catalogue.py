@@ -55,6 +55,7 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "size_mismatch_accepted": "writes with more or fewer bytes than the data type are confirmed",
             "toggle_bit_ignored": "segments with a toggle bit that does not alternate are served",
             "segmented_upload_truncated": "the last segment of a segmented upload lacks its last byte",
+            "long_reads_refused": "every read of an entry over 4 bytes is refused (08000000h)",
             "segment_size_ignored": "a download segment's n bits are ignored: all 7 bytes are taken as data",
             "client_abort_ignored": "an abort from the client leaves the transfer open: the next segment continues it",
             "open_transfer_blocks_requests": "while a segmented transfer is open, initiate requests go unanswered",
@@ -227,6 +228,9 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "emcy_without_generic_bit": "1001h and the EMCY's byte 2 show the specific error bit without bit 0 "
                                         "(generic)",
             "emcy_inhibit_ignored": "the EMCY inhibit time 1015h is ignored: EMCYs follow each other at once",
+            "sync_length_error_silent": "a SYNC of the wrong length for 1019h records no error and sends no EMCY",
+            "emcy_only_first": "after its first EMCY the device sends no other (1001h and 1003h still record "
+                               "the errors)",
             "emcy_no_error_reset": "no EMCY 0000h (error reset) when the cause of the errors goes away",
             "emcy_in_stopped": "EMCYs are sent in stopped too",
             "sync_length_unchecked": "a SYNC whose length does not match 1019h is taken without the EMCY 8240h",
