@@ -159,11 +159,13 @@ def test_a_device_with_an_error_at_every_start_is_incomplete_in_a_run(tmp_path):
     assert "NMT" in summary.incomplete_areas()
     assert {a.area: a.verdict for a in summary.areas()}["identity"] == "PASS"
     assert summary.coverage()["holds"].get("PERSISTENT_ERROR", 0) > 0
-    assert "INCOMPLETE: " in result.stdout and "not testable: " in result.stdout
+    assert "INCOMPLETE: " in result.stdout
+    assert "not testable: " in result.stdout
     assert all("1001h = 01h" in r.message for r in summary.with_kind(Kind.NOT_TESTABLE))
     cases = ET.parse(tmp_path / "junit.xml").getroot().iter("testcase")
     coverage = [case for case in cases if case.get("name") == junit_coverage.CASE_NAME]
-    assert len(coverage) == 1 and coverage[0].find("failure") is not None
+    assert len(coverage) == 1
+    assert coverage[0].find("failure") is not None
 
 
 def test_goods_in_fails_a_device_with_an_error_at_every_start(tmp_path):
