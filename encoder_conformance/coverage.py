@@ -44,6 +44,8 @@ class Hold(Enum):
     NO_EMCY_FROM_TRIGGER = (Kind.NOT_TESTABLE, "the device sent no EMCY for the bench's error stimulus", True)
     EMCY_NOT_REPEATED = (Kind.NOT_TESTABLE, "the device did not repeat the EMCY often enough to measure", True)
     NO_TPDO_ON_CHANGE = (Kind.NOT_TESTABLE, "the TPDO sent nothing on a change in operational", True)
+    NO_USABLE_TPDO = (Kind.NOT_TESTABLE, "no TPDO the profile makes usable is usable as the device is configured "
+                                         "(nothing mapped, or disabled with a read-only COB-ID)", True)
     UNTYPED = (Kind.NOT_TESTABLE, "a skip whose reason the suite did not type (a defect of the suite: report it)",
                False)
     HOST_LATE = (Kind.INCONCLUSIVE, "the tester's host was late at the moments that count", False)

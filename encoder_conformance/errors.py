@@ -118,9 +118,10 @@ class CannotPersist(EncoderConformanceError):
 class NoUsableTpdo(EncoderConformanceError):
     """No TPDO of the profile can be used for the test; the message says why (a skip reason)."""
 
-    def __init__(self, reason: str, deviations: list[tuple[str, str]]) -> None:
+    def __init__(self, reason: str, deviations: list[tuple[str, str]], hold: Hold | None = None) -> None:
         super().__init__(reason)
         self.deviations = deviations
+        self.hold = hold  # where the device's configuration, not the profile, left none usable
 
 
 class NotJudged(EncoderConformanceError):

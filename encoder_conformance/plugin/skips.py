@@ -50,9 +50,11 @@ def not_judged(hold: Hold, detail: str) -> NoReturn:
     raise TypedSkip(hold.kind, detail, hold)
 
 
-def skip_text(text: str) -> NoReturn:
-    """A reason composed elsewhere (a capture's or a chooser's text): typed by its first words; an untyped text is
-    not testable (``Hold.UNTYPED``), never out of scope."""
+def skip_text(text: str, hold: Hold | None = None) -> NoReturn:
+    """A reason composed elsewhere (a capture's or a chooser's text) with its hold where it has one, else typed by
+    its first words; an untyped text is not testable (``Hold.UNTYPED``), never out of scope."""
+    if hold is not None:
+        raise TypedSkip(hold.kind, text, hold)
     kind = kind_of(text)
     raise TypedSkip(kind, text, Hold.UNTYPED if kind.in_scope else None)
 

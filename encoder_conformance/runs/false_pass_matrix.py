@@ -52,6 +52,7 @@ PATHS: tuple[FalsePassPath, ...] = (
     FalsePassPath(Hold.NO_EMCY_FROM_TRIGGER, "sync_length_error_silent", "test_emcy", "test_emcy_frame_on_error",
                   FULL_PDO_PROFILE, external=True),
     FalsePassPath(Hold.EMCY_NOT_REPEATED, "emcy_only_first", "test_emcy", "test_emcy_inhibit_time_spaces_emcys"),
+    FalsePassPath(Hold.NO_USABLE_TPDO, "tpdo_mappings_empty", "test_pdo_comm", "test_tpdo_silent_after_leaving"),
     FalsePassPath(Hold.NO_READABLE_LONG_ENTRY, "long_reads_refused", "test_sdo_protocol",
                   "test_segmented_upload_wrong_toggle_aborts", "cia406-c3-st"),
 )

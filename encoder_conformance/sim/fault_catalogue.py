@@ -36,6 +36,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
         {
             "missing_object": "the last declared object of the profile does not exist (aborts 06020000h)",
             "wrong_default": "every writable UNSIGNED value starts one higher than its factory default",
+            "tpdo_mappings_empty": "every TPDO mapping is empty after each reload (sub 0 = 0): no default mapping "
+                                   "(test_factory_default; the TPDO tests are not testable)",
             "wrong_size": "expedited uploads of 32-bit objects carry 2 bytes",
             "write_ro_accepted": "writes to ro/const objects are confirmed (and ignored)",
             "wrong_abort_write_ro": "writes to ro/const objects abort with 08000000h instead of 06010002h",
