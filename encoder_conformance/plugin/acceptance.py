@@ -57,6 +57,10 @@ SELECTION: tuple[tuple[str, str | None], ...] = (
     ("test_encoder_position.py", "test_position_plausible_and_moving"),
 )
 
+#: tests only an acceptance runs (a full run selects them out): the fault matrix, which runs full runs, leaves them
+#: to tests/test_coverage_verdict.py (a faulty twin fails them at goods-in, a conformant one passes)
+GOODS_IN_ONLY: frozenset[str] = frozenset({"test_no_error_reported_at_start_up", "test_nmt_start_reaches_operational"})
+
 #: the pytest node id of the start-up check's verdict when the device is another product
 IDENTITY_CHECK = "start-up check: identity"
 

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.plugin.hypothesis_profiles import PROFILE_ENV as HYPOTHESIS_PROFILE_ENV
+from encoder_conformance.plugin.junit_coverage import CLASS_NAME as COVERAGE_CASE_CLASS
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
@@ -45,6 +46,8 @@ class RunResult:
 def _parse_junit(path: Path) -> dict[str, str]:
     outcomes: dict[str, str] = {}
     for case in ET.parse(path).getroot().iter("testcase"):
+        if case.get("classname") == COVERAGE_CASE_CLASS:  # the run's coverage, not a test (plugin/junit_coverage.py)
+            continue
         name = f"{case.get('classname', '').split('.')[-1]}::{case.get('name')}"
         verdicts = {p.get("value") for p in case.iter("property") if p.get("name") == "verdict"}
         if "internal error" in verdicts:  # our own code broke: it catches no fault, and fails every baseline
