@@ -17,6 +17,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from encoder_conformance.plugin.junit_coverage import CLASS_NAME as COVERAGE_CASE_CLASS
 from encoder_conformance.runs.fault_matrix import RunResult, run_suite
 from encoder_conformance.runs.host_load import busy_process
 
@@ -96,7 +97,7 @@ def _failure_messages(junit: Path) -> dict[str, str]:
         return found
     for case in ET.parse(junit).getroot().iter("testcase"):
         problem = case.find("failure") if case.find("failure") is not None else case.find("error")
-        if problem is not None:
+        if problem is not None and case.get("classname") != COVERAGE_CASE_CLASS:  # the run's coverage: no test
             test = f"{case.get('classname', '').split('.')[-1]}::{case.get('name')}"
             text = (problem.get("message") or problem.text or "").strip()
             found[test] = text.splitlines()[0][:300] if text else "(no message)"
