@@ -116,12 +116,29 @@ def test_alarms_folded_when_device_given_back():
     page = render(_summary(PASSED, restored=True), PageContext(custody=[("a note", True)]))
     assert "<div class='g-alarm'>" not in page
 
+HELD = TestResult("suites/test_nmt.py::test_operational", "NMT", "skipped", message="not testable: NMT start: 1001h = "
+                  "01h (the device keeps an error)", skip_kind="not testable", hold="PERSISTENT_ERROR")
+
+
+def test_checks_not_judged_shown_open_apart_from_the_scope():
+    """What kept checks in scope from judging is open on the first screen; the scope is folded and declared."""
+    summary = _summary(PASSED, HELD, *SKIPPED)
+    summary.scope = {"power switch": "none: the power-cycle checks are out of scope"}
+    page = render(summary)
+    held = page.index("<details id='not-judged' open>")
+    assert "NOT RUN" not in page[page.index("<td>NMT</td>"):page.index("</tr>", page.index("<td>NMT</td>"))]
+    assert "1001h = 01h" in page[held:page.index("</details>", held)]
+    assert "<details id='skips'>" in page
+    assert "Out of scope" in page
+    assert "none: the power-cycle checks are out of scope" in page[page.index("id='scope'"):]
+
 
 @pytest.mark.parametrize(("results", "stopped", "css", "word"), [
     ((PASSED,), None, "g-pass", "PASS"),
     ((PASSED, WARNED), None, "g-warn", "PASS WITH WARNINGS"),
     ((PASSED,), "the device went silent", "g-none", "COULD NOT TEST"),
     ((), None, "g-none", "NOT RUN"),
+    ((PASSED, HELD), None, "g-inc", "INCOMPLETE"),
 ])
 def test_banner_colour_per_verdict(results, stopped, css, word):
     page = render(_summary(*results, stopped=stopped))
