@@ -48,6 +48,7 @@ CSS = """<style>
 .g-inc{background:#ad4e00}
 .glance .g-v-pass{color:#1e7e34;font-weight:bold}.glance .g-v-fail{color:#c62828;font-weight:bold}
 .glance .g-v-warn{color:#b36b00;font-weight:bold}.glance .g-v-none{color:#888}
+.glance .g-v-inc{color:#ad4e00;font-weight:bold}
 .g-draft{background:#fff3cd;border:1px solid #e0b000;padding:4px 10px;margin:4px 0}
 .g-alarm{background:#fdecea;border:1px solid #c62828;color:#c62828;font-weight:bold;padding:4px 10px;margin:4px 0}
 .g-item{border-left:4px solid #c62828;padding:2px 8px;margin:6px 0}
