@@ -116,6 +116,16 @@ def test_alarms_folded_when_device_given_back():
     assert "<div class='g-alarm'>" not in page
 
 
+def test_memory_not_as_found_is_shown_though_the_values_were_given_back():
+    """Values given back, memory not (dut/boot_memory.py): the alarm unfolded, never "given back as found"."""
+    summary = _summary(PASSED, restored=True)
+    summary.device_memory = "the device reported no valid stored parameters when the run began"
+    page = render(summary, PageContext(custody=[("MEMORY NOT AS FOUND: it stores now", True)]))
+    assert "<div class='g-alarm'>MEMORY NOT AS FOUND: it stores now" in page
+    assert "(values given back, memory NOT as found)" in page
+    assert "given back as found)" not in page
+
+
 @pytest.mark.parametrize(("results", "stopped", "css", "word"), [
     ((PASSED,), None, "g-pass", "PASS"),
     ((PASSED, WARNED), None, "g-warn", "PASS WITH WARNINGS"),
