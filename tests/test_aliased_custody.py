@@ -198,3 +198,19 @@ def test_memory_not_as_found_after_a_run_stored_on_an_empty_memory(rig, tmp_path
         assert record.memory
         assert "no valid stored parameters when the run began (EMCY 5000h" in record.memory
         assert json.loads((tmp_path / "device-snapshot.json").read_text(encoding="utf-8"))["boot_emcy"] == [0x5000]
+
+
+def test_aliased_timers_stored_by_the_run_given_back_group_by_group(rig, tmp_path):
+    """The run stored the tied value (both 50); stored as delivered they differ (1, 0): written and stored one
+    store group at a time (1800h sub 5 with 1010h sub 2, 6200h with sub 3), the memory holds both again."""
+    dut, custody = _custody(rig, (VARIANT,), tmp_path, read_stored=True)
+    dut.write(*EVENT, u16(50))
+    dut.write(0x1010, 1, SAVE)
+    record = custody.give_back(30)
+    assert record.ok, record.failures
+    alone = [line for line in record.written if "stored alone" in line]
+    assert [line.split(" =")[0] for line in alone] == ["1800h.05", "6200h.00"]
+    assert record.store_commands[-2:] == ["1010h.02 'save'", "1010h.03 'save'"]
+    assert (dut.read(*CYCLIC), dut.read(*EVENT)) == (u16(1), u16(0))
+    assert dut.reset_and_reach()
+    assert (dut.read(*CYCLIC), dut.read(*EVENT)) == (u16(1), u16(0)), "the memory as delivered"

@@ -6,7 +6,8 @@ from its target after the write-back, and each written entry that now holds the 
 a time and read back: "writing A changed B" is an edge. They are then written again in an order where an entry
 comes before those its write changes. Two entries that change each other and want different values (a device
 fresh from the factory: 6200h = 0001h, 1800h sub 5 = 0000h) have no such order: the caller may give them back
-by NMT reset node where they were the stored values (CiA 301 §7.2.8.3.2.2: reset node loads the stored values).
+by NMT reset node where they were the stored values (CiA 301 §7.2.8.3.2.2: reset node loads the stored values),
+and stores them one at a time where each has a store command of its own (1010h sub 2 and sub 3 on the WDGA).
 """
 
 from __future__ import annotations

@@ -26,7 +26,7 @@ def errors_after_boot(dut: DeviceUnderTest) -> list[int]:
     def wanted(msg: can.Message) -> bool:
         return dut.is_heartbeat(msg) or (msg.is_rx and msg.arbitration_id == emcy and len(msg.data) >= 2)
 
-    frames = dut.frames.before(dut.frames.mark(), wanted, LOOK_BACK)
+    frames = [m for m in dut.frames.last(LOOK_BACK) if wanted(m)]  # a copy of the log's end: no indexing into it
     boots = [i for i, m in enumerate(frames) if dut.is_heartbeat(m) and bytes(m.data) == b"\x00"]
     after = frames[boots[-1] + 1:] if boots else frames
     return [code for m in after if not dut.is_heartbeat(m) and (code := int.from_bytes(m.data[:2], "little"))]
