@@ -133,6 +133,16 @@ def test_checks_not_judged_shown_open_apart_from_the_scope():
     assert "none: the power-cycle checks are out of scope" in page[page.index("id='scope'"):]
 
 
+def test_memory_not_as_found_is_shown_though_the_values_were_given_back():
+    """Values given back, memory not (dut/boot_memory.py): the alarm unfolded, never "given back as found"."""
+    summary = _summary(PASSED, restored=True)
+    summary.device_memory = "the device reported no valid stored parameters when the run began"
+    page = render(summary, PageContext(custody=[("MEMORY NOT AS FOUND: it stores now", True)]))
+    assert "<div class='g-alarm'>MEMORY NOT AS FOUND: it stores now" in page
+    assert "(values given back, memory NOT as found)" in page
+    assert "given back as found)" not in page
+
+
 @pytest.mark.parametrize(("results", "stopped", "css", "word"), [
     ((PASSED,), None, "g-pass", "PASS"),
     ((PASSED, WARNED), None, "g-warn", "PASS WITH WARNINGS"),

@@ -160,7 +160,9 @@ def _print(record: RestoreRecord) -> None:
         print(f"  wrote {line}")
     for command in record.store_commands:
         print(f"  stored with {command}")
-    if record.ok:
+    if record.memory:
+        print(f"MEMORY NOT AS FOUND: {record.memory}", file=sys.stderr)
+    if record.ok and not record.memory:
         print(f"device restored as found: every value checked ({record.seconds:.2f} s)")
     for failure in record.failures:
         print(f"NOT RESTORED: {failure}", file=sys.stderr)

@@ -15,85 +15,31 @@ with the stored values, the one found after the values in use. Every step has a 
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from functools import partial
 from pathlib import Path
 
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import COMMAND_FOR_STATE, STATE_NAMES, NmtState
+from encoder_conformance.dut.aliased_values import AliasOutcome, AliasRepair, Key, label, no_reset_gives_back
+from encoder_conformance.dut.boot_memory import errors_after_boot, memory_note
+from encoder_conformance.dut.deadline import Deadline
 from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
 from encoder_conformance.dut.frames import Mark
 from encoder_conformance.dut.identity import identity_mismatch, read_identity
-from encoder_conformance.dut.persist import CannotPersist, store_commands_for
+from encoder_conformance.dut.persist import CannotPersist, StoreCommand, store_commands_for
 from encoder_conformance.dut.power import BenchPower
 from encoder_conformance.dut.reference_custody import ReferenceCustody
 from encoder_conformance.dut.reference_point import ReferencePoint
 from encoder_conformance.dut.restart_watch import RestartWatch
+from encoder_conformance.dut.restore_record import Change, RestoreRecord
 from encoder_conformance.dut.sdo_frames import abort_name
-from encoder_conformance.dut.snapshot import (
-    Key,
-    Snapshot,
-    SnapshotEntry,
-    custody_keys,
-    hex_or_none,
-    is_stored,
-    read_values,
-)
+from encoder_conformance.dut.snapshot import Snapshot, SnapshotEntry, custody_keys, hex_or_none, is_stored, read_values
 from encoder_conformance.dut.store_watch import StoreWatch
 from encoder_conformance.dut.write_plan import plan_writes
 from encoder_conformance.errors import BusLostError, DutLostError, IdentityMismatch, PreflightError
-
-
-@dataclass
-class Change:
-    """An entry that differs from the snapshot."""
-
-    label: str
-    expected: str | None
-    observed: str | None
-
-    def describe(self) -> str:
-        return f"{self.label} = {self.observed or 'unreadable'} instead of {self.expected}"
-
-
-@dataclass
-class RestoreRecord:
-    """What the give-back found, did and could not do (shown in the report, kept as JSON)."""
-
-    snapshot: str | None
-    left_changed: list[Change] = field(default_factory=list)  # values in use at the end of the run
-    stored_changed: list[Change] = field(default_factory=list)  # stored values after a reset
-    written: list[str] = field(default_factory=list)
-    store_commands: list[str] = field(default_factory=list)
-    failures: list[str] = field(default_factory=list)
-    run_store_commands: dict[str, int] = field(default_factory=dict)  # what the tests sent (EEPROM wear)
-    restore_store_commands: int = 0
-    seconds: float = 0.0
-    done: bool = False
-
-    @property
-    def ok(self) -> bool:
-        return self.done and not self.failures
-
-    def fail(self, text: str) -> None:
-        self.failures.append(text)
-
-    def save(self, path: Path) -> None:
-        path.write_text(json.dumps(asdict(self), indent=1), encoding="utf-8")
-
-
-class Deadline:
-    """A point in time the restore must not pass."""
-
-    def __init__(self, seconds: float) -> None:
-        self.end = time.monotonic() + seconds
-        self.seconds = seconds
-
-    def expired(self) -> bool:
-        return time.monotonic() >= self.end
 
 
 class Custody:
@@ -158,6 +104,7 @@ class Custody:
             if not answered:
                 self._check_identity(snapshot)
             stored = read_values(dut, keys)
+            snapshot.boot_emcy = errors_after_boot(dut)  # e.g. 5000h: no valid stored data (``boot_memory``)
             snapshot.reference_stored = self.reference.read()
             found_values = {e.key: e.found for e in snapshot.entries}
             snapshot.entries = [self._entry(k, None, stored[k], found_values.get(k)) for k in keys]
@@ -262,11 +209,16 @@ class Custody:
         record.left_changed = self._differences(now, lambda e: e.target_found())
         if check_stored and self._give_back_stored(record, deadline, now, history_unknown):
             now = read_values(dut, keys)  # a reset or writes since the first read
-        targets = {e.key: e.target_found() for e in snapshot.entries}
-        self._write(record, deadline, {k: v for k, v in targets.items() if v is not None and now.get(k) != v}, now)
+        if check_stored:  # what it says after the give-back's last boot-up
+            record.memory = memory_note(snapshot.boot_emcy, errors_after_boot(dut),
+                                        self.watch.total + self.watch.total_by_restore)
+        targets = {e.key: v for e in snapshot.entries if (v := e.target_found()) is not None}
+        written = self._write(record, deadline, {k: v for k, v in targets.items() if now.get(k) != v}, now)
         self._give_back_reference(record, deadline, snapshot.reference_in_use, record.left_changed)  # scaled units
         # nothing written or preset since ``now`` was read (and it showed no difference): it is still ``now``
         after = read_values(dut, keys) if record.written or record.left_changed else now
+        if written and self._repair_aliases(record, deadline, targets, written, after):
+            after = read_values(dut, keys)
         for change in self._differences(after, lambda e: e.target_found()):
             record.fail(f"not restored: {change.describe()}")
         self._back_to_found_state(record)
@@ -297,7 +249,9 @@ class Custody:
             return not shows_stored
         targets = {e.key: e.target_stored() for e in stored}
         differing = {k: v for k, v in targets.items() if v is not None and loaded.get(k) != v}
-        self._write(record, deadline, differing, loaded)
+        written = self._write(record, deadline, differing, loaded)
+        aliases = self._alias_order(record, {k: differing[k] for k in written if k in differing}, written,
+                                    read_values(dut, sorted(set(written))))
         preset = self._give_back_reference(record, deadline, reference, record.stored_changed)
         try:
             keys = stored_keys if defaults_restored else sorted(differing)
@@ -305,10 +259,12 @@ class Custody:
         except CannotPersist as exc:
             record.fail(f"cannot store the restored values: {exc}")
             return True  # as below: it may have reset the device and written, so the values in use are read again
-        for command in commands:
-            self._check_time(deadline, f"storing with {command.label}")
-            command.issue(dut)
-            record.store_commands.append(command.label)
+        self._store(record, deadline, commands)
+        for key in aliases.conflicting:  # each alone with its own command (where two share one, the check says so)
+            dut.write(*key, differing[key])
+            record.written.append(f"{label(key)} = {differing[key].hex(' ').upper()} and stored alone: "
+                                  f"{aliases.describe()}")
+            self._store(record, deadline, store_commands_for(dut.profile, [key]))
         self._reset(deadline)
         reloaded = read_values(dut, stored_keys)
         for change in self._differences(reloaded, lambda e: e.target_stored(), stored_keys):
@@ -323,7 +279,7 @@ class Custody:
         """Preset to ``target`` where the reference point differs (a Change in ``changes``); True if it preset."""
         if target is None:
             return False
-        self._check_time(deadline, "giving back the reference point")
+        deadline.check("giving back the reference point")
         outcome = self.reference.give_back(target, settle=not self.restarts.shows_stored)
         if outcome.change:
             changes.append(Change(*outcome.change))
@@ -346,30 +302,69 @@ class Custody:
         return changes
 
     def _write(self, record: RestoreRecord, deadline: Deadline, targets: dict[Key, bytes],
-               current: dict[Key, bytes | None]) -> None:
-        """Carry out the write plan; refused steps are tried once more after the others."""
-        refused = []
+               current: dict[Key, bytes | None]) -> list[Key]:
+        """Carry out the write plan; refused steps are tried once more after the others. The keys written."""
+        refused, written = [], []
         for step in plan_writes(self.dut.profile, targets, current):
-            self._check_time(deadline, f"writing {step.label}")
+            deadline.check(f"writing {step.label}")
             try:
                 self.dut.write(*step.key, step.value)
                 record.written.append(step.label)
+                written.append(step.key)
             except SdoAbortedError as exc:
                 refused.append((step, exc))
         for step, _ in [r for r in refused if not r[0].temporary]:
-            self._check_time(deadline, f"writing {step.label}")
+            deadline.check(f"writing {step.label}")
             try:
                 self.dut.write(*step.key, step.value)
                 record.written.append(step.label + " (second attempt)")
+                written.append(step.key)
             except SdoAbortedError as exc:
                 record.fail(f"{step.label} refused: {abort_name(exc.code)}")
+        return written
+
+    def _store(self, record: RestoreRecord, deadline: Deadline, commands: list[StoreCommand]) -> None:
+        for command in commands:
+            deadline.check(f"storing with {command.label}")
+            command.issue(self.dut)
+            record.store_commands.append(command.label)
+
+    def _alias_order(self, record: RestoreRecord, targets: dict[Key, bytes], written: list[Key],
+                     after: dict[Key, bytes | None]) -> AliasOutcome:
+        """Entries a write to another changed (``aliased_values``) written again in an order that works; the outcome
+        names those no order gives back."""
+        dut = self.dut
+        outcome = AliasRepair(partial(read_values, dut), lambda key, value: dut.write(*key, value)).repair(
+            targets, after, written)
+        record.written += outcome.written
+        return outcome
+
+    def _repair_aliases(self, record: RestoreRecord, deadline: Deadline, targets: dict[Key, bytes],
+                        written: list[Key], after: dict[Key, bytes | None]) -> bool:
+        """Entries a write to another changed (``aliased_values``): written in an order that works, else given back
+        by NMT reset node where they were the stored values at the start; True if it wrote (read back again)."""
+        dut = self.dut
+        outcome = self._alias_order(record, targets, written, after)
+        problem = no_reset_gives_back(self.snapshot, outcome) if outcome.conflicting else None
+        if problem or not outcome.conflicting:
+            if problem:
+                record.fail(problem)
+            return bool(outcome.written)
+        self._reset(deadline)  # CiA 301 §7.2.8.3.2.2: reset node loads the stored values
+        record.written.append(f"NMT reset node: {outcome.describe()}, so only a reset gives back "
+                              f"{', '.join(label(k) for k in outcome.conflicting)} (their stored values, as found)")
+        now = read_values(dut, list(targets))
+        self._write(record, deadline, {k: v for k, v in targets.items()
+                                       if now.get(k) != v and k not in outcome.conflicting}, now)
+        self._give_back_reference(record, deadline, self.snapshot.reference_in_use if self.snapshot else None, [])
+        return True
 
     def _reset(self, deadline: Deadline) -> None:
         """Make the device show what it stored: reset node, unless it restarted since the last write to it."""
         dut = self.dut
         if self.restarts.shows_stored:
             return
-        self._check_time(deadline, "reset node")
+        deadline.check("reset node")
         if not dut.reset_and_reach():
             raise DutLostError(f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after reset node")
 
@@ -381,8 +376,3 @@ class Custody:
         if command is not None and command != "pre-operational":
             self.dut.nmt(command)
             record.written.append(f"NMT {command} (found {STATE_NAMES.get(state, '?')})")
-
-    @staticmethod
-    def _check_time(deadline: Deadline, doing: str) -> None:
-        if deadline.expired():
-            raise TimeoutError(f"the restore ran out of time ({deadline.seconds:.1f} s) before {doing}")

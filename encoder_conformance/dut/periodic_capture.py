@@ -59,6 +59,8 @@ class PeriodicCapture:
     started: bool = False  # the node was started (NMT operational) for the TPDO stream
     clock: str = ""  # which clock stamped the frames (FrameLog.clock)
     kept_error: int = 0  # 1001h after the reset communication that was to clear an error left before the capture
+    #: entries the capture must not write (an acceptance: those that may alias another, ``aliased_values``)
+    leave_alone: frozenset[tuple[int, int]] = frozenset()
 
     @classmethod
     def at_test_period(cls, dut: DeviceUnderTest, count: int) -> PeriodicCapture:
@@ -97,7 +99,7 @@ class PeriodicCapture:
         else:
             beat.skip = "not applicable: the profile declares no heartbeat producer (capabilities.heartbeat_producer)"
         if dut.profile.capabilities.tpdos:
-            _configure(timer, lambda: _configure_event_timer(dut, journal, timer))
+            _configure(timer, lambda: _configure_event_timer(dut, journal, timer, self.leave_alone))
         else:
             timer.skip = "not applicable: the profile declares no TPDOs (capabilities.tpdos)"
         streams = [s for s in (beat, timer) if not (s.skip or s.error)]
@@ -165,8 +167,9 @@ def _configure(stream: PeriodicStream, configure: Callable[[], None]) -> None:
         stream.error = f"{stream.what}: setting up the capture failed: {exc}"
 
 
-def _configure_event_timer(dut: DeviceUnderTest, journal: SettingsJournal, stream: PeriodicStream) -> None:
-    choice = choose_tpdo(dut, 5, EVENT_TIMER_TYPES)
+def _configure_event_timer(dut: DeviceUnderTest, journal: SettingsJournal, stream: PeriodicStream,
+                           leave_alone: frozenset[tuple[int, int]]) -> None:
+    choice = choose_tpdo(dut, 5, EVENT_TIMER_TYPES, leave_alone)
     stream.deviations.extend(choice.deviations)
     tpdo = TpdoUnderTest.chosen(dut, journal, choice)
     stream.notes.extend(choice.notes)

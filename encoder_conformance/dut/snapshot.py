@@ -95,6 +95,8 @@ class Snapshot:
     #: node-IDs an LSS test gave the device (255: unconfigured) and has not put back yet: where a later
     #: ``restore --from`` looks for it (absent in snapshots of older runs)
     lss_node_ids: list[int] = field(default_factory=list)
+    #: EMCY codes the node sent after the boot-up that showed what it stored (5000h: no valid stored data)
+    boot_emcy: list[int] = field(default_factory=list)
     taken_at: str = field(default_factory=lambda: time.strftime("%Y-%m-%dT%H:%M:%S%z"))
     format: str = FORMAT
 

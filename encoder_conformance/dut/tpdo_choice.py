@@ -43,10 +43,12 @@ def fixed_behaviour_tpdos(dut: DeviceUnderTest) -> tuple[set[int], tuple[str, st
     return fixed, (quirk_id, f"{title}: {', '.join(f'{c:04X}h' for c in sorted(fixed))} not used here")
 
 
-def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int]) -> TpdoChoice:
+def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int],
+                leave_alone: frozenset[tuple[int, int]] = frozenset()) -> TpdoChoice:
     """The first TPDO that maps something, whose sub-index ``sub`` is writable and whose type is one of
     ``usable_types`` (in order of preference): to be written if sub 2 is writable, else as the device has
-    it fixed. A disabled TPDO (sub 1 bit 31) is chosen only if sub 1 is writable (``enable_cob_id``).
+    it fixed. A disabled TPDO (sub 1 bit 31) is chosen only if sub 1 is writable (``enable_cob_id``);
+    none whose sub-index ``sub`` is in ``leave_alone``.
 
     Raises NoUsableTpdo when none qualifies.
     """
@@ -54,7 +56,7 @@ def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int]) -> Tpdo
     configured_away: list[str] = []  # TPDOs the profile makes usable that the device's configuration leaves out
     for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF and i not in fixed):
         entry, kind, cob = (dut.profile.entry(comm, s) for s in (sub, 2, 1))
-        if entry is None or kind is None or cob is None or not entry.writable:
+        if entry is None or kind is None or cob is None or not entry.writable or (comm, sub) in leave_alone:
             continue
         mapping = comm + PDO_MAPPING_OFFSET
         count = dut.profile.entry(mapping, 0)

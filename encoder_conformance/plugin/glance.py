@@ -117,7 +117,7 @@ def _banner(summary: RunSummary) -> str:
     if summary.internal_errors:
         why += (f"<div>{len(summary.internal_errors)} {INTERNAL_ERROR_TEXT} (outside every verdict: see "
                 "<a href='#internal-errors' style='color:#fff'>below</a>)</div>")
-    if summary.device_restored is False:
+    if summary.device_restored is False or summary.device_memory:
         why += "<div>the device was NOT given back as found: see the custody lines below</div>"
     return (f"<div class='g-banner g-{VERDICT_CLASS.get(verdict, 'none')}' id='verdict'>"
             f"<span class='g-word'>{escape(verdict)}</span>"
@@ -218,11 +218,12 @@ def _custody(summary: RunSummary, lines: list[tuple[str, bool]]) -> str:
     items = "".join(f"<li{' class=g-alarm' if alarm else ''}>{escape(text)}</li>" for text, alarm in lines)
     alarms = [text for text, alarm in lines if alarm]
     visible = ""
-    if alarms and summary.device_restored is not True:  # never fold what the operator must act on
+    if alarms and (summary.device_restored is not True or summary.device_memory):  # what the operator must act on
         visible = "".join(f"<div class='g-alarm'>{escape(text)}</div>" for text in alarms)
     state = {True: "given back as found", False: "NOT given back as found", None: "no restore recorded"}
+    shown = "values given back, memory NOT as found" if summary.device_memory else state[summary.device_restored]
     return (f"{visible}<details id='custody'><summary>The device on the bench: snapshot and restore "
-            f"({state[summary.device_restored]})</summary><ul>{items}</ul></details>")
+            f"({shown})</summary><ul>{items}</ul></details>")
 
 
 def _by_basis(summary: RunSummary, mode: str) -> str:

@@ -356,7 +356,11 @@ def summary_lines(config: pytest.Config) -> list[tuple[str, bool]]:
         lines += [(f"  {title}: {change.describe()}", False) for change in changes[:shown]]
         if len(changes) > shown:
             lines.append((f"  ... and {len(changes) - shown} more (device-restore.json)", False))
-    if record.ok:
+    if record.memory:
+        lines.append((f"MEMORY NOT AS FOUND: {record.memory}", True))
+    if record.ok and record.memory:
+        lines.append(("every value given back and checked, but the device is not as found: its memory (above)", True))
+    elif record.ok:
         lines.append(("device restored as found: every value checked", False))
     else:
         for failure in record.failures:

@@ -180,6 +180,7 @@ def completed(session: pytest.Session) -> RunSummary | None:
         if state.rejected and not already:  # completed() runs twice: for the HTML summary, then for the file
             summary.results.insert(0, _identity_rejected(config, state.rejected))
         summary.device_restored = None if state.record is None else state.record.ok
+        summary.device_memory = None if state.record is None else state.record.memory
     for result in summary.results:  # traces of passed tests may have been dropped (--bus-trace failed)
         if result.trace and not (Path(folder) / result.trace).exists():
             result.trace = None

@@ -8,7 +8,7 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 
 Adding an effect: write its model here (the docstring says what the device does, each field
 what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 41 effects, one small model
+This module is over 400 lines because it is the catalogue of the 42 effects, one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -589,6 +589,16 @@ class SyncCobIdAnyCanId(EffectParams):
     min: int = Field(ge=0, le=0x7FF, description="the lowest CAN-ID the manual allows")
     max: int = Field(ge=0, le=0x7FF, description="the highest CAN-ID the manual allows")
 
+class CyclicTimerRelationUnstated(EffectParams):
+    """The manual lists a cyclic timer (CiA 406 6200h) beside TPDO1's event timer (1800h sub 5) with other
+    defaults and does not say how they relate: two values, or one (a write to either sets both). The suites
+    accept either; the twin plays two values, its variant one."""
+
+    effect = "cyclic_timer_relation_unstated"
+    cyclic_timer: ObjectKeyField = Field(description="the cyclic timer entry (ms)")
+    event_timer: ObjectKeyField = Field(description="the TPDO event timer entry (ms)")
+
+
 EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
@@ -602,6 +612,6 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
         UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
         OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange, ZeroingObject, MappingLengthDiffers,
         MappingChangeWhileValid, ErrorHistoryKeepsFirst, EmcyInStopped, HeartbeatConsumerEmcy, SyncCobIdAnyCanId,
-        BlockTransferUnconfirmed,
+        BlockTransferUnconfirmed, CyclicTimerRelationUnstated,
     )
 }

@@ -55,4 +55,24 @@ READINGS: list[OpenReading] = [
         modules=("test_pdo_comm", "test_pdo_timing"),
         requires=("tpdos",),
     ),
+    OpenReading(
+        point="cyclic-timer-vs-event-timer",
+        question="The manual lists a cyclic timer 6200h (default 0001h) beside TPDO1's event timer 1800h sub 5 "
+                 "(default 0000h): are they two values, or one value a write to either sets?",
+        source='WDGA manual T 6.6 (p. 23): 6200h "Cyclic-Timer", "Änderung / Anzeige der Transmissions Periode '
+               'für TPDO1", Unsigned16, rw, default 0001h; T 6.3 (p. 21): 1800h sub 5 event timer, default 0000h, '
+               'in ms (M §8.5.3, 30 ms = 1Eh); the manual does not say how they relate. CiA 406 v3.0 and later are '
+               'read as tying 6200h to TPDO1\'s event timer, both in ms (not checked against the text of CiA 406)',
+        readings=("two values: a write to one leaves the other as it is",
+                  "one value: a write to either sets both, while each loads its own stored value or default at a "
+                  "reset (fresh from the factory 6200h = 0001h beside 1800h sub 5 = 0000h, which no order of "
+                  "writes gives back: the run's custody gives it back by NMT reset node where the values in use "
+                  "were the stored ones; an acceptance writes neither)"),
+        variant="cyclic_timer_aliases_event_timer",
+        variant_text="6200h (cyclic timer) and 1800h sub 5 (TPDO1 event timer) are one value: a write to either "
+                     "sets both; a reset loads each from its own stored value or default",
+        modules=("test_sdo_protocol", "test_pdo", "test_pdo_timing", "test_heartbeat", "test_object_dictionary"),
+        requires=("tpdos",),
+        requires_effects=("cyclic_timer_relation_unstated",),
+    ),
 ]

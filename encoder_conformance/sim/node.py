@@ -54,10 +54,12 @@ from encoder_conformance.sim.send_repeat import SendRepeatCounters
 from encoder_conformance.sim.shaft import Shaft
 from encoder_conformance.sim.sim_log import EventLog
 from encoder_conformance.sim.store_commands import EncoderMemory, StoreCommands
+from encoder_conformance.sim.store_variants import ReadsBack
 from encoder_conformance.sim.sync_counter import SyncCounterRules
 from encoder_conformance.sim.sync_objects import SyncCobIdRules, SyncConsumer, SyncLengthCheck
 from encoder_conformance.sim.sync_producer import SyncProducer
 from encoder_conformance.sim.sync_timeout import SyncTimeoutMonitor
+from encoder_conformance.sim.timer_link import CyclicTimerLink
 from encoder_conformance.sim.tpdo import TpdoEngine
 from encoder_conformance.sim.values import ObjectValues
 from encoder_conformance.sim.write_gates import preop_only, scaling_bit_needed
@@ -171,10 +173,11 @@ class SimulatedNode:
                 p, lambda: self.encoder.apply_preset(0), self._preset_is_zero)),
             self._built(fx.BitsForcedAtInit, lambda p: assemble(ForcedBits, faults)(p, self.store)),
             self.heartbeat,
+            self._built(fx.CyclicTimerRelationUnstated, lambda p: assemble(CyclicTimerLink, faults)(p, self.store)),
             self._built(fx.NmtAutostartObject, lambda p: assemble(Autostart, faults)(p, self.read_int,
                                                                                         self.nmt.enter)),
             self.tpdo,
-            self._built(fx.StoreObjectReadsBack, _ReadsBack),
+            self._built(fx.StoreObjectReadsBack, ReadsBack),
             self.sdo_channel,
             self._lss(),
         ]
@@ -385,16 +388,3 @@ class _EncoderBehaviour:
         hooks.before_set.append(self._encoder.on_write)
         hooks.reload.append(lambda event: self._encoder.reload(self._nvm) if event.everything else None)
         hooks.powered_off.append(self._encoder.thaw)
-
-
-class _ReadsBack:
-    """Quirk ``store_object_reads_back``: 1010h/1011h subs read back a value other than CiA's word."""
-
-    def __init__(self, params: fx.StoreObjectReadsBack) -> None:
-        self._value = params.value
-
-    def register(self, hooks: NodeHooks) -> None:
-        hooks.sources.append(self.value)
-
-    def value(self, key: Key, channel: str) -> int | None:
-        return self._value if key[0] in (0x1010, 0x1011) and key[1] >= 1 else None

@@ -10,6 +10,8 @@ Set values live in the node's NVM under keys ``(set_number << 16 | index, sub)``
 ordinary stored values, so that a power cycle keeps them as the device keeps its sets.
 
 ``manufacturer_store_object``: a second 'save' object for manufacturer parameters (WayCon 2105h).
+
+``store_object_reads_back``: 1010h/1011h subs read back a value other than CiA's word.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.sim.hooks import NodeHooks
 from encoder_conformance.sim.nvm import Key, NonVolatileMemory
 from encoder_conformance.sim.object_store import ObjectStore
 
@@ -82,3 +85,16 @@ class ManufacturerStoreObject:
             saves=tuple(params.saves),
             wrong_signature_abort=params.wrong_signature_abort,
         )
+
+
+class ReadsBack:
+    """Quirk ``store_object_reads_back``: 1010h/1011h subs read back a value other than CiA's word."""
+
+    def __init__(self, params: fx.StoreObjectReadsBack) -> None:
+        self._value = params.value
+
+    def register(self, hooks: NodeHooks) -> None:
+        hooks.sources.append(self.value)
+
+    def value(self, key: Key, channel: str) -> int | None:
+        return self._value if key[0] in (0x1010, 0x1011) and key[1] >= 1 else None
