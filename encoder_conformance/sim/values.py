@@ -81,3 +81,20 @@ class WrongDeviceName(ObjectValues):
     def shown(self, key: Key, value: Value) -> Value:
         value = super().shown(key, value)
         return f"X{value}" if key == (0x1008, 0) and isinstance(value, str) else value  # 1008h: a VISIBLE_STRING
+
+
+@breaks(ObjectValues, "mapped_values_change_every_read")
+class CountsAtEveryRead(ObjectValues):
+    """A hold fault: each SDO read of a PDO-mappable integer entry shows one more than the read before."""
+
+    def __init__(self, store: ObjectStore, hooks: NodeHooks) -> None:
+        super().__init__(store, hooks)
+        self._reads: dict[Key, int] = {}
+
+    def current(self, key: Key, channel: str = "sdo") -> Value:
+        value = super().current(key, channel)
+        entry = self._store.entries.get(key)
+        if channel != "sdo" or not isinstance(value, int) or entry is None or not entry.pdo_mappable:
+            return value
+        self._reads[key] = self._reads.get(key, 0) + 1
+        return value + self._reads[key]
