@@ -17,6 +17,7 @@ class HoldFault(NamedTuple):
 
 HOLD_FAULTS: dict[str, HoldFault] = {
     "mapped_values_change_every_read": HoldFault(
-        "every SDO read of a PDO-mappable integer entry shows one more than the read before (a counter)",
+        "an SDO read of a PDO-mappable integer entry shows its value plus the SYNCs since the last (re)start (the "
+        "mapped objects change between every read before a SYNC and one after it; a TPDO carries the value)",
         ("test_pdo_mapping",), "VALUES_CHANGED"),
 }

@@ -84,17 +84,25 @@ class WrongDeviceName(ObjectValues):
 
 
 @breaks(ObjectValues, "mapped_values_change_every_read")
-class CountsAtEveryRead(ObjectValues):
-    """A hold fault: each SDO read of a PDO-mappable integer entry shows one more than the read before."""
+class CountsAtEverySync(ObjectValues):
+    """A hold fault: an SDO read of a PDO-mappable integer entry shows its value plus the SYNCs since the last
+    (re)start: the mapped objects change between a read before a SYNC and a read after it."""
 
     def __init__(self, store: ObjectStore, hooks: NodeHooks) -> None:
         super().__init__(store, hooks)
-        self._reads: dict[Key, int] = {}
+        self._syncs = 0
+        hooks.sync.append(self._count)
+        hooks.reload.append(lambda event: self._restart())
+
+    def _count(self, counter: int | None) -> None:
+        self._syncs += 1
+
+    def _restart(self) -> None:
+        self._syncs = 0
 
     def current(self, key: Key, channel: str = "sdo") -> Value:
         value = super().current(key, channel)
         entry = self._store.entries.get(key)
         if channel != "sdo" or not isinstance(value, int) or entry is None or not entry.pdo_mappable:
             return value
-        self._reads[key] = self._reads.get(key, 0) + 1
-        return value + self._reads[key]
+        return value + self._syncs
