@@ -26,7 +26,7 @@ import pytest
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.encoder_bench import EncoderBench
 from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_preconditions import return_to_preoperational
+from encoder_conformance.dut.nmt_states import return_to_preoperational
 from encoder_conformance.dut.pdo_mapping import MappingCustody, apply_mapping, describe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest

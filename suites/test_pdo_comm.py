@@ -32,7 +32,7 @@ from encoder_conformance.cia.cia301 import (
 from encoder_conformance.coverage import Hold
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
+from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
 from encoder_conformance.dut.sdo_frames import abort_name
 from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest

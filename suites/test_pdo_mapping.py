@@ -30,7 +30,7 @@ from encoder_conformance.coverage import Hold
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_preconditions import return_to_preoperational
+from encoder_conformance.dut.nmt_states import return_to_preoperational
 from encoder_conformance.dut.pdo_mapping import (
     Entry,
     MappingCustody,

@@ -8,7 +8,7 @@ import pytest
 
 from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_REGISTER, EmcyCode, NmtCommand
 from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.nmt_preconditions import start_operational
+from encoder_conformance.dut.nmt_states import start_operational
 from encoder_conformance.dut.periodic_capture import PeriodicCapture
 from encoder_conformance.dut.persistent_error import kept_error, persisting_error
 from encoder_conformance.dut.settings_journal import SettingsJournal
