@@ -94,6 +94,16 @@ class LssDevice:
                                       and bool(m.data) and m.data[0] != 0)
         return beats[-1].data[0] if beats else None
 
+    def into_lss_state(self, node_id: int) -> None:
+        """Quirk lss_only_in_states without operational: NMT enter pre-operational at ``node_id`` and an SDO answer
+        there, as the manual's procedure stops the device first (WDGA M §8.2.4); a device that started itself after
+        a power cycle would ignore LSS. Nothing where LSS is obeyed in every NMT state (CiA 305)."""
+        quirk = self.dut.profile.params_of(fx.LssOnlyInStates)
+        if quirk is None or "operational" in quirk.states:
+            return
+        self.dut.nmt("pre-operational", node_id=node_id)
+        assert self.answers_at(node_id), f"no SDO answer at node-ID {node_id} after NMT enter pre-operational"
+
     def leave(self) -> Mark:
         return self.master.switch_global(LssState.WAITING)
 
