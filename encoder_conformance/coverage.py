@@ -44,6 +44,8 @@ class Hold(Enum):
     NO_EMCY_FROM_TRIGGER = (Kind.NOT_TESTABLE, "the device sent no EMCY for the bench's error stimulus", True)
     EMCY_NOT_REPEATED = (Kind.NOT_TESTABLE, "the device did not repeat the EMCY often enough to measure", True)
     NO_TPDO_ON_CHANGE = (Kind.NOT_TESTABLE, "the TPDO sent nothing on a change in operational", True)
+    NO_USABLE_TPDO = (Kind.NOT_TESTABLE, "no TPDO the profile makes usable is usable as the device is configured "
+                                         "(nothing mapped, or disabled with a read-only COB-ID)", True)
     UNTYPED = (Kind.NOT_TESTABLE, "a skip whose reason the suite did not type (a defect of the suite: report it)",
                False)
     HOST_LATE = (Kind.INCONCLUSIVE, "the tester's host was late at the moments that count", False)
@@ -60,11 +62,11 @@ class Hold(Enum):
 PREFIXES: dict[str, Kind] = {kind.value: kind for kind in Kind}
 
 
-def kind_of(message: str) -> Kind:
-    """The kind a skip's message names by its first words; a message that names none is not testable (an untyped
-    skip must never count as out of scope)."""
+def kind_of(message: str, unnamed: Kind = Kind.NOT_TESTABLE) -> Kind:
+    """The kind a skip's message names by its first words; a message that names none is ``unnamed``: not testable
+    for a skip in a run (an untyped skip must never count as out of scope)."""
     head = message.split(":", 1)[0].strip().lower()
-    return PREFIXES.get(head, Kind.NOT_TESTABLE)
+    return PREFIXES.get(head, unnamed)
 
 
 def hold_named(name: str | None) -> Hold | None:

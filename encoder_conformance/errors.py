@@ -41,6 +41,8 @@ The exit code a class leads to is set where it is caught (``exit_codes.py`` name
           +-- HubStop                   SIGTERM/SIGINT: the hub process leaves its loop (vcan/hub.py)
 
     BaseException
+     +-- TypedSkip                      pytest's skip (its Skipped, an outcome, not an error) that says why: a scope
+     |                                  kind or a coverage.Hold (plugin/skips.py)
      +-- KeyboardInterrupt
           +-- RunInterrupted            device calls once the run is stopping (Ctrl-C, SIGTERM); by design not an
                                         EncoderConformanceError: ``except Exception`` must not swallow it
@@ -116,9 +118,10 @@ class CannotPersist(EncoderConformanceError):
 class NoUsableTpdo(EncoderConformanceError):
     """No TPDO of the profile can be used for the test; the message says why (a skip reason)."""
 
-    def __init__(self, reason: str, deviations: list[tuple[str, str]]) -> None:
+    def __init__(self, reason: str, deviations: list[tuple[str, str]], hold: Hold | None = None) -> None:
         super().__init__(reason)
         self.deviations = deviations
+        self.hold = hold  # where the device's configuration, not the profile, left none usable
 
 
 class NotJudged(EncoderConformanceError):

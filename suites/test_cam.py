@@ -394,7 +394,7 @@ def cam_tpdo(cam_channel: CamChannel, evidence: Evidence) -> Iterator[Remapped]:
     try:
         choice = choose_tpdo(dut, 2, [1])
     except NoUsableTpdo as exc:
-        skip_text(str(exc))
+        skip_text(str(exc), exc.hold)
     tpdo = TpdoUnderTest(dut, journal, choice.comm, choice.transmission_type)
     comm, mapping = tpdo.comm, tpdo.mapping_index
     entries = [dut.profile.entry(mapping, sub) for sub in (0, 1)] + [dut.profile.entry(comm, 1)]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.dut.identity import NO_SERIAL, read_identity, serial_650b_key
-from encoder_conformance.plugin.skips import not_applicable
+from encoder_conformance.plugin.skips import not_applicable, not_selected
 from encoder_conformance.profile import datatypes
 from encoder_conformance.suite_support.checks import describe_value
 
@@ -114,7 +114,7 @@ def test_serial_number_matches_label(dut, evidence, label_serial):
     """The unit reports the serial number printed on its label (1018h sub 4, else 650Bh): goods-in checks that
     the device on the bench is the unit it books in."""
     if label_serial is None:
-        not_applicable("no label serial number given (--label-serial)")
+        not_selected("no label serial number given (--label-serial)")
     label, source = label_serial
     identity = read_identity(dut)
     if identity.unit_serial is None:

@@ -309,8 +309,7 @@ def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
     frames = lss.dut.frames.since(quiet, lambda m: m.is_rx and m.arbitration_id in (0x7FF, 0x77F, 0x6FF, 0x5FF))
     assert not frames, f"an unconfigured device sent frames as node 127 or 255:\n{format_frames(frames)}"
     if power_on_check:
-        mark = lss.dut.frames.mark()
-        lss.power_cycle()
+        mark = lss.power_cycle()
         assert lss.wait_bootup_at(lss.node_id, mark) is None, "node-ID 255 stored, but a boot-up after power-on"
         if "identify_non_configured" in lss.services:
             assert lss.master.identify_non_configured() == 1, "after power-on not identified as non-configured"
@@ -326,8 +325,7 @@ def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
         evidence.rests_on("manual", NEW_BOOT_UP)
         evidence.note("no boot-up on leaving the configuration state: the new boot-up the manual asks for, by a "
                       "power cycle")
-        mark = lss.dut.frames.mark()
-        lss.power_cycle()
+        mark = lss.power_cycle()
         boot = lss.wait_bootup_at(lss.node_id, mark)
     if boot is None and not new_boot_up:
         evidence.rests_on("cia", UNCONFIGURED_START_READINGS)

@@ -36,7 +36,7 @@ from encoder_conformance.dut.nmt_states import return_to_preoperational, start_o
 from encoder_conformance.dut.sdo_frames import abort_name
 from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
-from encoder_conformance.plugin.skips import not_applicable, not_judged
+from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
 from encoder_conformance.suite_support.checks import abort_accepted, expected_aborts
@@ -82,7 +82,7 @@ def _syncs(dut, count: int, cob_id: int, until_first: bool = False) -> list[can.
 
 def _need_shaft(shaft, what: str) -> None:
     if shaft is None:
-        not_applicable(f"{what} needs a turning shaft (the twin, or --shaft-drive)")
+        not_equipped(f"{what} needs a turning shaft (the twin, or --shaft-drive)")
 
 
 def _event_tpdo(dut, evidence, settings_journal, shaft) -> TpdoUnderTest:

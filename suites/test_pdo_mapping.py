@@ -190,7 +190,7 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
     try:
         choice = choose_tpdo(dut, 1, [1])
     except NoUsableTpdo as exc:
-        skip_text(str(exc))
+        skip_text(str(exc), exc.hold)
     tpdo = _variable(dut, choice.comm)
     if tpdo is None:
         fixed = "is fixed (sub 0 or entries read-only)" if _mapping_objects(dut) else "has no object"
@@ -393,7 +393,7 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
     try:
         choice = choose_tpdo(dut, 1, [1])
     except NoUsableTpdo as exc:
-        skip_text(str(exc))
+        skip_text(str(exc), exc.hold)
     tpdo = _variable(dut, choice.comm)
     objects = [c for c in _mappable(dut) if c[2] <= 32]
     if tpdo is None or tpdo.slots < 2 or not objects:

@@ -18,6 +18,8 @@ from encoder_conformance.dut.custody import Custody
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.lss_device import LssDevice, expect_success, table_index
 from encoder_conformance.dut.lss_master import LssAddress, LssMaster
+from encoder_conformance.dut.power import BenchPower, SimulatorPowerSwitch
+from encoder_conformance.dut.power_on import power_cycler
 from encoder_conformance.dut.snapshot import Snapshot
 from encoder_conformance.dut.store_watch import StoreWatch
 from encoder_conformance.exit_codes import RunExit
@@ -43,7 +45,8 @@ def _lss(rig: Rig, profile_id: str, faults: tuple[str, ...] = (), switch: bool =
     address = LssAddress(*(dut.read_uint(0x1018, sub) for sub in range(1, 5)))
     rate = profile.bus.bitrate if isinstance(profile.bus.bitrate, int) else None
     bit_index = None if rate is None else table_index(rate, profile.bus.lss_table())
-    return node, LssDevice(dut, master, address, bit_index, node.power_cycle if switch else None, on_move=on_move)
+    power = power_cycler(dut, BenchPower(SimulatorPowerSwitch(node))) if switch else None
+    return node, LssDevice(dut, master, address, bit_index, power, on_move=on_move)
 
 
 def _stored(node: SimulatedNode) -> int | None:

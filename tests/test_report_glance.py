@@ -81,12 +81,12 @@ def test_first_screen_order_verdict_identity_areas_failures_warnings():
 def test_areas_in_reading_order_with_counts():
     page = render(_summary(PASSED, FAILED, WARNED, *SKIPPED))
     areas = page[page.index("id='areas'"):page.index("id='failures'")]
-    names = ["identity", "object dictionary", "SDO", "NMT", "error control", "EMCY", "PDO", "store/restore", "LSS",
-             "encoder function", "CAM"]
+    names = ["identity", "working order", "object dictionary", "SDO", "NMT", "error control", "EMCY", "PDO",
+             "store/restore", "LSS", "encoder function", "CAM"]
     assert _positions(areas, *(f"<td>{n}</td>" for n in names)) == sorted(_positions(areas, *(f"<td>{n}</td>"
                                                                                               for n in names)))
     assert "<td>LSS</td><td class='g-v-none'>NOT RUN</td><td class='n'>0</td><td class='n'>0</td>" \
-           "<td class='n'>0</td><td class='n'>3</td>" in areas  # skipped only: not run, 3 skipped
+           "<td class='n'>0</td><td class='n'>0</td><td class='n'>0</td><td class='n'>3</td>" in areas  # 3 out of scope
     assert "<td>error control</td><td class='g-v-fail'>FAIL</td><td class='n'>0</td><td class='n'>1</td>" in areas
     assert "<td>SDO</td><td class='g-v-none'>NOT RUN</td>" in areas  # an area without tests is shown, greyed
 
@@ -98,7 +98,8 @@ def test_deviations_skips_settings_folded_draft_and_alarms_visible():
     deviations = page[page.index("<details id='deviations'>"):page.index("</details>", page.index("id='deviations'"))]
     assert deviations.count("<tr>") == 47
     assert "46; 23 relied on" in deviations
-    assert "Skipped: 3 tests, 1 reasons" in page  # one reason: the parenthesis names the parameter
+    assert "Out of scope (not applicable, not available, not selected): 3 tests, 1 reasons" in page  # one reason:
+    # the parenthesis names the parameter
     assert "bench-3" in page
     assert "Ana" in page
     assert "pcan (from station bench.toml)" in page

@@ -76,6 +76,31 @@ class EmcyCode(IntEnum):
     SYNC_LENGTH = 0x8240  # unexpected SYNC data length
 
 
+#: EMCY error code classes (CiA 301 v4.2.0 §7.2.7.1, table 21), the most specific prefix first: code -> meaning
+EMCY_CODE_MEANINGS: dict[int, str] = {
+    0x8110: "CAN overrun (objects lost)", 0x8120: "CAN in error passive mode", 0x8130: "life guard or heartbeat error",
+    0x8140: "recovered from bus off", 0x8150: "CAN-ID collision", 0x8210: "PDO not processed due to length error",
+    0x8220: "PDO length exceeded", 0x8230: "DAM MPDO not processed, destination object not available",
+    0x8240: "unexpected SYNC data length", 0x8250: "RPDO time-out",
+    0x0000: "error reset or no error", 0x1000: "generic error",
+    0x2000: "current", 0x2100: "current, device input side", 0x2200: "current inside the device",
+    0x2300: "current, device output side", 0x3000: "voltage", 0x3100: "mains voltage",
+    0x3200: "voltage inside the device", 0x3300: "output voltage", 0x4000: "temperature",
+    0x4100: "ambient temperature", 0x4200: "device temperature", 0x5000: "device hardware",
+    0x6000: "device software", 0x6100: "internal software", 0x6200: "user software", 0x6300: "data set",
+    0x7000: "additional modules", 0x8000: "monitoring", 0x8100: "communication", 0x8200: "protocol error",
+    0x9000: "external error", 0xF000: "additional functions", 0xFF00: "device specific",
+}
+
+
+def emcy_meaning(code: int) -> str:
+    """What an EMCY error code means by CiA 301's table 21 (its exact code, else its class, else its group)."""
+    for key in (code, code & 0xFFF0, code & 0xFF00, code & 0xF000):
+        if key in EMCY_CODE_MEANINGS:
+            return EMCY_CODE_MEANINGS[key]
+    return "not in CiA 301's table 21"
+
+
 TPDO_COMMUNICATION = range(0x1800, 0x1A00)
 TPDO_MAPPING = range(0x1A00, 0x1C00)
 RPDO_COMMUNICATION = range(0x1400, 0x1600)

@@ -13,6 +13,7 @@ import argparse
 from collections.abc import Callable
 
 from encoder_conformance.cli.usage import command_arguments
+from encoder_conformance.coverage import Kind
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.plugin import option_table
 from encoder_conformance.run_summary import RunSummary
@@ -51,13 +52,17 @@ def format_verdict(summary: RunSummary) -> list[str]:
     lines = [f"accept {summary.profile_id}: serial {summary.serial or '-'}, revision {summary.revision or '-'}"
              + (f", device name {identity['device name (1008h)']}" if identity.get("device name (1008h)") else "")]
     for area in summary.areas():
-        counts = ", ".join(f"{n} {what}" for n, what in ((area.passed, "passed"), (area.failed, "failed"),
-                                                         (area.warnings, "warnings"), (area.skipped, "skipped")) if n)
+        counts = ", ".join(f"{n} {what}" for n, what in (
+            (area.passed, "passed"), (area.failed, "failed"), (area.warnings, "warnings"),
+            (area.not_testable, "not testable"), (area.inconclusive, "inconclusive"),
+            (area.out_of_scope, "out of scope")) if n)
         lines.append(f"  {area.area:18s} {area.verdict:18s} ({counts})")
         if area.verdict == "FAIL":
             failed = next(r for r in summary.results if r.area == area.area and r.outcome in ("failed", "error"))
             first = (failed.message.strip().splitlines() or [""])[0].removeprefix("AssertionError: ")
             lines.append(f"      {failed.nodeid.split('/')[-1]}: {first[:MESSAGE_WIDTH]}")
+    for held in summary.with_kind(Kind.NOT_TESTABLE)[:3]:
+        lines.append(f"      {held.nodeid.split('/')[-1]}: {held.message.splitlines()[0][:MESSAGE_WIDTH]}")
     if summary.could_not_test:
         lines.append(f"  could not test: {summary.could_not_test}")
     if summary.device_restored is False:

@@ -20,11 +20,12 @@ from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.dut import connection
 from encoder_conformance.dut.custody import Custody, RestoreRecord
 from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
-from encoder_conformance.dut.frames import FrameLog
+from encoder_conformance.dut.frames import FrameLog, Mark
 from encoder_conformance.dut.identity import read_identity
 from encoder_conformance.dut.lss_custody import Changes, LssCustody
 from encoder_conformance.dut.lss_master import LssAddress, LssMaster
 from encoder_conformance.dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
+from encoder_conformance.dut.power_on import power_cycler
 from encoder_conformance.dut.reference_point import preset_keys
 from encoder_conformance.dut.snapshot import Snapshot
 from encoder_conformance.dut.store_watch import StoreWatch
@@ -135,10 +136,10 @@ def _lss_recover(dut: DeviceUnderTest, snapshot: Snapshot, request: RestoreReque
         return "the snapshot does not give the LSS address (1018h sub 1..4) needed to select the device"
     master = LssMaster(lambda cob_id, data: dut.network.send_message(cob_id, data), dut.frames,
                        dut.profile.timing.lss_response_ms / 1000)
-    power: Callable[[], None] | None = None
+    power: Callable[[], Mark] | None = None
     if request.power_off_command and request.power_on_command:
         switch = BenchPower(ShellPowerSwitch(request.power_off_command, request.power_on_command))
-        power = switch.cycle
+        power = power_cycler(dut, switch)
     candidates = frozenset(snapshot.lss_node_ids) | ({request.node_id} if request.node_id else set())
     hint = (f"encoder-conformance restore --from {request.snapshot_path} again"
             + ("" if power else " (or give --power-off-cmd CMD --power-on-cmd CMD)"))

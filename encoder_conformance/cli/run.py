@@ -97,7 +97,8 @@ def run_epilog() -> str:
         "table at the end (each station's report folder under --report-dir, default reports/).",
         "",
         "Exit codes: 0 passed, 1 device non-conformant, 3 internal error, 4 usage error, 5 no tests",
-        "selected, 69 could not test, 70 device not restored as found, 130 interrupted (143 SIGTERM).",
+        "selected, 6 incomplete (nothing failed, but checks in scope were not testable), 69 could not",
+        "test, 70 device not restored as found, 130 interrupted (143 SIGTERM).",
         "",
     ])
 

@@ -244,9 +244,9 @@ class Custody:
         assert snapshot is not None
         if dut.lost and not (dut.device_lost and dut.reset_and_reach()):  # a silent device: one NMT reset node
             raise DutLostError(dut.lost)
+        mark = dut.frames.mark()  # before the switch is told to switch on: a boot-up during its command counts
         if self.power is not None and self.power.ensure_on():  # Ctrl-C between power off and on
             record.written.append(f"power switched on again ({self.power.description})")
-            mark = dut.frames.mark()
             wake_if_silent(dut)
             if not self.first_steps:  # else they wait for the device where it is (e.g. unconfigured: no boot-up)
                 dut.wait_bootup(mark)

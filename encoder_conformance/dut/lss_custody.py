@@ -33,7 +33,7 @@ from encoder_conformance.cia.cia301 import (
     SDO_RESPONSE_BASE,
 )
 from encoder_conformance.cia.cia305 import UNCONFIGURED_NODE_ID, LssState
-from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
+from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark
 from encoder_conformance.dut.lss_master import LssAddress, LssAnswer, LssMaster
 from encoder_conformance.dut.sdo_frames import upload_request
@@ -70,7 +70,7 @@ class LssCustody:
     address: LssAddress
     target: int
     bit_index: int | None
-    power_cycle: Callable[[], None] | None = None
+    power_cycle: Callable[[], Mark] | None = None  # off, on, woken; the power-on mark (dut/power_on.py)
     candidates: frozenset[int] = frozenset()  # node-IDs a test gave the device
     restore_hint: str = ""  # the command that finishes the job later (shown where the device stays moved)
 
@@ -141,11 +141,9 @@ class LssCustody:
         return None if boot is None else boot.arbitration_id - HEARTBEAT_BASE
 
     def _cycle(self) -> Mark:
+        """A power cycle; the power-on mark (a boot-up window starts there, not before the power went off)."""
         assert self.power_cycle is not None
-        mark = self.dut.frames.mark()
-        self.power_cycle()
-        wake_if_silent(self.dut)
-        return mark
+        return self.power_cycle()
 
     # -- putting back ---------------------------------------------------------------------------
     def put_back(self, changes: Changes) -> str | None:
@@ -201,10 +199,12 @@ class LssCustody:
         if problem:
             self.master.switch_global(LssState.WAITING)
             return self.where(found, f"{problem} (to put it back)")
-        mark = self.master.switch_global(LssState.WAITING)  # an unconfigured device starts now (CiA 305)
+        # the boot-up comes at the first of two events: leaving (an unconfigured device starts now, CiA 305) or the
+        # reset communication (the pending node-ID applied, CiA 305 v3); frames are counted from the first
+        mark = self.master.switch_global(LssState.WAITING)
         others = [n for n in [found.node_id] if n not in (None, UNCONFIGURED_NODE_ID)] or self._others()
         for node_id in others:
-            mark = self._nmt("reset-communication", node_id)  # the pending node-ID applied (CiA 305 v3)
+            self._nmt("reset-communication", node_id)
         boot = self._wait_bootup([self.target, *others], mark)
         if boot == self.target or (boot is None and self.answers_at(self.target)):
             return None

@@ -45,11 +45,11 @@ class LssDevice:
     master: LssMaster
     address: LssAddress
     bit_index: int | None  # the table-0 index of the bit rate in use, where known
-    power_cycle: Callable[[], None] | None = None  # a bench power switch, where there is one
+    power_cycle: Callable[[], Mark] | None = None  # the bench switch's cycle, where there is one: the power-on mark
     moved_to: set[int] = field(default_factory=set)  # node-IDs a test gave the device
     made_unconfigured: bool = False
     start: Mark = field(init=False)  # before the test's first LSS frame (set at construction)
-    unconfigured_since: Mark | None = None  # before the reset or power-on that made it unconfigured
+    unconfigured_since: Mark | None = None  # at the reset or power-on that made it unconfigured
     on_move: Callable[[int], None] | None = None  # told each node-ID before a test gives it (the run's snapshot)
     on_settled: Callable[[], None] | None = None  # told when the device is back where it was found
     restore_hint: str = ""  # the command that finishes a put-back later (``restore --from``)
@@ -166,16 +166,17 @@ class LssDevice:
         return self.master.configure_node_id(new_id)
 
     def apply_configured(self) -> Mark:
-        """Make the configured node-ID active; a mark before it does. CiA 305 v3: NMT reset communication; a
-        device that applies it only at power-on: store configuration and a power cycle."""
+        """Make the configured node-ID active; the mark of the event that does, where a window for the device starts:
+        CiA 305 v3: before NMT reset communication; a device that applies it only at power-on: store configuration
+        and a power cycle, the power-on mark (not one before the power went off: issue 39)."""
         if self.applies_on_reset:
             self.leave()
             return self.reset_communication(self.node_id)
         return self._store_and_power_cycle()
 
     def apply_node_id(self, new_id: int) -> Mark:
-        """Configure ``new_id`` instead of the node-ID in use and make it active; returns a mark before it
-        becomes active."""
+        """Configure ``new_id`` instead of the node-ID in use and make it active; the mark of the event that makes it
+        active (``apply_configured``)."""
         expect_success(self.configure_for(new_id), f"configure node-ID {new_id}")
         return self.apply_configured()
 
@@ -206,15 +207,13 @@ class LssDevice:
         return None
 
     def _store_and_power_cycle(self) -> Mark:
-        """Store (unless the device stores by itself) and power-cycle; a mark before the power went off."""
+        """Store (unless the device stores by itself) and power-cycle; the power-on mark."""
         if "node_id" not in self.auto_stored:
             expect_success(self.master.store_configuration(), "store configuration")
         self.leave()
         if self.power_cycle is None:
             raise AssertionError("the device applies a node-ID only at power-on and there is no power switch")
-        mark = self.dut.frames.mark()
-        self.power_cycle()
-        return mark
+        return self.power_cycle()
 
     # -- put back ---------------------------------------------------------------------------------
     def _sent(self, command: int) -> bool:

@@ -54,8 +54,7 @@ def stored_node_id_survives_power_cycle(lss: LssDevice, store: bool) -> None:
         if store:
             expect_success(lss.master.store_configuration(), "store configuration")
         lss.leave()
-        mark = lss.dut.frames.mark()
-        lss.power_cycle()  # type: ignore[misc]  # why: its tests ask for power_cycle (skipped without a switch)
+        mark = lss.power_cycle()  # type: ignore[misc]  # why: its tests ask for power_cycle (skipped without a switch)
         assert lss.wait_bootup_at(node_id, mark) is not None or lss.answers_at(node_id), (
             f"after a power cycle the device is not at the stored node-ID {node_id}\n"
             f"{format_frames(lss.dut.frames.since(mark)) or '  no frames'}")

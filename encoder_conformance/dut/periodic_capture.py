@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import NmtState
+from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark
 from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe, TwinLateness
@@ -42,6 +43,7 @@ class PeriodicStream:
     timestamps: list[float] = field(default_factory=list)
     cob_id: int | None = None
     skip: str | None = None
+    skip_hold: Hold | None = None  # in scope: why the stream could not be captured
     error: str | None = None
     notes: list[str] = field(default_factory=list)
     deviations: list[tuple[str, str]] = field(default_factory=list)
@@ -108,6 +110,7 @@ class PeriodicCapture:
             problem = _not_operational(dut, started, beat) if beat in streams else None
             if problem is not None and self.kept_error:  # an error no reset clears may hold it in pre-operational
                 timer.skip = describe_hold(dut, "the event-timer TPDO stream", self.kept_error)
+                timer.skip_hold = Hold.PERSISTENT_ERROR
                 streams.remove(timer)
             elif problem is not None:
                 timer.error = problem
@@ -158,7 +161,7 @@ def _configure(stream: PeriodicStream, configure: Callable[[], None]) -> None:
         configure()
     except NoUsableTpdo as exc:
         stream.deviations.extend(exc.deviations)
-        stream.skip = str(exc)
+        stream.skip, stream.skip_hold = str(exc), exc.hold
     except (SdoAbortedError, AssertionError) as exc:
         stream.error = f"{stream.what}: setting up the capture failed: {exc}"
 

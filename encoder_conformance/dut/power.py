@@ -105,12 +105,15 @@ class BenchPower:
     def description(self) -> str:
         return self.switch.description
 
-    def cycle(self) -> None:
-        """Off, keep it off for the switch's off time (so the supply really drops), on."""
+    def cycle(self, before_on: Callable[[], object] | None = None) -> None:
+        """Off, keep it off for the switch's off time (so the supply really drops), on; ``before_on`` is called
+        just before the switch is told to switch on (where a window after the power-on starts: dut/power_on.py)."""
         self.left_off = True  # also when 'off' is interrupted half-way: the state is not known then
         self.switch.off()
         if self.switch.off_time_s > 0:
             threading.Event().wait(self.switch.off_time_s)  # a hold time of the stimulus, not a wait for the device
+        if before_on is not None:
+            before_on()
         self.switch.on()
         self.left_off = False
 

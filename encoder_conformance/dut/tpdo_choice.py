@@ -9,9 +9,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, cob_id_valid
+from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.errors import NoUsableTpdo
 from encoder_conformance.profile import quirk_effects as fx
+from encoder_conformance.profile.model import resolve_node_id_expression
 from encoder_conformance.profile.value_domain import declared_domain
 
 
@@ -49,12 +51,16 @@ def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int]) -> Tpdo
     Raises NoUsableTpdo when none qualifies.
     """
     fixed, deviation = fixed_behaviour_tpdos(dut)
+    configured_away: list[str] = []  # TPDOs the profile makes usable that the device's configuration leaves out
     for comm in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF and i not in fixed):
         entry, kind, cob = (dut.profile.entry(comm, s) for s in (sub, 2, 1))
         if entry is None or kind is None or cob is None or not entry.writable:
             continue
         mapping = comm + PDO_MAPPING_OFFSET
-        if dut.profile.entry(mapping, 0) is not None and dut.read_uint(mapping, 0) == 0:
+        count = dut.profile.entry(mapping, 0)
+        if count is not None and dut.read_uint(mapping, 0) == 0:
+            if isinstance(count.default, int) and count.default:  # mapped by default: configured otherwise here
+                configured_away.append(f"{mapping:04X}h.00 = 0 (default {count.default})")
             continue  # nothing mapped
         accepted = declared_domain(dut.profile, comm, 2)  # the profile's types within the entry's own limits
         candidates = ([t for t in usable_types if accepted is None or t in accepted] if kind.writable
@@ -62,6 +68,9 @@ def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int]) -> Tpdo
         chosen = next((t for t in candidates if t in usable_types), None)
         cob_id = dut.read_uint(comm, 1)
         if chosen is None or (cob_id & COB_ID_INVALID and not cob.writable):
+            default = resolve_node_id_expression(cob.default, dut.node_id)
+            if chosen is not None and isinstance(default, int) and not default & COB_ID_INVALID:
+                configured_away.append(f"{comm:04X}h.01 = {cob_id:08X}h (disabled, read-only; default valid)")
             continue
         choice = TpdoChoice(comm, chosen, deviations=[deviation] if deviation else [])
         if cob_id & COB_ID_INVALID:
@@ -70,5 +79,9 @@ def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int]) -> Tpdo
         if not kind.writable:
             choice.notes.append(f"{comm:04X}h.02 is read-only: its fixed type {chosen} is used")
         return choice
+    deviations = [deviation] if deviation else []
+    if configured_away:
+        raise NoUsableTpdo(f"not testable: no TPDO with writable sub-index {sub} is usable as the device is "
+                           f"configured: {'; '.join(configured_away)}", deviations, Hold.NO_USABLE_TPDO)
     raise NoUsableTpdo(f"not applicable: no mapped TPDO with writable sub-index {sub} and a usable transmission type",
-                       [deviation] if deviation else [])
+                       deviations)

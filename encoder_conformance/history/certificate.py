@@ -47,6 +47,7 @@ h1 { font-size: 17pt; margin: 0 0 1mm 0; }
 .FAIL { color: #b00020; border-color: #b00020; }
 .WARN { color: #8a5a00; border-color: #c98a00; }
 .NONE { color: #555; border-color: #777; }
+.INC { color: #ad4e00; border-color: #ad4e00; }
 table { border-collapse: collapse; width: 100%; margin-bottom: 3mm; }
 table.areas { page-break-inside: avoid; }
 table.failures td { font-size: 7.5pt; padding: 0.6mm 2mm; }
@@ -103,7 +104,7 @@ _PAGE = _ENV.from_string(_TEMPLATE)
 
 
 def _css(overall: str) -> str:
-    return {"PASS": "PASS", "FAIL": "FAIL", "PASS WITH WARNINGS": "WARN"}.get(overall, "NONE")
+    return {"PASS": "PASS", "FAIL": "FAIL", "PASS WITH WARNINGS": "WARN", "INCOMPLETE": "INC"}.get(overall, "NONE")
 
 
 def _date(started: str) -> str:

@@ -29,7 +29,7 @@ CREATE TABLE IF NOT EXISTS runs (
     vendor_id TEXT,
     product_code TEXT,
     device_name TEXT,
-    overall TEXT NOT NULL,            -- PASS | FAIL | PASS WITH WARNINGS | COULD NOT TEST | NOT RUN
+    overall TEXT NOT NULL,            -- PASS | FAIL | PASS WITH WARNINGS | INCOMPLETE | COULD NOT TEST | NOT RUN
     could_not_test TEXT,
     station TEXT,
     operator TEXT,

@@ -13,6 +13,10 @@ Why each test is in it:
   revision within the profile's range, record size, serial number consistent (650Bh) and in its format:
   "is this the product we bought". A device that is plainly another product (vendor-ID and product code
   both differ) is rejected by the start-up check and reported as an identity failure, not "could not test".
+- working order (whole module test_working_order.py): no error the device reports at start-up that no test caused
+  (an EMCY since the tester opened the bus, 1001h set; its code named by CiA 301's table 21, or documented by the
+  quirk error_at_start_up_documented), and NMT start reaches operational (heartbeat 05h): a device that reports a
+  hardware error at every start and never sends process data is not accepted.
 - test_factory_default: every factory default the profile declares (communication objects, PDO mapping,
   application parameters), read as found: a device at goods-in is in its delivery state, so the values
   a customer's configuration relies on must be the manual's.
@@ -43,6 +47,7 @@ ACCEPT_HEARTBEAT_INTERVALS = 10
 #: (module, test function or None for the whole module): the acceptance selection, see the docstring
 SELECTION: tuple[tuple[str, str | None], ...] = (
     ("test_identity.py", None),
+    ("test_working_order.py", None),
     ("test_object_dictionary.py", "test_factory_default"),
     ("test_pdo_mapping.py", "test_default_mapping_names_mappable_objects"),
     ("test_sdo_protocol.py", "test_expedited_upload_byte_exact"),

@@ -19,11 +19,12 @@ from dataclasses import dataclass, field
 from html import escape
 from pathlib import PurePosixPath
 
+from encoder_conformance.coverage import Kind
 from encoder_conformance.run_summary import AREAS, INTERNAL_ERROR_TEXT, RunSummary, TestResult
 
 #: the banner's colour per overall verdict
-VERDICT_CLASS = {"PASS": "pass", "FAIL": "fail", "PASS WITH WARNINGS": "warn", "COULD NOT TEST": "none",
-                 "INTERNAL ERROR": "int", "NOT RUN": "none"}
+VERDICT_CLASS = {"PASS": "pass", "FAIL": "fail", "PASS WITH WARNINGS": "warn", "INCOMPLETE": "inc",
+                 "COULD NOT TEST": "none", "INTERNAL ERROR": "int", "NOT RUN": "none"}
 
 KIND_NAMES = {"run": "conformance run", "accept": "acceptance check"}
 
@@ -44,6 +45,7 @@ CSS = """<style>
 .g-banner .g-word{font-size:30px;font-weight:bold;margin-right:18px}
 .g-int{background:#6a1b9a}.g-item.g-i{border-left-color:#6a1b9a}
 .g-pass{background:#1e7e34}.g-fail{background:#c62828}.g-warn{background:#e69500}.g-none{background:#757575}
+.g-inc{background:#ad4e00}
 .glance .g-v-pass{color:#1e7e34;font-weight:bold}.glance .g-v-fail{color:#c62828;font-weight:bold}
 .glance .g-v-warn{color:#b36b00;font-weight:bold}.glance .g-v-none{color:#888}
 .g-draft{background:#fff3cd;border:1px solid #e0b000;padding:4px 10px;margin:4px 0}
@@ -105,7 +107,7 @@ def _banner(summary: RunSummary) -> str:
     counts: Counter[str] = Counter(r.outcome for r in summary.results)
     figures = ", ".join(f"{counts[key]} {label if counts[key] > 1 else label.removesuffix('s')}"
                         for key, label in (("passed", "passed"), ("failed", "failed"), ("error", "internal errors"),
-                                           ("warning", "warnings"), ("skipped", "skipped")) if counts[key])
+                                           ("warning", "warnings"), ("skipped", "without a verdict")) if counts[key])
     serial = f" &middot; serial {escape(summary.serial)}" if summary.serial else ""
     duration = f", {summary.duration_s:.0f} s" if summary.duration_s else ""
     why = f"<div>could not test: {escape(summary.could_not_test)}</div>" if summary.could_not_test else ""
@@ -142,17 +144,31 @@ def _verdict_cell(verdict: str) -> str:
 def _areas(summary: RunSummary) -> str:
     ran = {area.area: area for area in summary.areas()}
     rows = []
+    columns = ("passed", "failed", "warnings", "not testable", "inconclusive", "out of scope")
     for name in [*AREAS, *(a for a in ran if a not in AREAS)]:
         area = ran.get(name)
         if area is None:
             if name != "other":
-                rows.append(f"<tr><td>{escape(name)}</td><td class='g-v-none'>NOT RUN</td>"
-                            "<td class='n'>0</td><td class='n'>0</td><td class='n'>0</td><td class='n'>0</td></tr>")
+                zeros = "<td class='n'>0</td>" * len(columns)
+                rows.append(f"<tr><td>{escape(name)}</td><td class='g-v-none'>NOT RUN</td>{zeros}</tr>")
             continue
-        counts = "".join(f"<td class='n'>{n}</td>" for n in (area.passed, area.failed, area.warnings, area.skipped))
+        counts = "".join(f"<td class='n'>{n}</td>" for n in (area.passed, area.failed, area.warnings,
+                                                            area.not_testable, area.inconclusive, area.out_of_scope))
         rows.append(f"<tr><td>{escape(name)}</td>{_verdict_cell(area.verdict)}{counts}</tr>")
-    return ("<h2>Verdict per area</h2><table id='areas'><tr><th>area</th><th>verdict</th><th>passed</th>"
-            f"<th>failed</th><th>warnings</th><th>skipped</th></tr>{''.join(rows)}</table>")
+    heads = "".join(f"<th>{c}</th>" for c in columns)
+    return (f"<h2>Verdict per area</h2><table id='areas'><tr><th>area</th><th>verdict</th>{heads}</tr>"
+            f"{''.join(rows)}</table>{_scope(summary)}")
+
+
+def _scope(summary: RunSummary) -> str:
+    """The run's scope as declared before the first test: what the station and the options left out."""
+    if not summary.scope and not summary.deselected:
+        return ""
+    rows = "".join(f"<tr><td>{escape(k)}</td><td>{escape(v)}</td></tr>" for k, v in summary.scope.items())
+    if summary.deselected:
+        rows += f"<tr><td>deselected</td><td>{summary.deselected} test(s) left out by the selection</td></tr>"
+    return ("<div class='g-small'>Scope of this run (checks outside it are listed, never counted): </div>"
+            f"<table id='scope'>{rows}</table>")
 
 
 def trace_links(trace: str | None) -> str:
@@ -231,19 +247,27 @@ def _deviations(summary: RunSummary, deviations: list[Deviation]) -> str:
             f"{rows}</table></details>")
 
 
-def _skips(summary: RunSummary) -> str:
-    skipped = summary.with_outcome("skipped")
-    if not skipped:
+def _skip_table(results: list[TestResult], title: str, anchor: str, open_: bool) -> str:
+    if not results:
         return ""
     groups: dict[str, list[str]] = {}
-    for result in skipped:
+    for result in results:
         groups.setdefault(skip_reason_key(result.message or "no reason given"), []).append(result.nodeid)
     rows = "".join(
         f"<tr><td class='n'>{len(tests)}</td><td>{escape(reason)}<div class='g-small'>"
         f"{'<br>'.join(escape(t) for t in tests)}</div></td></tr>"
         for reason, tests in sorted(groups.items(), key=lambda kv: (-len(kv[1]), kv[0])))
-    return (f"<details id='skips'><summary>Skipped: {len(skipped)} tests, {len(groups)} reasons</summary>"
-            f"<table><tr><th>tests</th><th>reason</th></tr>{rows}</table></details>")
+    return (f"<details id='{anchor}'{' open' if open_ else ''}><summary>{title}: {len(results)} tests, "
+            f"{len(groups)} reasons</summary><table><tr><th>tests</th><th>reason</th></tr>{rows}</table></details>")
+
+
+def _skips(summary: RunSummary) -> str:
+    """Checks in scope that did not judge (open: they make the verdict INCOMPLETE), then the run's scope."""
+    held = summary.with_kind(Kind.NOT_TESTABLE, Kind.INCONCLUSIVE)
+    scope = summary.with_kind(Kind.NOT_APPLICABLE, Kind.NOT_EQUIPPED, Kind.NOT_SELECTED)
+    return (_skip_table(held, "In scope but not judged (not testable: INCOMPLETE; inconclusive: the host was late)",
+                        "not-judged", True)
+            + _skip_table(scope, "Out of scope (not applicable, not available, not selected)", "skips", False))
 
 
 def _settings(summary: RunSummary, environment: dict[str, str]) -> str:

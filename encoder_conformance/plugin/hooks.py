@@ -27,8 +27,11 @@ from encoder_conformance.errors import (
 )
 from encoder_conformance.paths import CONTENT_ROOT
 from encoder_conformance.plugin import (
+    allure_labels,
+    allure_run,
     bus_trace,
     hypothesis_profiles,
+    junit_coverage,
     lifecycle,
     outcomes,
     reporting,
@@ -163,6 +166,8 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
     verdicts.judge(item, report, exc)  # a broken inferred rule: a warning, or a failure with --strict-inferred
     reporting.attach_evidence(item, call, report)
     run_record.note_report(item, report)
+    if reporting.allure_active(item.config):  # allure says what the run says (status, area, clause, basis)
+        allure_labels.amend(item, run_record.result_of(item))
     lifecycle.note_report(item.config, report)
 
 
@@ -210,7 +215,11 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> Generator[
     if not lifecycle.ended_early(session.config):
         reporting.fail_all_skipped(session)
     lifecycle.final_exit_status(session)
-    run_record.finish(session)
+    summary = run_record.finish(session)
+    if xmlpath and summary is not None:
+        junit_coverage.add(Path(xmlpath), summary)  # a CI reading only JUnit sees an INCOMPLETE run as not green
+    if summary is not None and (allure_results := reporting.allure_results(session.config)) is not None:
+        allure_run.write(allure_results, summary)  # environment (the verdict), categories
     history.record(session)  # the history entry, and an acceptance run's certificate
     reporting.finish_background_writers(session.config)
     return result

@@ -169,8 +169,9 @@ OPTIONS: tuple[Option, ...] = (
            help="wall-clock time each SDO fuzz test may spend sending examples; once spent, it stops (default: no "
                 "limit, the hypothesis profile's example count decides; set it on a bench)"),
     Option("--allure", action="store_true", default=False,
-           help="also write allure-pytest results (allure-results/ in the report folder; render with `npx allure "
-                "generate`). Off by default: about 3,400 files and 3 s of a 14 s WDGA run"),
+           help="also write allure-pytest results (allure-results/ in the report folder, with the run's verdict, "
+                "device and settings as environment; render with `npx -p allure-commandline allure generate`, Java "
+                "needed). Off by default: about 3,400 files and 3 s of a 14 s WDGA run"),
     Option("--shuffle", kind="int", metavar="SEED",
            help="run the suite modules and the tests inside each in a random order drawn from SEED (the same SEED "
                 "gives the same order): shows tests that inherit a state"),

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from encoder_conformance.coverage import Kind
 from encoder_conformance.paths import SUITES_DIR, default_reports_dir
 from encoder_conformance.plugin import bus_trace, time_budget
 from encoder_conformance.plugin.allure_writer import BackgroundWriter, write_in_background
@@ -68,9 +69,15 @@ def configure_outputs(config: pytest.Config) -> None:
         option.clean_alluredir = True
 
 
+def allure_results(config: pytest.Config) -> Path | None:
+    """The folder allure-pytest writes results into in this run (--allure, or its own --alluredir), if any."""
+    folder = getattr(config.option, "allure_report_dir", None)
+    return Path(folder) if folder else None
+
+
 def allure_active(config: pytest.Config) -> bool:
-    """Whether allure-pytest writes results in this run (--allure, or its own --alluredir)."""
-    return bool(getattr(config.option, "allure_report_dir", None))
+    """Whether allure-pytest writes results in this run."""
+    return allure_results(config) is not None
 
 
 def start_background_writers(config: pytest.Config) -> None:
@@ -331,5 +338,10 @@ def fail_all_skipped(session: pytest.Session) -> None:
     stats = reporter.stats
     ran = len(stats.get("passed", [])) + len(stats.get("failed", [])) + len(stats.get("error", []))
     if session.testscollected and not ran:
+        held = [rep for rep in stats.get("skipped", []) if booked(rep)[0] is Kind.NOT_TESTABLE]
+        if held:  # the device's state kept the checks from running: INCOMPLETE (exit 6), not a failure
+            reporter.write_line(f"every test was skipped, {len(held)} of them not testable: the run is INCOMPLETE",
+                                red=True)
+            return
         reporter.write_line("every test was skipped: nothing was checked, so the run fails", red=True)
         session.exitstatus = pytest.ExitCode.TESTS_FAILED

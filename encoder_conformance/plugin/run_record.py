@@ -27,6 +27,11 @@ def summary_of(config: pytest.Config) -> RunSummary | None:
     return config.stash.get(SUMMARY, None)
 
 
+def result_of(item: pytest.Item) -> TestResult | None:
+    """The test's result as recorded so far (None before a phase said anything)."""
+    return item.stash.get(_RESULT, None)
+
+
 def start(config: pytest.Config) -> None:
     """A conformance run (one with a report folder) starts its summary."""
     folder = report_dir(config)

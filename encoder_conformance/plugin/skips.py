@@ -20,7 +20,7 @@ KIND_PROPERTY = "skip_kind"
 HOLD_PROPERTY = "hold"
 
 
-class TypedSkip(pytest.skip.Exception):  # type: ignore[name-defined,misc]
+class TypedSkip(pytest.skip.Exception):  # type: ignore[name-defined]
     """pytest's skip, carrying why (a scope kind, or a hold for a check in scope)."""
 
     def __init__(self, kind: Kind, detail: str, hold: Hold | None = None) -> None:
@@ -50,9 +50,11 @@ def not_judged(hold: Hold, detail: str) -> NoReturn:
     raise TypedSkip(hold.kind, detail, hold)
 
 
-def skip_text(text: str) -> NoReturn:
-    """A reason composed elsewhere (a capture's or a chooser's text): typed by its first words; an untyped text is
-    not testable (``Hold.UNTYPED``), never out of scope."""
+def skip_text(text: str, hold: Hold | None = None) -> NoReturn:
+    """A reason composed elsewhere (a capture's or a chooser's text) with its hold where it has one, else typed by
+    its first words; an untyped text is not testable (``Hold.UNTYPED``), never out of scope."""
+    if hold is not None:
+        raise TypedSkip(hold.kind, text, hold)
     kind = kind_of(text)
     raise TypedSkip(kind, text, Hold.UNTYPED if kind.in_scope else None)
 
@@ -88,6 +90,6 @@ def book(report: pytest.TestReport, exc: BaseException | None) -> None:
 
 def booked(report: pytest.TestReport) -> tuple[Kind | None, Hold | None]:
     """The kind and hold ``book`` gave a skipped report (None, None where it has none)."""
-    props = dict(report.user_properties)
+    props = {str(name): str(value) for name, value in report.user_properties}
     kind = props.get(KIND_PROPERTY)
-    return (Kind(kind) if kind else None), Hold.__members__.get(str(props.get(HOLD_PROPERTY, "")))
+    return (Kind(kind) if kind else None), Hold.__members__.get(props.get(HOLD_PROPERTY, ""))

@@ -71,6 +71,14 @@ class ErrorRegisterWithoutGenericBit(NoParams):
     effect = "error_register_without_generic_bit"
 
 
+class ErrorAtStartUpDocumented(EffectParams):
+    """The manual documents an error the device reports at every start-up as normal (e.g. until a first
+    configuration): goods-in does not fail the device for these EMCY codes."""
+
+    effect = "error_at_start_up_documented"
+    codes: list[int] = Field(min_length=1, description="the EMCY error codes the manual documents at start-up")
+
+
 class TransmissionType255Timer0Disables(NoParams):
     """A TPDO with transmission type 255 and event timer 0 is not sent at all."""
 
@@ -585,7 +593,8 @@ EFFECT_MODELS: dict[str, type[EffectParams]] = {
     model.effect: model
     for model in (
         SilentUntilBusTraffic, CobIdsFollowNodeIdUntilStore, WritesPreopOnly, NodeIdObject, BitrateObject,
-        ErrorRegisterWithoutGenericBit, TransmissionType255Timer0Disables, PdoSendRepeatCounters,
+        ErrorRegisterWithoutGenericBit, ErrorAtStartUpDocumented, TransmissionType255Timer0Disables,
+        PdoSendRepeatCounters,
         BitsForcedAtInit, StoreRebootsWithoutReply, WritesNeedScalingBit, AbortCode, StoreObjectReadsBack,
         StoreAutomatic, PositionFrozenDuringExecution, SecondNode, ManufacturerEncoderObjects,
         LimitSwitchFlags, FixedTpdoMapping, GuardingHeartbeatExclusive, RestoreExcludes, NmtAutostartObject,

@@ -90,6 +90,7 @@ READINGS: list[OpenReading] = [
         modules=("test_nmt", "test_emcy", "test_pdo", "test_nmt_state_machine", "test_lss"),
         requires=("emcy", "heartbeat_producer"),
         shares_twin=False,
+        verdict="INCOMPLETE",  # conformant, but the checks that need operational are not testable: no PASS
     ),
     OpenReading(
         point="persistent-error-start-from-stopped",
@@ -106,6 +107,7 @@ READINGS: list[OpenReading] = [
         modules=("test_nmt", "test_emcy", "test_pdo"),
         requires=("emcy", "heartbeat_producer"),
         shares_twin=False,
+        verdict="INCOMPLETE",  # conformant, but the checks that need operational are not testable: no PASS
     ),
     OpenReading(
         point="sync-processing-cycle",

@@ -23,6 +23,9 @@ class OpenReading:
     #: False: the variant runs on a twin of its own (one that keeps the device out of operational would leave the
     #: tests of another reading on the same twin untested)
     shares_twin: bool = True
+    #: the run's verdict a conformant device playing this reading earns: "INCOMPLETE" where the reading keeps checks
+    #: from running (a device that keeps an error and so never stays operational), else "PASS"
+    verdict: str = "PASS"
 
     def applies_to(self, capabilities: Iterable[str], effects: Iterable[str]) -> bool:
         """Whether a profile with these (truthy) capabilities and quirk effects can play this reading."""

@@ -41,7 +41,8 @@ CLEAR = "\r\x1b[K"  # back to the start of the line, erase it
 SignalHandler: TypeAlias = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
 
 #: exit codes from least to most serious: the combined run ends with the most serious one
-SEVERITY: tuple[int, ...] = (RunExit.PASSED, RunExit.NO_TESTS, RunExit.NON_CONFORMANT, RunExit.COULD_NOT_TEST,
+SEVERITY: tuple[int, ...] = (RunExit.PASSED, RunExit.NO_TESTS, RunExit.INCOMPLETE, RunExit.NON_CONFORMANT,
+                             RunExit.COULD_NOT_TEST,
                              RunExit.USAGE_ERROR, RunExit.INTERNAL_ERROR, RunExit.INTERRUPTED,
                              interrupted_by(signal.SIGTERM), RunExit.NOT_RESTORED)
 

@@ -14,6 +14,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.paths import CONTENT_ROOT
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.readings import OpenReading, all_readings
@@ -55,8 +56,13 @@ class VariantRun:
         return sum(1 for name, outcome in self.result.outcomes.items() if name != PREFLIGHT and outcome != "skipped")
 
     @property
+    def expected_exit(self) -> int:
+        """The exit code the reading's verdict gives: 0 for PASS, 6 where the reading keeps checks from running."""
+        return RunExit.INCOMPLETE if self.reading.verdict == "INCOMPLETE" else RunExit.PASSED
+
+    @property
     def ok(self) -> bool:
-        return not self.bad and self.judged > 0 and self.result.returncode == 0
+        return not self.bad and self.judged > 0 and self.result.returncode == self.expected_exit
 
 
 def _profile_ref(profile: str) -> str:
@@ -132,7 +138,7 @@ def run_variants(pairs: list[tuple[OpenReading, str]], workdir: Path, workers: i
         variants = tuple(r.variant for r in readings)
         result = run_suite(profile, variants[0], folder, targeted=True, together=variants[1:])
         shared = [VariantRun(r, profile, _restricted(result, r.modules)) for r in readings]
-        if len(readings) == 1 or (result.returncode == 0 and all(run.ok for run in shared)):
+        if len(readings) == 1 or all(run.ok for run in shared):
             return shared
         return [VariantRun(r, profile, run_suite(profile, r.variant, folder, targeted=True)) for r in readings]
 

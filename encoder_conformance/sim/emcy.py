@@ -221,6 +221,19 @@ class EmcyInhibitIgnored(EmcyProducer):  # every EMCY at once
         return 0.0
 
 
+@breaks(EmcyProducer, "emcy_only_first")
+class EmcyOnlyFirst(EmcyProducer):
+    """After its first EMCY since the node was assembled or reset, the producer sends none (errors are still
+    recorded in 1001h and 1003h)."""
+
+    _sent_one = False
+
+    def _transmit(self, frame: bytes) -> None:
+        if not self._sent_one:
+            self._sent_one = True
+            super()._transmit(frame)
+
+
 @breaks(EmcyProducer, "emcy_no_error_reset")
 class EmcyNoErrorReset(EmcyProducer):
     def clear(self) -> None:

@@ -159,6 +159,17 @@ class WrongDefaults(ObjectStore):
                 self.values[key] = value + 1
 
 
+@breaks(ObjectStore, "tpdo_mappings_empty")
+class TpdoMappingsEmpty(ObjectStore):
+    """Every reload leaves every TPDO mapping empty (sub 0 = 0): the device lost its default mapping."""
+
+    def reload(self, in_scope: Callable[[int], bool], node_id: int) -> None:
+        super().reload(in_scope, node_id)
+        for mapping in TPDO_MAPPING:
+            if (mapping, 0) in self.values and in_scope(mapping):
+                self.values[(mapping, 0)] = 0
+
+
 @breaks(ObjectStore, "default_mapping_wrong_length")
 class DefaultMappingWrongLength(ObjectStore):
     """Every reload leaves the first TPDO mapping entry 8 bits longer than its object (e.g. 60040028h)."""

@@ -321,6 +321,17 @@ class SegmentedUploadTruncated(SdoServer):
         return chunk if transfer.data else chunk[:-1]
 
 
+@breaks(SdoServer, "long_reads_refused")
+class LongReadsRefused(SdoServer):
+    """Every read of an entry over 4 bytes is refused (08000000h): no segmented upload is left to judge."""
+
+    def upload_data(self, index: int, sub: int) -> bytes:
+        data = super().upload_data(index, sub)
+        if len(data) > 4:
+            raise SdoAbort(SdoAbortCode.GENERAL_ERROR)
+        return data
+
+
 @breaks(SdoServer, "segment_size_ignored")
 class SegmentSizeIgnored(SdoServer):
     """A download segment's n bits are ignored: all 7 bytes are taken as data."""

@@ -105,6 +105,14 @@ class SyncLengthCheck:
         return 1 if overflow else 0
 
 
+@breaks(SyncLengthCheck, "sync_length_error_silent")
+class SyncLengthErrorSilent(SyncLengthCheck):
+    """A SYNC of the wrong length records no error and sends no EMCY."""
+
+    def on_sync(self, length: int) -> None:
+        return
+
+
 @breaks(SyncCobIdRules, "sync_generate_bit_accepted")
 class SyncGenerateBitAccepted(SyncCobIdRules):
     def generate_accepted(self) -> bool:

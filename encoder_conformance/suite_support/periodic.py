@@ -19,7 +19,7 @@ def replay(stream: PeriodicStream, evidence: Evidence) -> None:
     for note in stream.notes:
         evidence.note(note)
     if stream.skip:
-        skip_text(stream.skip)
+        skip_text(stream.skip, stream.skip_hold)
     if stream.error:
         pytest.fail(stream.error, pytrace=False)
 

@@ -20,7 +20,7 @@ def tpdo_under_test(dut: DeviceUnderTest, sub: int, evidence: Evidence, journal:
     except NoUsableTpdo as exc:
         for quirk_id, text in exc.deviations:
             evidence.deviation(quirk_id, text)
-        skip_text(str(exc))
+        skip_text(str(exc), exc.hold)
     for quirk_id, text in choice.deviations:
         evidence.deviation(quirk_id, text)
     tpdo = TpdoUnderTest.chosen(dut, journal, choice)

@@ -10,7 +10,7 @@ from urllib.parse import urlencode
 
 from encoder_conformance.errors import UsageError
 
-VERDICTS = ("PASS", "PASS WITH WARNINGS", "FAIL", "COULD NOT TEST", "INTERNAL ERROR", "NOT RUN")
+VERDICTS = ("PASS", "PASS WITH WARNINGS", "INCOMPLETE", "FAIL", "COULD NOT TEST", "INTERNAL ERROR", "NOT RUN")
 KINDS = ("run", "accept")
 MAX_TEXT = 200
 #: query parameter -> what it selects (the page's form uses these names)

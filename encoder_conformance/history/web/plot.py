@@ -9,8 +9,8 @@ from datetime import datetime
 
 from markupsafe import Markup, escape
 
-COLOURS = {"PASS": "#2e7d32", "PASS WITH WARNINGS": "#c98a00", "FAIL": "#c62828", "COULD NOT TEST": "#6d6d6d",
-           "INTERNAL ERROR": "#6a1b9a", "NOT RUN": "#9e9e9e"}
+COLOURS = {"PASS": "#2e7d32", "PASS WITH WARNINGS": "#c98a00", "INCOMPLETE": "#ad4e00", "FAIL": "#c62828",
+           "COULD NOT TEST": "#6d6d6d", "INTERNAL ERROR": "#6a1b9a", "NOT RUN": "#9e9e9e"}
 _ROW = 26
 _LABEL_W = 230
 _BAR_W = 200
