@@ -26,7 +26,7 @@ import pytest
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.encoder_bench import EncoderBench
 from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_preconditions import return_to_preoperational
+from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
 from encoder_conformance.dut.pdo_mapping import MappingCustody, apply_mapping, describe
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
@@ -414,13 +414,14 @@ def cam_tpdo(cam_channel: CamChannel, evidence: Evidence) -> Iterator[Remapped]:
 
 
 @pytest.mark.usefixtures("no_error_left")  # NMT start: no error may hold the device out of operational
-def test_cam_state_in_tpdo_matches_sdo(cam_channel: CamChannel, cam_tpdo: Remapped, evidence: Evidence) -> None:
+def test_cam_state_in_tpdo_matches_sdo(cam_channel: CamChannel, cam_tpdo: Remapped, settings_journal,
+                                       evidence: Evidence) -> None:
     """6300h sub 1 mapped into a TPDO: after each SYNC the PDO carries the state 6300h shows over SDO and the model
     expects (CiA 406 6300h PDO-mappable, CiA 301 §7.2.2; WDGA T 6.6)."""
     cams = cam_channel.windows()
     reference = cam_channel.configure(cams, enable=(1 << cam_channel.count) - 1)
     dut = cam_channel.dut
-    dut.nmt("start")
+    start_operational(dut, settings_journal, evidence)
     problems: list[str] = []
     positions = [cam_channel.outside(cams), *(_mid(cam) for cam in list(cams.values())[:3])]
     window = dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000

@@ -32,7 +32,7 @@ from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.emcy_trigger import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
-from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
+from encoder_conformance.dut.nmt_states import reach, return_to_preoperational, start_operational
 from encoder_conformance.dut.persistent_error import raise_if_held_by_error
 from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import quirk_effects as fx
@@ -169,14 +169,13 @@ def test_emcy_sent_in_state(dut, emcy, settings_journal, back_to_preoperational,
     emcy.wait(trigger.fire(), trigger, f"in {state}, after {trigger.name}")
 
 
-def test_no_emcy_in_stopped(dut, emcy, back_to_preoperational, evidence):
+def test_no_emcy_in_stopped(dut, emcy, settings_journal, back_to_preoperational, evidence):
     """An error in stopped sends no EMCY (only NMT and error control work there); where the manual lists EMCY in
     stopped (quirk), whether one came is recorded."""
     evidence.rests_on("cia", STATE_CLAUSE)
     trigger = emcy.trigger()
     cob_id = emcy.cob_id()
-    stop = dut.nmt("stop")
-    dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000, stop)
+    reach(dut, settings_journal, evidence, "stopped")  # seen there (heartbeat 04h) before the error is caused
     mark = trigger.fire()
     sent = dut.frames.quiet_period(cob_id.matches, trigger.silence_s(), mark)
     found = dut.profile.quirk_of(fx.EmcyInStopped)

@@ -15,6 +15,7 @@ import pytest
 
 from encoder_conformance.cia.cia301 import PDO_MAPPING_OFFSET
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.nmt_states import start_operational
 from encoder_conformance.dut.reference_custody import ReferenceCustody
 from encoder_conformance.dut.store_watch import AUTO_STORED
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
@@ -388,7 +389,7 @@ def test_position_in_tpdo_equals_sdo(encoder, dut, settings_journal, back_to_pre
         enable = cob_id & 0x7FFFFFFF
     tpdo.configure(cob_id=enable, trans_type=kind, event_timer=timer)
     before = encoder.access.position()
-    dut.nmt("start")
+    start_operational(dut, settings_journal, evidence)
     mark = dut.frames.mark()
     if 1 <= kind <= 240:
         for _ in range(kind):
@@ -465,7 +466,7 @@ def test_limit_switch_flags_in_the_process_value(encoder, dut, settings_journal,
     for switch, _ in switches:
         encoder.write(params.enable_object, 0, enable | 1 << switch.enable_bit)
         enable |= 1 << switch.enable_bit
-    dut.nmt("start")
+    start_operational(dut, settings_journal, evidence)
     problems = []
     for switch, below in switches:
         for beyond in (True, False):  # position beyond the limit, then the limit moved past the position

@@ -6,7 +6,9 @@ import pytest
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, HEARTBEAT_BASE, PDO_MAPPING_OFFSET, STATE_NAMES, cob_id_valid
 from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.boot_state import expected_after_reset, settled_state
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.heartbeat_state import describe
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
 from encoder_conformance.dut.persist import CannotPersist, persist_entry
 from encoder_conformance.dut.persistent_error import raise_if_held_out_of
@@ -60,14 +62,14 @@ def test_bootup_after_reset(dut, reset, evidence):
                          ids=[f"{s} --{c}--> {e:02X}h" for s, c, e in TRANSITIONS])
 def test_transition(dut, nmt, start, command, expected):
     """Each NMT command moves the device to its target state (heartbeat state byte, or services)."""
-    if start != "pre-operational":
-        nmt.go_to(start)
+    nmt.go_to(start)  # seen there first: a device that starts itself would otherwise be judged from operational
     mark = nmt.command(command)
     nmt.expect_state(mark, expected, f"{command} from {start}")
 
 
 def test_broadcast_command_applies(dut, nmt):
     """An NMT command to node-id 0 (all nodes) is obeyed like an addressed one."""
+    nmt.go_to("pre-operational")
     mark = nmt.command("start", node_id=0)
     nmt.expect_state(mark, 0x05, "start remote node to all nodes (node-id 0)")
 
@@ -75,6 +77,7 @@ def test_broadcast_command_applies(dut, nmt):
 def test_command_for_other_node_ignored(dut, nmt):
     """An NMT command addressed to another node-id leaves the device in its state."""
     other = dut.node_id % 127 + 1
+    nmt.go_to("pre-operational")
     mark = nmt.command("start", node_id=other)
     nmt.expect_not_state(mark, 0x05, f"start command addressed to node {other}")
 
@@ -162,8 +165,7 @@ def _skip_without_trigger(dut, sync_tpdo, shaft) -> None:
 def test_no_pdo_outside_operational(dut, sync_tpdo, nmt, shaft, state):
     """No TPDO is sent in pre-operational or stopped, although SYNCs arrive and the shaft turns."""
     _skip_without_trigger(dut, sync_tpdo, shaft)
-    if state != "pre-operational":
-        nmt.go_to(state)
+    nmt.go_to(state)
     mark = pdo_stimulus(dut, shaft)
     pdos = dut.frames.since(mark, dut.is_pdo)
     assert not pdos, f"{len(pdos)} TPDO(s) in {state}:\n{format_frames(pdos[:5])}"
@@ -283,4 +285,37 @@ def test_autostart_object_starts_device_after_reset(dut, settings_journal, evide
             persist_entry(dut, index, sub)
             settings_journal.restore()
     state = _boots_into(dut, settings_journal, evidence)
-    assert state == 0x7F, f"after putting {index:04X}h back the device boots into {state:02X}h, not pre-operational"
+    wanted = 0x05 if params.operational_value == int.from_bytes(original, "little") else 0x7F
+    assert state == wanted, (f"after putting {index:04X}h back ({original.hex(' ').upper()}) the device boots into "
+                             f"{describe(state)}, not {describe(wanted)}")
+
+
+@pytest.mark.spec("CiA 301 §7.3.2.2 (NMT state diagram: after initialisation, pre-operational); CiA 302-2 1F80h bit 3")
+@pytest.mark.requires("heartbeat_producer")
+@pytest.mark.parametrize("reset", ["reset-node", "reset-communication", "power-on"])
+def test_state_after_reset(dut, reset, settings_journal, request, evidence):
+    """Each reset (NMT reset node, reset communication, power-on) ends in pre-operational, as the heartbeat after the
+    boot-up reports (7Fh), unless the device is documented self-starting (its autostart object, 1F80h bit 3)."""
+    expected = expected_after_reset(dut)
+    evidence.rests_on("manual" if expected.state == 0x05 else "cia", expected.why)
+    if expected.quirk_id is not None:
+        evidence.deviation(expected.quirk_id, expected.why)
+    period = dut.read_uint(0x1017)
+    mark = dut.frames.mark()
+    if reset == "power-on":
+        request.getfixturevalue("power_cycle")()  # not available without a power switch
+    else:
+        dut.nmt(reset)
+    boot = dut.wait_bootup(mark)
+    assert boot is not None, f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after {reset}"
+    if not period:  # no heartbeat after the reset: switched on by SDO, which pre-operational and operational offer
+        assert dut.responds() or dut.responds(), (
+            f"after {reset} and its boot-up the device answers no SDO: it is in neither pre-operational nor "
+            f"operational ({expected.why})\n{format_frames(dut.frames.since(mark)[-6:])}")
+        period = dut.profile.timing.heartbeat_state_period_ms
+        settings_journal.write(0x1017, 0, period.to_bytes(2, "little"))
+    state = settled_state(dut, mark, boot, period)
+    evidence.note(f"after {reset}: the heartbeat reports {describe(state)}; expected {describe(expected.state)}")
+    assert state == expected.state, (
+        f"after {reset} the device is in {describe(state)} (heartbeat after its boot-up), expected "
+        f"{describe(expected.state)}: {expected.why}\n{format_frames(dut.frames.since(mark, dut.is_heartbeat)[-4:])}")

@@ -38,8 +38,10 @@ from hypothesis.control import currently_in_test_context
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule, run_state_machine_as_test
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, STATE_NAMES, NmtCommand, NmtState
+from encoder_conformance.dut.boot_state import settled_state
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark, format_frames
+from encoder_conformance.dut.heartbeat_state import describe, newest_state
 from encoder_conformance.dut.nmt_observer import HeartbeatObserver
 from encoder_conformance.dut.persistent_error import raise_if_held_by_error
 from encoder_conformance.dut.sdo_frames import upload_request
@@ -335,7 +337,8 @@ class NmtMachine(RuleBasedStateMachine):
             seen = dut.frames.since(mark, dut.is_heartbeat)[-6:]
             wanted = f"state {state:02X}h ({STATE_NAMES.get(state)})" if state is not None else "any state"
             raise AssertionError(f"{why}: no heartbeat with {wanted} within {wait * 1000:.0f} ms (1017h = "
-                                 f"{self.model.heartbeat_ms} ms); heartbeats seen:\n"
+                                 f"{self.model.heartbeat_ms} ms): the heartbeat reports "
+                                 f"{describe(newest_state(dut, mark))}; heartbeats seen:\n"
                                  f"{format_frames(seen) or '  none'}")
 
     def _confirm_by_services(self, why: str) -> None:
@@ -382,6 +385,11 @@ class NmtMachine(RuleBasedStateMachine):
         why = f"NMT {name} to {'node ' + str(target) if target else 'all nodes'}"
         assert boot is not None, (f"{why}: no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms\n"
                                   f"{format_frames(dut.frames.since(mark)[-8:]) or '  no frames'}")
+        if self.model.heartbeat_ms:  # the state the reset ends in, once settled (an early beat may precede a start)
+            state = settled_state(dut, mark, boot, self.model.heartbeat_ms, SLACK_S)
+            assert state == self.model.heartbeat_byte, (
+                f"{why}: after the boot-up the heartbeat reports {describe(state)}, the reset ends in "
+                f"{describe(self.model.heartbeat_byte)} (CiA 301 §7.3.2.2; the boot state as stored)")
         self._confirm(mark, f"{why}, after the boot-up")
         self._say(f"{why} (boot-up seen; values back to stored)", mark)
 

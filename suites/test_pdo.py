@@ -12,7 +12,7 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_preconditions import start_operational
+from encoder_conformance.dut.nmt_states import start_operational
 from encoder_conformance.dut.stimulus import pdo_stimulus
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
@@ -80,7 +80,8 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
         return msg.is_rx and msg.arbitration_id == cob_id
 
     window = 5 * period_s + dut.pdo_silence_s
-    mark = dut.nmt("start")
+    mark = dut.frames.mark()
+    start_operational(dut, settings_journal, evidence)
     running = dut.frames.wait_count(is_this_tpdo, 2, window, mark)
     assert len(running) == 2, f"{comm:04X}h with event timer {period_s * 1000:.0f} ms: {len(running)} TPDO(s) in " \
                               f"operational within {window * 1000:.0f} ms"
@@ -92,6 +93,7 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
                      "frames", 0, 0)
     assert not late, f"{len(late)} TPDO(s) on {cob_id:03X}h in {state}, {window * 1000:.0f} ms after the " \
                      f"transition (event timer {period_s * 1000:.0f} ms):\n{format_frames(late[:5])}"
-    again = dut.nmt("start")
+    again = dut.frames.mark()
+    start_operational(dut, settings_journal, evidence)
     resumed = dut.frames.wait_for(is_this_tpdo, window, again)
     assert resumed is not None, f"no TPDO on {cob_id:03X}h within {window * 1000:.0f} ms after NMT start again"

@@ -32,7 +32,7 @@ from encoder_conformance.cia.cia301 import (
 from encoder_conformance.coverage import Hold
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
+from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
 from encoder_conformance.dut.sdo_frames import abort_name
 from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
@@ -60,11 +60,6 @@ def _u32(value: int) -> bytes:
 
 def _is_tpdo(cob_id: int):
     return lambda m: m.is_rx and m.arbitration_id == cob_id and not m.is_remote_frame
-
-
-def _start(dut, settings_journal, evidence) -> None:
-    """NMT start; returns once the heartbeat reports operational (``start_operational``)."""
-    start_operational(dut, settings_journal, evidence)
 
 
 def _window(dut) -> float:
@@ -171,7 +166,7 @@ def test_invalid_tpdo_sends_nothing(dut, settings_journal, back_to_preoperationa
 
     def frames(expected: bool = True) -> list[can.Message]:
         """The TPDOs of three SYNCs or five event-timer periods (up to the first where one is ``expected``)."""
-        _start(dut, settings_journal, evidence)
+        start_operational(dut, settings_journal, evidence)
         if trigger == "SYNC":
             found = _syncs(dut, 3, cob_id, until_first=expected)
         elif expected:
@@ -291,7 +286,7 @@ def test_rtr_answered(dut, settings_journal, back_to_preoperational, evidence):
     comm, how = _rtr_tpdo(dut, evidence, settings_journal)
     cob_id = dut.read_uint(comm, 1) & 0x7FF
     dlc = _rtr_dlc(dut, comm)
-    _start(dut, settings_journal, evidence)
+    start_operational(dut, settings_journal, evidence)
     if how == "type 253":
         unasked = _syncs(dut, 2, cob_id)
         assert not unasked, f"{comm:04X}h type 253 sent on SYNC:\n{format_frames(unasked[:5])}"
@@ -318,7 +313,7 @@ def test_rtr_not_answered_without_rtr_bit(dut, settings_journal, back_to_preoper
     if not cob & COB_ID_NO_RTR:
         not_applicable(f"{comm:04X}h.01 = {cob:08X}h allows RTR (bit 30 clear)")
     cob_id = cob & 0x7FF
-    _start(dut, settings_journal, evidence)
+    start_operational(dut, settings_journal, evidence)
     mark = dut.send(cob_id, bytes(_rtr_dlc(dut, comm)), remote=True)
     answers = dut.frames.quiet_period(_is_tpdo(cob_id), dut.pdo_silence_s, mark)
     evidence.measure(f"TPDO {cob_id:03X}h frames after a remote frame", len(answers), "frames", 0, 0)
@@ -335,7 +330,7 @@ def test_type_0_sends_on_sync_only_after_change(dut, settings_journal, back_to_p
     if not tpdo.maps_position():
         not_applicable(f"{comm:04X}h maps no position value the shaft could change")
     cob_id = tpdo.can_id()
-    _start(dut, settings_journal, evidence)
+    start_operational(dut, settings_journal, evidence)
     _syncs(dut, 1, cob_id)  # whether the first SYNC after start sends is not this test's business
     standing = _syncs(dut, 3, cob_id)
     assert not standing, f"{comm:04X}h type 0: {len(standing)} TPDO(s) on SYNCs without a change:\n" \
@@ -358,7 +353,7 @@ def test_change_of_state_sends_event_tpdo(dut, settings_journal, back_to_preoper
                       "is a change of its position (e.g. WDGA T 8.46); CiA 406 leaves it to the manufacturer")
     tpdo = _event_tpdo(dut, evidence, settings_journal, shaft)
     comm, kind, cob_id = tpdo.comm, tpdo.trans_type, tpdo.can_id()
-    _start(dut, settings_journal, evidence)
+    start_operational(dut, settings_journal, evidence)
     dut.frames.quiet_period(lambda m: False, _window(dut))  # a TPDO on entering operational is allowed
     standing = dut.frames.quiet_period(_is_tpdo(cob_id), dut.pdo_silence_s)
     mark = dut.frames.mark()
@@ -393,7 +388,7 @@ def test_sync_start_value(dut, settings_journal, tpdo_while_invalid, back_to_pre
     tpdo.configure(trans_type=1)
     tpdo.configure_while_invalid(tpdo_while_invalid, sync_start_value=start)
     cob_id = tpdo.can_id()
-    _start(dut, settings_journal, evidence)
+    start_operational(dut, settings_journal, evidence)
     sent = []
     for counter in range(1, overflow + 1):
         mark = dut.send(SYNC_COB_ID, bytes([counter]))
@@ -484,7 +479,7 @@ def test_tpdo_parameters_writable_in_preoperational_only(dut, settings_journal, 
                     "may change")
     for comm, sub, _, _, _ in changes:
         settings_journal.remember(comm, sub)
-    _start(dut, settings_journal, evidence)
+    start_operational(dut, settings_journal, evidence)
     problems = []
     for comm, sub, size, value, wanted in changes:
         before = dut.read(comm, sub)
@@ -533,7 +528,7 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
                 dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
         return dut.frames.since(mark, is_this)
 
-    _start(dut, settings_journal, evidence)
+    start_operational(dut, settings_journal, evidence)
     running = stimulate()
     if trigger != "SYNC" and not running:
         not_judged(Hold.NO_TPDO_ON_CHANGE, f"{comm:04X}h sent nothing on a change in operational (see "
@@ -544,5 +539,5 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
     late = stimulate(expected=False)
     evidence.measure(f"TPDO {cob_id:03X}h frames on {trigger} in {state}", len(late), "frames", 0, 0)
     assert not late, f"{len(late)} TPDO(s) on {cob_id:03X}h on {trigger} after NMT {state}:\n{format_frames(late[:5])}"
-    _start(dut, settings_journal, evidence)
+    start_operational(dut, settings_journal, evidence)
     assert stimulate(), f"no TPDO on {cob_id:03X}h on {trigger} after NMT start again"

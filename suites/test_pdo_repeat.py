@@ -11,7 +11,7 @@ import pytest
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid
 from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.persistent_error import raise_if_held_by_error
+from encoder_conformance.dut.nmt_states import start_operational
 from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable, not_equipped
 from encoder_conformance.profile import quirk_effects as fx
@@ -39,20 +39,6 @@ def _valid_cob_id(dut, comm: int, settings_journal) -> int:
     return cob_id & 0x7FF
 
 
-def _start(dut, request) -> None:
-    """NMT start; returns once the device shows operational (heartbeat 05h, else an SDO answer)."""
-    if not dut.profile.capabilities.heartbeat_producer:
-        dut.nmt("start")
-        assert dut.responds(), "no SDO answer after NMT start"
-        return
-    period = request.getfixturevalue("heartbeat")
-    mark = dut.nmt("start")
-    window = (dut.profile.timing.nmt_settle_ms + 2 * period) / 1000
-    if dut.wait_heartbeat(mark, window, state=0x05) is None:
-        raise_if_held_by_error(dut, "NMT start")  # an error the device keeps may hold it in pre-operational
-        raise AssertionError("no heartbeat 05h after NMT start")
-
-
 def _window(dut) -> float:
     return dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
 
@@ -64,7 +50,7 @@ def _is(cob_id: int):
 @pytest.mark.spec("CiA 301 §7.2.2.2 (event-driven TPDO); manufacturer send-repeat counter (quirk)")
 @pytest.mark.requires("tpdos")
 def test_send_repeat_counter_sends_each_change_n_times(
-    dut, settings_journal, back_to_preoperational, shaft, request, evidence
+    dut, settings_journal, back_to_preoperational, shaft, evidence
 ):
     """Counter 3, event timer 0: one position change gives exactly 3 frames, a still shaft none."""
     params = _quirk_params(dut, fx.PdoSendRepeatCounters, evidence)
@@ -76,7 +62,7 @@ def test_send_repeat_counter_sends_each_change_n_times(
     settings_journal.write(comm, 5, (0).to_bytes(2, "little"))
     settings_journal.write(counter, 0, bytes([repeats]))
     mark = dut.frames.mark()
-    _start(dut, request)
+    start_operational(dut, settings_journal, evidence)
     turned = dut.frames.mark()
     shaft.turn_by(0.25)
     pdos = dut.pdos_counted(_is(cob_id), repeats, turned, _window(dut))
@@ -103,7 +89,7 @@ def _sync_burst(dut, cob_id: int, syncs: int, expected: int) -> tuple[list, Mark
 @pytest.mark.spec("CiA 301 §7.2.2.2 (synchronous TPDO); manufacturer send-repeat counter (quirk)")
 @pytest.mark.requires("tpdos")
 def test_send_repeat_counter_limits_sync_tpdo(
-    dut, settings_journal, back_to_preoperational, shaft, request, evidence
+    dut, settings_journal, back_to_preoperational, shaft, evidence
 ):
     """Type 1, counter 2: 6 SYNCs with a still shaft give 2 frames; after a position change 2 more."""
     params = _quirk_params(dut, fx.PdoSendRepeatCounters, evidence)
@@ -112,7 +98,7 @@ def test_send_repeat_counter_limits_sync_tpdo(
     cob_id = _valid_cob_id(dut, comm, settings_journal)
     TpdoUnderTest(dut, settings_journal, comm, 1).configure(trans_type=1)
     settings_journal.write(counter, 0, bytes([limit]))
-    _start(dut, request)
+    start_operational(dut, settings_journal, evidence)
     for step in ("still shaft", "after a position change"):
         if step != "still shaft":
             if shaft is None:

@@ -26,6 +26,7 @@ from encoder_conformance.cia.cia301 import (
 )
 from encoder_conformance.dut import sdo_frames
 from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.nmt_states import start_operational
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
@@ -177,8 +178,7 @@ def test_sync_taken_on_its_cob_id(dut, sync_cob_id, settings_journal, back_to_pr
     tpdo = chosen.can_id()
     old = sync_cob_id & 0x7FF
     settings_journal.write(SYNC_COB_ID_OBJECT, 0, other.to_bytes(4, "little"))
-    dut.nmt("start")
-    assert dut.responds(), "no SDO answer after NMT start"
+    start_operational(dut, settings_journal, evidence)
     window = dut.pdo_silence_s + dut.profile.timing.nmt_settle_ms / 1000
 
     def is_tpdo(msg) -> bool:

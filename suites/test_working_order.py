@@ -19,7 +19,7 @@ import pytest
 from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_HISTORY, NmtState, emcy_meaning
 from encoder_conformance.dut.emcy_trigger import emcy_code
 from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.nmt_preconditions import return_to_preoperational, start_operational
+from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
 from encoder_conformance.dut.persistent_error import error_register
 from encoder_conformance.errors import NotJudged
 from encoder_conformance.plugin import acceptance

@@ -8,7 +8,7 @@ import pytest
 
 from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_REGISTER, EmcyCode, NmtCommand
 from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.nmt_preconditions import start_operational
+from encoder_conformance.dut.nmt_states import start_operational
 from encoder_conformance.dut.periodic_capture import PeriodicCapture
 from encoder_conformance.dut.persistent_error import kept_error, persisting_error
 from encoder_conformance.dut.settings_journal import SettingsJournal
@@ -79,7 +79,8 @@ def test_an_error_kept_after_a_reset_makes_operational_not_testable_resetting_on
     journal, notes = SettingsJournal(dut), _Notes()
     mark = rig.log.mark()
     for _ in range(2):
-        with pytest.raises(HeldByPersistentError, match=r"not testable: NMT start: .*1001h = 01h.*00005000h") as held:
+        held_by = r"not testable: NMT start \(to enter operational\): .*1001h = 01h.*00005000h"
+        with pytest.raises(HeldByPersistentError, match=held_by) as held:
             start_operational(dut, journal, notes)
         assert not is_device_finding(held.value)
     assert _resets_sent(rig, dut.node_id, mark) == 1

@@ -163,6 +163,9 @@ class LssCustody:
     def _select(self, found: Found) -> bool:
         if found.selected:
             return True
+        if found.node_id not in (None, UNCONFIGURED_NODE_ID):  # LSS may be obeyed only in some NMT states, and a
+            self._nmt("pre-operational", found.node_id)  # device that started itself is operational: its answer
+            self.answers_at(found.node_id)  # shows the command was taken (pre-operational offers SDO)
         if "switch_selective" in self.services:
             return self.master.switch_selective(self.address)
         self.master.switch_global(LssState.CONFIGURATION)  # one device on the bench: global is the way

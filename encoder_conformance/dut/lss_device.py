@@ -25,6 +25,7 @@ from encoder_conformance.cia.cia305 import (
 )
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark
+from encoder_conformance.dut.heartbeat_state import describe
 from encoder_conformance.dut.lss_custody import Changes, LssCustody, failure
 from encoder_conformance.dut.lss_master import LssAddress, LssAnswer, LssMaster
 from encoder_conformance.dut.sdo_frames import upload_request
@@ -86,6 +87,23 @@ class LssDevice:
         self.master.switch_global(LssState.CONFIGURATION)
         return True
 
+    def _state_seen(self) -> int | None:
+        """The NMT state the newest heartbeat at the device's node-ID since the test began reports (LSS may be
+        documented only in some states: quirk lss_only_in_states)."""
+        beats = self.dut.frames.since(self.start, lambda m: _from(m, HEARTBEAT_BASE + self.node_id)
+                                      and bool(m.data) and m.data[0] != 0)
+        return beats[-1].data[0] if beats else None
+
+    def into_lss_state(self, node_id: int) -> None:
+        """Quirk lss_only_in_states without operational: NMT enter pre-operational at ``node_id`` and an SDO answer
+        there, as the manual's procedure stops the device first (WDGA M §8.2.4); a device that started itself after
+        a power cycle would ignore LSS. Nothing where LSS is obeyed in every NMT state (CiA 305)."""
+        quirk = self.dut.profile.params_of(fx.LssOnlyInStates)
+        if quirk is None or "operational" in quirk.states:
+            return
+        self.dut.nmt("pre-operational", node_id=node_id)
+        assert self.answers_at(node_id), f"no SDO answer at node-ID {node_id} after NMT enter pre-operational"
+
     def leave(self) -> Mark:
         return self.master.switch_global(LssState.WAITING)
 
@@ -142,7 +160,8 @@ class LssDevice:
 
     def configure_for(self, new_id: int) -> LssAnswer | None:
         """Select the device and configure ``new_id`` (pending); the answer."""
-        assert self.select(), f"switch state selective to {self.address.describe()}: no answer (44h)"
+        assert self.select(), (f"switch state selective to {self.address.describe()}: no answer (44h); the heartbeat "
+                               f"at node-ID {self.node_id} reports {describe(self._state_seen())}")
         self.moving_to(new_id)
         return self.master.configure_node_id(new_id)
 

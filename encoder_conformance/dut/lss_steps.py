@@ -48,7 +48,8 @@ def stored_node_id_survives_power_cycle(lss: LssDevice, store: bool) -> None:
     """Configure another node-ID (and store it), power cycle: the device boots with it; then the same way
     back to the node-ID it was found at (AssertionError where it does not)."""
     new_id = lss.free_node_id()
-    for node_id in (new_id, lss.node_id):
+    for node_id, at in ((new_id, lss.node_id), (lss.node_id, new_id)):
+        lss.into_lss_state(at)  # after the power cycle a device may have started itself
         expect_success(lss.configure_for(node_id), f"configure node-ID {node_id}")
         if store:
             expect_success(lss.master.store_configuration(), "store configuration")

@@ -22,7 +22,8 @@ from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark
 from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe, TwinLateness
-from encoder_conformance.dut.nmt_preconditions import error_register, return_to_preoperational
+from encoder_conformance.dut.nmt_preconditions import error_register
+from encoder_conformance.dut.nmt_states import return_to_preoperational
 from encoder_conformance.dut.persistent_error import describe_hold, persisting_error
 from encoder_conformance.dut.settings_journal import SettingsJournal
 from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo

@@ -16,6 +16,7 @@ from weakref import WeakKeyDictionary
 from encoder_conformance.cia.cia301 import ERROR_HISTORY, ERROR_REGISTER, NmtState
 from encoder_conformance.dut.device import DeviceUnderTest, SdoAborted
 from encoder_conformance.dut.frames import Mark
+from encoder_conformance.dut.heartbeat_state import leave_stopped
 from encoder_conformance.errors import HeldByPersistentError
 
 CLAUSE = ("CiA 301 v4.2.0 object 1029h (error behaviour, §7.5.2.32): a device failure sends the device from "
@@ -68,9 +69,12 @@ def reset_and_read(dut: DeviceUnderTest) -> tuple[Mark, int | None]:
 def persisting_error(dut: DeviceUnderTest) -> int | None:
     """1001h where it is set and stays set after NMT reset communication and its boot-up, else None (1001h is 0,
     the reset cleared it, or no boot-up came: the caller's own verdict stands then). The value the device kept
-    after an earlier reset in this run counts without a new one."""
+    after an earlier reset in this run counts without a new one. A device that may be in stopped is brought out of
+    it before the first SDO request (``heartbeat_state.leave_stopped``, else the reset)."""
     if not dut.usable:
         return None
+    if not leave_stopped(dut):  # no SDO in stopped (CiA 301 §7.3.2.2): reset communication brings it out
+        return reset_and_read(dut)[1] or None
     register = error_register(dut)
     if not register:
         return None

@@ -6,13 +6,13 @@ conformant **variant** of the twin that plays the reading our default twin does 
 matrix (``tests/test_variant_matrix.py``) runs the suite modules each point concerns against every
 variant, on every representative profile where it applies: a conformant reading must never fail.
 
-One module per area holds its points (``sdo``, ``lss``, ``pdo``, ``errors``); this module only
+One module per area holds its points (``sdo``, ``lss``, ``pdo``, ``errors``, ``nmt``); this module only
 gathers them. Data only: the plugin, the command line and the simulator import it without each other.
 """
 
 from __future__ import annotations
 
-from encoder_conformance.readings import errors, lss, pdo, sdo
+from encoder_conformance.readings import errors, lss, nmt, pdo, sdo
 from encoder_conformance.readings.model import OpenReading
 
 __all__ = ["OpenReading", "all_readings", "variant_modules", "variants"]
@@ -20,7 +20,7 @@ __all__ = ["OpenReading", "all_readings", "variant_modules", "variants"]
 
 def all_readings() -> list[OpenReading]:
     """Every open point, in area order."""
-    return [*sdo.READINGS, *lss.READINGS, *pdo.READINGS, *errors.READINGS]
+    return [*sdo.READINGS, *lss.READINGS, *pdo.READINGS, *errors.READINGS, *nmt.READINGS]
 
 
 def variants() -> dict[str, str]:

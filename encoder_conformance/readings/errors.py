@@ -93,6 +93,23 @@ READINGS: list[OpenReading] = [
         verdict="INCOMPLETE",  # conformant, but the checks that need operational are not testable: no PASS
     ),
     OpenReading(
+        point="persistent-error-start-from-stopped",
+        question="A device that keeps a failure no reset clears gets NMT start in stopped: does it take the start "
+                 "and fall back to pre-operational, or refuse it and stay stopped?",
+        source=ERROR_BEHAVIOUR + '; CiA 301 v4.2.0 §7.3.2.2 (NMT state diagram): in stopped the device offers no '
+               'SDO, only NMT and error control',
+        readings=("the start is taken and the error behaviour sends the device to pre-operational (CANopenNode)",
+                  "the start is refused and the device stays stopped: the check for the kept error brings it out "
+                  "of stopped (NMT reset communication and its boot-up) before it reads 1001h by SDO"),
+        variant="device_error_at_start_stays_stopped",
+        variant_text="the device_error_at_start failure, and NMT start leaves the node where it is (stopped stays "
+                     "stopped, pre-operational stays pre-operational)",
+        modules=("test_nmt", "test_emcy", "test_pdo"),
+        requires=("emcy", "heartbeat_producer"),
+        shares_twin=False,
+        verdict="INCOMPLETE",  # conformant, but the checks that need operational are not testable: no PASS
+    ),
+    OpenReading(
         point="sync-processing-cycle",
         question="Two SYNCs come closer together than the device takes to process one: must it count both?",
         source="CiA 301 v4.2.0 §7.2.5 (SYNC protocol) gives no shortest SYNC interval a consumer must resolve; "

@@ -1,5 +1,6 @@
 """Quirk ``nmt_autostart_object``: after boot-up the device enters operational by itself when an
-object holds a given value (instead of CiA 302-2 1F80h bit semantics)."""
+object holds a given value (instead of CiA 302-2 1F80h bit semantics). Its variant ``autostart_set_at_delivery``: the
+object's default is that value (a device delivered self-starting)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ from encoder_conformance.profile.quirk_effects import NmtAutostartObject
 from encoder_conformance.sim.faults import breaks
 from encoder_conformance.sim.hooks import NodeHooks
 from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.nvm import Key
+from encoder_conformance.sim.object_store import ObjectStore
 
 
 class Autostart:
@@ -36,3 +39,14 @@ class Autostart:
 class AutostartIgnored(Autostart):
     def starts_itself(self) -> bool:
         return False
+
+
+@breaks(ObjectStore, "autostart_set_at_delivery")
+class AutostartSetAtDelivery(ObjectStore):
+    """A variant, not a fault: the autostart object's default is its operational value (a self-starting device)."""
+
+    def default_of(self, key: Key, node_id: int) -> int | str:
+        params = self.profile.params_of(NmtAutostartObject)
+        if params is not None and key == (params.index, params.subindex):
+            return params.operational_value
+        return super().default_of(key, node_id)

@@ -1,12 +1,11 @@
 """The catalogue of the simulator's named faults: what each breaks and which suites it is made for.
 
-Each fault is one deliberate deviation from CiA 301 (or from the profile), committed by the
-simulator to prove that each conformance test can fail. This module is data only, so that the
-plugin and the command line can list and check faults without importing the simulator; the
-faults themselves are small classes next to the simulator behaviour they break (``sim.faults``
-wires them). tests/test_fault_matrix.py runs the suites against every fault and shows which tests
-catch it; each fault names the suite modules it is made for, so that the matrix can run a fault
-against those alone.
+Each fault is one deliberate deviation from CiA 301 (or from the profile), committed by the simulator to prove that
+each conformance test can fail. This module is data only, so that the plugin and the command line can list and check
+faults without importing the simulator; the faults themselves are small classes next to the simulator behaviour they
+break (``sim.faults`` wires them). tests/test_fault_matrix.py runs the suites against every fault and shows which
+tests catch it; each fault names the suite modules it is made for, so that the matrix can run it against those alone.
+It is over 400 lines because it is one table: a line or two per fault, grouped by area.
 """
 
 from __future__ import annotations
@@ -14,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from encoder_conformance.readings import variant_modules, variants
+from encoder_conformance.sim.hold_faults import HOLD_FAULTS
 
 #: (the suite modules a group of faults is made for, the group). The CI fault matrix runs each
 #: fault against its own modules only; ``encoder-conformance fault-matrix`` can run the full product.
@@ -113,6 +113,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
                                            "1000h-1FFFh (a plain state change loses unstored changes)",
             "tpdo_not_resumed_after_stopped": "after NMT stop the TPDOs stay silent in operational until the next "
                                               "reset",
+            "self_starts_after_reset": "after every boot-up (power-on, reset node, reset communication) the node "
+                                       "enters operational by itself (no autostart object says so)",
         },
     ),
     (  # PDO
@@ -330,10 +332,9 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
 ]
 FAULTS: dict[str, str] = {name: text for _, group in FAULT_GROUPS for name, text in group.items()}
 
-#: Variants: the twin behaves as a device that a strictness option judges differently: one that follows
-#: CiA where the profile's rule is only our inference (a warning; --strict-inferred fails it), one that
-#: answers with an abort code of the right family (--abort-codes). They stay out of the fault matrix;
-#: tests/test_verdict_basis.py shows what each option makes of them.
+#: Variants: the twin behaves as a device that a strictness option judges differently: one that follows CiA where the
+#: profile's rule is only our inference (--strict-inferred fails it), one that answers with an abort code of the right
+#: family (--abort-codes). They stay out of the fault matrix; tests/test_verdict_basis.py shows what each option makes.
 #: conformant variants that are not an open reading: a device judged by --abort-codes (passes only with family)
 ABORT_FAMILY_VARIANTS: dict[str, str] = {
     "write_ro_unsupported_access": "writes to ro/const objects abort with 06010000h (unsupported access), the "
@@ -342,11 +343,11 @@ ABORT_FAMILY_VARIANTS: dict[str, str] = {
 #: conformant variants: each open reading's (encoder_conformance.readings) and the abort-family ones
 VARIANTS: dict[str, str] = {**variants(), **ABORT_FAMILY_VARIANTS}
 #: every name the simulator's --fault takes
-SIMULATOR_DEVIATIONS: dict[str, str] = {**FAULTS, **VARIANTS}
+SIMULATOR_DEVIATIONS: dict[str, str] = {**FAULTS, **VARIANTS, **{n: h.text for n, h in HOLD_FAULTS.items()}}
 #: fault -> the suite modules (file stems under suites/) it is made for
 TARGET_MODULES: dict[str, tuple[str, ...]] = {
     **{name: modules for modules, group in FAULT_GROUPS for name in group},
-    **variant_modules(),
+    **variant_modules(), **{name: hold.modules for name, hold in HOLD_FAULTS.items()},
 }
 
 

@@ -11,7 +11,8 @@ also at an NMT start (the node stays in pre-operational: the heartbeat never sho
 device failure present at every start (CANopenNode's Linux demo without its storage files): after each boot-up an
 EMCY 5000h with 1001h bit 0, which no reset clears (another error going away leaves it in 1001h and in the error
 reset EMCY), and while it is there the node does not enter operational (CiA 301's default error behaviour for a
-device failure; the heartbeat never shows operational).
+device failure; the heartbeat never shows operational). Its second variant refuses NMT start as a whole: a node
+started from stopped stays stopped (no SDO there, CiA 301 §7.3.2.2).
 """
 
 from __future__ import annotations
@@ -117,3 +118,13 @@ class FailsAtEveryStart(StartUpFailure):
 
     def failed_at_start(self) -> bool:
         return True
+
+
+@breaks(StartUpFailure, "device_error_at_start_stays_stopped")
+class FailsAndRefusesStart(FailsAtEveryStart):
+    """A variant, not a fault: the same failure, and NMT start refused as a whole: the node stays where it is."""
+
+    def admit(self, state: NmtState) -> NmtState:
+        if state is NmtState.OPERATIONAL and self._nmt.state is not None:
+            return self._nmt.state
+        return super().admit(state)

@@ -144,6 +144,10 @@ class NmtSlave:
     def sends_bootup(self, power_on: bool) -> bool:
         return True
 
+    def starts_itself(self) -> bool:
+        """After the boot-up the node stays in pre-operational (CiA 301 §7.3.2.2); a quirk's object may start it."""
+        return False
+
     def _reload(self, event: ReloadEvent, area: Callable[[int], bool] | None = None) -> None:
         self.node_id = self._node_id_for(event)
         self._store.reload(area or (_everything if event.everything else _communication_area), self.node_id)
@@ -181,6 +185,8 @@ class NmtSlave:
             self.enter(NmtState.PRE_OPERATIONAL)
             for listener in self._hooks.booted:
                 listener()
+            if self.starts_itself():
+                self.enter(NmtState.OPERATIONAL)
 
 
 @breaks(NmtSlave, "no_bootup_after_reset")
@@ -248,6 +254,14 @@ class PreopReloadsCommunication(NmtSlave):
         if state is NmtState.PRE_OPERATIONAL and self.state in (NmtState.OPERATIONAL, NmtState.STOPPED):
             self._reload(ReloadEvent("nmt_82h", everything=False))
         super().enter(state)
+
+
+@breaks(NmtSlave, "self_starts_after_reset")
+class SelfStartsAfterReset(NmtSlave):
+    """After every boot-up (power-on, reset node, reset communication) the node enters operational by itself."""
+
+    def starts_itself(self) -> bool:
+        return True
 
 
 @breaks(NmtSlave, "lss_unconfigured_boots")

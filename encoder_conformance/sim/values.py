@@ -81,3 +81,28 @@ class WrongDeviceName(ObjectValues):
     def shown(self, key: Key, value: Value) -> Value:
         value = super().shown(key, value)
         return f"X{value}" if key == (0x1008, 0) and isinstance(value, str) else value  # 1008h: a VISIBLE_STRING
+
+
+@breaks(ObjectValues, "mapped_values_change_every_read")
+class CountsAtEverySync(ObjectValues):
+    """A hold fault: an SDO read of a PDO-mappable integer entry shows its value plus the SYNCs since the last
+    (re)start: the mapped objects change between a read before a SYNC and a read after it."""
+
+    def __init__(self, store: ObjectStore, hooks: NodeHooks) -> None:
+        super().__init__(store, hooks)
+        self._syncs = 0
+        hooks.sync.append(self._count)
+        hooks.reload.append(lambda event: self._restart())
+
+    def _count(self, counter: int | None) -> None:
+        self._syncs += 1
+
+    def _restart(self) -> None:
+        self._syncs = 0
+
+    def current(self, key: Key, channel: str = "sdo") -> Value:
+        value = super().current(key, channel)
+        entry = self._store.entries.get(key)
+        if channel != "sdo" or not isinstance(value, int) or entry is None or not entry.pdo_mappable:
+            return value
+        return value + self._syncs
