@@ -36,7 +36,6 @@ class Hold(Enum):
     # (kind, what it means, whether a device can cause it)
     PERSISTENT_ERROR = (Kind.NOT_TESTABLE, "the device keeps an error no reset clears and stays out of the state the "
                                            "check needs", True)
-    STATE_NOT_REACHED = (Kind.NOT_TESTABLE, "the device did not reach the state the check needs", True)
     VALUES_CHANGED = (Kind.NOT_TESTABLE, "every value the check compares changed between its reads: nothing could be "
                                          "compared", True)
     NO_READABLE_LONG_ENTRY = (Kind.NOT_TESTABLE, "every entry over 4 bytes refused its read: no segmented transfer "

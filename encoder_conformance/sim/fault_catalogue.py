@@ -398,7 +398,8 @@ QUIRK_EFFECT_OF_FAULT: dict[str, str] = {
 #:   cam_low_order_ignored break CiA 406 or the profile's manual directly.
 JUDGED_STRICTLY: frozenset[str] = frozenset({"cam_edge_off_by_one", "change_of_state_ignored", "sync_tpdo_late",
                                              "unsized_download_takes_four_bytes", "emcy_on_unknown_command",
-                                             "sync_length_unchecked", "serial_unset", "open_transfer_blocks_requests"})
+                                             "sync_length_unchecked", "serial_unset", "open_transfer_blocks_requests",
+                                             "sync_length_error_silent"})
 
 
 def faults_for(effects: Iterable[str]) -> list[str]:
