@@ -31,6 +31,7 @@ from encoder_conformance.cia.cia301 import (
 )
 from encoder_conformance.coverage import Hold
 from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.device import answer_window
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
 from encoder_conformance.dut.sdo_frames import abort_name
@@ -150,6 +151,9 @@ def _writable_cob_id(dut, comm: int | None = None) -> int:
 
 
 # -- COB-ID: valid bit, changes, restricted CAN-IDs -------------------------------------------------------
+TIMER_S = 0.02  # the event timer test_invalid_tpdo_sends_nothing sets
+
+
 @pytest.mark.parametrize("trigger", ["SYNC", "event timer"])
 def test_invalid_tpdo_sends_nothing(dut, settings_journal, back_to_preoperational, evidence, trigger):
     """With 18xxh sub 1 bit 31 set the TPDO is not sent on its trigger; with the bit cleared it is sent again."""
@@ -158,7 +162,7 @@ def test_invalid_tpdo_sends_nothing(dut, settings_journal, back_to_preoperationa
         tpdo = _sync_tpdo(dut, evidence, settings_journal, [1])
     else:
         tpdo = tpdo_under_test(dut, 5, evidence, settings_journal, EVENT_TYPES)
-        tpdo.configure(trans_type=tpdo.trans_type, event_timer=20)
+        tpdo.configure(trans_type=tpdo.trans_type, event_timer=round(TIMER_S * 1000))
     comm = tpdo.comm
     _writable_cob_id(dut, comm)
     cob = tpdo.cob_id()
@@ -169,10 +173,10 @@ def test_invalid_tpdo_sends_nothing(dut, settings_journal, back_to_preoperationa
         start_operational(dut, settings_journal, evidence)
         if trigger == "SYNC":
             found = _syncs(dut, 3, cob_id, until_first=expected)
-        elif expected:
-            found = dut.frames.wait_count(_is_tpdo(cob_id), 1, 0.1, dut.frames.mark())
-        else:
-            found = dut.frames.quiet_period(_is_tpdo(cob_id), 0.1)
+        elif expected:  # a TPDO the 20 ms timer owes: the answer window ends when it comes
+            found = dut.frames.wait_count(_is_tpdo(cob_id), 1, answer_window(TIMER_S), dut.frames.mark())
+        else:  # five timer periods of silence
+            found = dut.frames.quiet_period(_is_tpdo(cob_id), 5 * TIMER_S)
         return_to_preoperational(dut)
         return found
 

@@ -281,7 +281,8 @@ def _finish(runs: list[subprocess.Popen[str]]) -> list[str]:
     for run in runs:
         out, _ = run.communicate(timeout=300)
         assert run.returncode == 0, out[-3000:]
-        assert out.splitlines()[-1].startswith("PASS ("), out[-3000:]  # the verdict, as without a history
+        # the verdict, as without a history: eight stations on two cores may leave a timing check inconclusive
+        assert out.splitlines()[-1].startswith(("PASS (", "PASS WITH WARNINGS (")), out[-3000:]
         outputs.append(out)
     return outputs
 

@@ -145,7 +145,8 @@ def test_filters_narrow_the_list(page, history, query, check):
     ("from=yesterday", "from &#39;yesterday&#39;: not a date; give YYYY-MM-DD"),
     ("until=2026-13-01", "until &#39;2026-13-01&#39;: not a date"),
     ("from=2026-05-01&until=2026-04-01", "until &#39;2026-04-01&#39; is before from &#39;2026-05-01&#39;"),
-    ("verdict=GOOD", "verdict &#39;GOOD&#39;: not a overall verdict; give one of PASS, PASS WITH WARNINGS, FAIL"),
+    ("verdict=GOOD", "verdict &#39;GOOD&#39;: not a overall verdict; give one of PASS, PASS WITH WARNINGS, INCOMPLETE, "
+                     "FAIL"),
     ("kind=all", "kind &#39;all&#39;: not a run or accept; give one of run, accept"),
     ("page=0", "page &#39;0&#39;: not a page number"),
     ("serial=0xZZ", "serial &#39;0xZZ&#39;: not a number"),

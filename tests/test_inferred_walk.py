@@ -30,7 +30,8 @@ PROFILE = "wachendorff-wdga-mt"
 #: the suites' helpers beside their modules (a basis chosen there counts as the suites')
 SUITE_SUPPORT_DIR = Path(suite_support.__file__).parent
 #: faults whose tests need what the WDGA lacks (a writable 1019h)
-PROFILE_OF = {"sync_length_unchecked": "tests/data/profiles/cia406-full-pdo.yaml"}
+PROFILE_OF = {"sync_length_unchecked": "tests/data/profiles/cia406-full-pdo.yaml",
+              "sync_length_error_silent": "tests/data/profiles/cia406-full-pdo.yaml"}
 #: tests that may rest on inferred but assert nothing there: what breaks only an inferred rule is noted or
 #: recorded as a problem (a warning), which the walk's faults need not show again
 NO_INFERRED_ASSERTION = {

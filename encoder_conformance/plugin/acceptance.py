@@ -60,6 +60,7 @@ SELECTION: tuple[tuple[str, str | None], ...] = (
 #: tests only an acceptance runs (a full run selects them out): the fault matrix, which runs full runs, leaves them
 #: to tests/test_coverage_verdict.py (a faulty twin fails them at goods-in, a conformant one passes)
 GOODS_IN_ONLY: frozenset[str] = frozenset({"test_no_error_reported_at_start_up", "test_nmt_start_reaches_operational"})
+GOODS_IN_MODULE = "test_working_order"  # their module: no fault group targets it (the fault matrix runs full runs)
 
 #: the pytest node id of the start-up check's verdict when the device is another product
 IDENTITY_CHECK = "start-up check: identity"

@@ -117,6 +117,7 @@ class IndependentEncoder:
     def __init__(self, od: canopen.ObjectDictionary, node_id: int, breaks: frozenset[str], per_unit: dict[Key, object],
                  revolutions: int, start_turns: float) -> None:
         self.node = canopen.LocalNode(node_id, od)
+        self.node.nmt.update_heartbeat = self._restart_heartbeat  # type: ignore[method-assign]
         self.od = od
         self.breaks = breaks
         self.lock = threading.RLock()
@@ -275,6 +276,14 @@ class IndependentEncoder:
             self._load(GROUPS[1] if everything else GROUPS[2], everything)
             self.sync_counts.clear()
         self.boot()
+
+    def _restart_heartbeat(self) -> None:
+        """A state change while the heartbeat runs: restart it with the new state byte. LocalNode would change the
+        running task's data (``modify_data``), which python-can-remote's client task breaks on (it calls
+        ``super(self)``: a TypeError in the bus's receive thread, after which the device answers nothing)."""
+        nmt = self.node.nmt
+        if nmt._send_task is not None:
+            nmt.start_heartbeat(nmt._heartbeat_time_ms)
 
     def boot(self) -> None:
         """Boot-up message, then pre-operational (LocalNode starts the heartbeat from 1017h)."""
