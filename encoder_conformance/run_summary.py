@@ -157,7 +157,6 @@ class RunSummary:
     time_budget: dict[str, Any] | None = None  # where the run's time went (plugin/time_budget.py)
     scope: dict[str, str] = field(default_factory=dict)  # what the station and the options left out, declared up front
     deselected: int = 0  # tests the selection (-k, -m) left out: scope, not counted
-    startup_errors: list[str] = field(default_factory=list)  # errors the device reported at start-up, no test's
 
     @property
     def serial(self) -> str | None:

@@ -19,7 +19,7 @@ import pytest
 from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_HISTORY, NmtState, emcy_meaning
 from encoder_conformance.dut.emcy_trigger import emcy_code
 from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
+from encoder_conformance.dut.nmt_states import start_operational
 from encoder_conformance.dut.persistent_error import error_register
 from encoder_conformance.errors import NotJudged
 from encoder_conformance.plugin import acceptance
@@ -94,5 +94,4 @@ def test_nmt_start_reaches_operational(dut, goods_in, settings_journal, back_to_
         start_operational(dut, settings_journal, evidence)
     except NotJudged as held:  # staying out of operational may be conformant; a device in working order does not
         pytest.fail(f"NMT start: the device does not stay in operational ({NmtState.OPERATIONAL:02X}h): {held}",
-                    pytrace=False)
-    return_to_preoperational(dut)
+                    pytrace=False)  # back_to_preoperational gives the device back to pre-operational

@@ -16,6 +16,11 @@ SDO_STATES = frozenset({NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL})
 LOOK_BACK = 2000
 
 
+def state_window_s(dut: DeviceUnderTest, period_ms: float) -> float:
+    """How long a state change may take to show in the heartbeat: the settle time plus two heartbeat periods."""
+    return (dut.profile.timing.nmt_settle_ms + 2 * period_ms) / 1000
+
+
 def describe(state: int | None) -> str:
     """'7Fh (pre-operational)', or 'no heartbeat'."""
     return "no heartbeat" if state is None else f"{state:02X}h ({STATE_NAMES.get(state, 'no NMT state')})"
@@ -81,5 +86,5 @@ def leave_stopped(dut: DeviceUnderTest) -> bool:
     if period is None:
         return False
     mark = dut.nmt("pre-operational")
-    window = dut.profile.timing.nmt_settle_ms / 1000 + 2 * period
+    window = state_window_s(dut, period * 1000)
     return wait_state(dut, mark, NmtState.PRE_OPERATIONAL, window) == NmtState.PRE_OPERATIONAL

@@ -18,6 +18,7 @@ from encoder_conformance.cia.cia301 import NmtState
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark, format_frames
 from encoder_conformance.dut.heartbeat_state import describe, is_state_beat, leave_stopped, wait_state
+from encoder_conformance.dut.heartbeat_state import state_window_s as window_s
 from encoder_conformance.dut.notes import Notes
 from encoder_conformance.dut.persistent_error import error_register, raise_if_held_by_error
 from encoder_conformance.dut.settings_journal import SettingsJournal
@@ -27,11 +28,6 @@ HEARTBEAT = 0x1017  # producer heartbeat time (ms)
 STATES = {"pre-operational": (NmtState.PRE_OPERATIONAL, "pre-operational"),
           "operational": (NmtState.OPERATIONAL, "start"), "stopped": (NmtState.STOPPED, "stop")}
 CLAUSE = "CiA 301 v4.2.0 §7.3.2.2 (NMT state diagram), §7.2.8.3.2.2 (heartbeat state byte)"
-
-
-def window_s(dut: DeviceUnderTest, period_ms: float) -> float:
-    """How long a state change may take to show: the settle time plus two heartbeat periods."""
-    return (dut.profile.timing.nmt_settle_ms + 2 * period_ms) / 1000
 
 
 def confirm(dut: DeviceUnderTest, after: Mark, state: int, period_ms: float, why: str) -> None:

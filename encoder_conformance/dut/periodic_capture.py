@@ -21,6 +21,7 @@ from encoder_conformance.cia.cia301 import NmtState
 from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark
+from encoder_conformance.dut.heartbeat_state import state_window_s
 from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe, TwinLateness
 from encoder_conformance.dut.nmt_preconditions import error_register
 from encoder_conformance.dut.nmt_states import return_to_preoperational
@@ -148,7 +149,7 @@ class PeriodicCapture:
 
 def _not_operational(dut: DeviceUnderTest, started: Mark, beat: PeriodicStream) -> str | None:
     """None once the heartbeat reports operational after NMT start (settle time + 2 periods), else what it shows."""
-    wait = (dut.profile.timing.nmt_settle_ms + 2 * beat.period_ms) / 1000
+    wait = state_window_s(dut, beat.period_ms)
     if dut.wait_heartbeat(started, wait, state=NmtState.OPERATIONAL) is not None:
         return None
     seen = [f"{m.data[0]:02X}h" for m in dut.frames.since(started, dut.is_heartbeat) if m.data][-4:]

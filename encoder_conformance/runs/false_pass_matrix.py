@@ -12,7 +12,6 @@ reason to skip needs its fault before it lands (``tests/test_false_pass_matrix.p
 from __future__ import annotations
 
 import json
-import os
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import ExitStack
 from dataclasses import dataclass, field
@@ -20,8 +19,8 @@ from pathlib import Path
 
 from encoder_conformance.coverage import Hold
 from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
-from encoder_conformance.plugin.hypothesis_profiles import PROFILE_ENV as HYPOTHESIS_PROFILE_ENV
 from encoder_conformance.run_summary import SUMMARY_FILE
+from encoder_conformance.runs.fault_matrix import matrix_env
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.process import start_simulator
 
@@ -97,8 +96,7 @@ def run_path(path: FalsePassPath, workdir: Path, extra: tuple[str, ...] = ()) ->
     command = [str(SUITES_DIR / f"{path.module}.py"), "-q", "-p", "no:cacheprovider", "--tb=no",
                "--device-profile", path.profile, "--report-dir", str(folder), "--history", "off",
                "-k", path.select, *extra]
-    env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
-    env.setdefault(HYPOTHESIS_PROFILE_ENV, "ci")
+    env = matrix_env()
     with ExitStack() as stack:
         if path.external:  # a device on a bus: no --sim-fault, no bench error stimulus
             folder.mkdir(parents=True, exist_ok=True)

@@ -84,6 +84,14 @@ def _suite_paths(faults: tuple[str, ...], targeted: bool) -> list[str]:
     return [str(SUITES_DIR)]
 
 
+def matrix_env() -> dict[str, str]:
+    """A matrix session's environment: no CAN_* settings of the caller's (the twin is the device), hypothesis
+    derandomized unless set (the same fuzz examples in every matrix)."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
+    env.setdefault(HYPOTHESIS_PROFILE_ENV, "ci")
+    return env
+
+
 def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None = None,
               targeted: bool = False, together: tuple[str, ...] = ()) -> RunResult:
     """One pytest run of suites/ (``targeted``: the fault's own modules) against the twin with ``fault``
@@ -100,9 +108,7 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
         command.append(STRICT_OPTION)
     if select:
         command += ["-k", select]
-    env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
-    env.setdefault(HYPOTHESIS_PROFILE_ENV, "ci")  # derandomized: the same fuzz examples in every matrix
-    completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
+    completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=matrix_env())
     junit = folder / "junit.xml"
     outcomes = _parse_junit(junit) if junit.exists() else {}
     preflight = _preflight_outcome(folder)
