@@ -31,6 +31,7 @@ ALL_SERVICES = frozenset({"switch_global", "switch_selective", "configure_node_i
                           "identify_remote_slave", "identify_non_configured", "fastscan"})
 VENDOR, PRODUCT, REVISION = 0x00000147, 0x00000030, 0x00010000
 RESPONSE_S = 0.01  # the twins answer within a millisecond; a missing answer costs this
+SPOILED_SCANS = 3  # scans in a row a loaded host may spoil before the test gives up
 
 
 @dataclass
@@ -88,12 +89,19 @@ def test_fastscan_finds_one_unconfigured_slave_in_under_a_second(lss_bus):
 @pytest.mark.parametrize("lss_bus", [8], indirect=True)
 def test_fastscan_finds_eight_slaves_in_under_five_seconds(lss_bus):
     """Each found slave gets a node-ID and leaves the scan; vendor and product come from the profile."""
-    master, found = lss_bus.master, []
+    master, found, spoiled = lss_bus.master, [], 0
     start = time.perf_counter()
     for node_id in itertools.count(10):
         address = master.fastscan(known=(VENDOR, PRODUCT, None, None))
         if address is None:
-            break
+            # a step's answer later than the 10 ms window (a loaded host) spoils a scan, as lss_find's rule says:
+            # the scan is repeated while non-configured slaves still answer, a few times at most
+            if master.identify_non_configured() == 0:
+                break
+            spoiled += 1
+            assert spoiled <= SPOILED_SCANS, f"{spoiled} scans in a row found none of the slaves that still answer"
+            continue
+        spoiled = 0
         found.append(address.serial)
         assert master.configure_node_id(node_id).error == 0
         slave = next(s for s in lss_bus.slaves if s.address()[3] == address.serial)
