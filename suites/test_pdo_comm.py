@@ -140,14 +140,20 @@ def _put_back_cob_id(dut, comm: int, now: int) -> None:
     dut.write(comm, 1, _u32(now | COB_ID_INVALID))
 
 
-def _writable_cob_id(dut, comm: int | None = None) -> int:
-    """A TPDO whose sub 1 is writable and that is not fixed by a layout quirk; skips where there is none."""
+def _writable_cob_id(dut, comm: int | None = None, made_valid: bool = False) -> int:
+    """A TPDO whose sub 1 is writable and that is not fixed by a layout quirk; skips where there is none.
+    ``made_valid``: the test makes it valid, so one that is invalid and maps nothing is passed over (CiA 301
+    does not say a device must accept a valid PDO with nothing mapped; CANopenNode refuses it with 06090030h)."""
     fixed, _ = fixed_behaviour_tpdos(dut)
     for index in sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF and i not in fixed):
         entry = dut.profile.entry(index, 1)
-        if entry is not None and entry.writable and (comm is None or index == comm):
-            return index
-    not_applicable("no TPDO COB-ID (18xxh sub 1) is writable")
+        if entry is None or not entry.writable or (comm is not None and index != comm):
+            continue
+        if made_valid and dut.read_uint(index, 1) & COB_ID_INVALID and not dut.read_uint(index + PDO_MAPPING_OFFSET, 0):
+            continue
+        return index
+    not_applicable("no TPDO COB-ID (18xxh sub 1) is writable" + (" on a TPDO that is valid or maps something"
+                                                                 if made_valid else ""))
 
 
 # -- COB-ID: valid bit, changes, restricted CAN-IDs -------------------------------------------------------
@@ -199,7 +205,7 @@ def test_cob_id_change_refused_while_valid(dut, settings_journal, evidence):
     """A write that changes the CAN-ID of a valid TPDO is refused and changes nothing; with bit 31 set first,
     the same change is accepted (then put back)."""
     evidence.rests_on("cia", "CiA 301 §7.5.2.37 (bits 0-29 shall not be changed while the PDO exists)")
-    comm = _writable_cob_id(dut)
+    comm = _writable_cob_id(dut, made_valid=True)
     found = dut.read_uint(comm, 1)
     settings_journal.remember(comm, 1, _u32(found))
     if found & COB_ID_INVALID:

@@ -75,4 +75,19 @@ READINGS: list[OpenReading] = [
         requires=("tpdos",),
         requires_effects=("cyclic_timer_relation_unstated",),
     ),
+    OpenReading(
+        point="valid-pdo-needs-a-mapping",
+        question="May a device refuse to make a PDO valid (18xxh/14xxh sub 1 bit 31 cleared) while its mapping "
+                 "maps nothing (1Axxh/16xxh sub 0 = 0)?",
+        source="CiA 301 v4.2.0 §7.5.2.36-38: sub 0 = 0 disables the mapping, and the PDO procedure makes the PDO "
+               "valid after the mapping; the text does not say a PDO with nothing mapped must be accepted as valid. "
+               "CANopenNode refuses it (06090030h: the mapping must be configured before enabling the PDO)",
+        readings=("a PDO with nothing mapped is made valid (and sends nothing, or an empty frame)",
+                  "a valid COB-ID is refused (06090030h) while the PDO maps nothing: a test that needs a valid PDO "
+                  "uses one that maps something"),
+        variant="valid_pdo_needs_a_mapping",
+        variant_text="18xxh/14xxh sub 1 with bit 31 cleared is refused (06090030h) while 1Axxh/16xxh sub 0 = 0",
+        modules=("test_pdo_comm", "test_pdo_mapping", "test_pdo", "test_pdo_timing"),
+        requires=("tpdos", "tpdo_delivered_invalid_and_empty"),  # played where a TPDO is delivered that way
+    ),
 ]

@@ -14,9 +14,11 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.paths import CONTENT_ROOT
 from encoder_conformance.profile.loader import load_profile
+from encoder_conformance.profile.model import DeviceProfile, resolve_node_id_expression
 from encoder_conformance.readings import OpenReading, all_readings
 from encoder_conformance.runs.fault_matrix import PREFLIGHT, RunResult, run_suite
 
@@ -31,9 +33,14 @@ REPRESENTATIVE_PROFILES: tuple[str, ...] = (
     "cia406-c3-st",
     "tests/data/profiles/cia406-full-pdo.yaml",
     "tests/data/profiles/cia406-block-sdo.yaml",
+    "tests/data/profiles/cia406-empty-tpdo1.yaml",
 )
-#: the class C3 encoder with block transfer: for any other reading it repeats cia406-c3-st, which it is made from
-ONLY_WHERE_NEEDED: frozenset[str] = frozenset({"tests/data/profiles/cia406-block-sdo.yaml"})
+#: the class C3 encoder with block transfer and the C2 encoder with TPDO1 delivered invalid and empty: for any
+#: other reading they repeat the profile they are made from
+ONLY_WHERE_NEEDED: frozenset[str] = frozenset({"tests/data/profiles/cia406-block-sdo.yaml",
+                                               "tests/data/profiles/cia406-empty-tpdo1.yaml"})
+#: a pseudo-capability of a profile with a TPDO delivered invalid (18xxh sub 1 bit 31) that maps nothing
+EMPTY_INVALID_TPDO = "tpdo_delivered_invalid_and_empty"
 
 
 @dataclass(frozen=True)
@@ -74,7 +81,19 @@ def applicable(profile: str, readings: list[OpenReading] | None = None) -> list[
     loaded = load_profile(_profile_ref(profile)).profile
     capabilities = {name for name, value in loaded.capabilities if value}
     capabilities |= {f"lss:{service}" for service in loaded.capabilities.lss}
+    if _has_empty_invalid_tpdo(loaded):
+        capabilities.add(EMPTY_INVALID_TPDO)
     return [r for r in (readings or all_readings()) if r.applies_to(capabilities, loaded.effects)]
+
+
+def _has_empty_invalid_tpdo(profile: DeviceProfile) -> bool:
+    """A TPDO whose COB-ID default has bit 31 set and whose mapping's sub 0 defaults to 0."""
+    for comm in (i for i in profile.objects if 0x1800 <= i <= 0x19FF):
+        cob, count = profile.entry(comm, 1), profile.entry(comm + PDO_MAPPING_OFFSET, 0)
+        cob_id = resolve_node_id_expression(cob.default, 1) if cob is not None else None
+        if isinstance(cob_id, int) and cob_id & COB_ID_INVALID and count is not None and count.default == 0:
+            return True
+    return False
 
 
 def plan(profiles: tuple[str, ...] = REPRESENTATIVE_PROFILES,

@@ -6,7 +6,8 @@ range of parameter exceeded): CiA 301 names no code, CANopenNode and the CTT (re
 Its variant ``pdo_config_refused_in_operational`` refuses every write to a PDO's communication or mapping
 parameters in operational with 08000022h (present device state), as the WDGA manual's device does (M §8.5.1);
 ``pdo_params_fixed_while_valid`` refuses a change of a TPDO's inhibit time (sub 3) or SYNC start value (sub 6)
-while the TPDO is valid (06090030h, as CANopenNode does).
+while the TPDO is valid (06090030h, as CANopenNode does); ``valid_pdo_needs_a_mapping`` refuses a valid COB-ID
+while the PDO maps nothing (06090030h, as CANopenNode does).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from encoder_conformance.cia.cia301 import (
     COB_ID_FIXED_WHILE_VALID,
     COB_ID_FRAME_29_BIT,
     COB_ID_INVALID,
+    PDO_MAPPING_OFFSET,
     RPDO_COMMUNICATION,
     RPDO_MAPPING,
     TPDO_COMMUNICATION,
@@ -51,6 +53,8 @@ class PdoCobIdRules:
         if sub != 1 or not isinstance(value, int) or not (index in TPDO_COMMUNICATION or index in RPDO_COMMUNICATION):
             return
         current = self._read(index, 1)
+        if not value & COB_ID_INVALID and self.needs_a_mapping(index):
+            raise SdoAbort(SdoAbortCode.VALUE_INVALID)
         if current is not None and self.fixed_while_valid(current, value):
             raise SdoAbort(SdoAbortCode.VALUE_INVALID)
         if self.restricted(value):
@@ -58,6 +62,10 @@ class PdoCobIdRules:
 
     def fixed_while_pdo_valid(self, index: int) -> bool:
         """Sub 3 (inhibit time) or sub 6 (SYNC start value) of a valid TPDO may not change (default twin: they may)."""
+        return False
+
+    def needs_a_mapping(self, index: int) -> bool:
+        """A PDO that maps nothing may not be made valid (the default twin: it may)."""
         return False
 
     def refused_in_state(self, index: int) -> bool:
@@ -101,3 +109,11 @@ class PdoParamsFixedWhileValid(PdoCobIdRules):
     def fixed_while_pdo_valid(self, index: int) -> bool:
         cob_id = self._read(index, 1)
         return cob_id is not None and not cob_id & COB_ID_INVALID
+
+
+@breaks(PdoCobIdRules, "valid_pdo_needs_a_mapping")
+class ValidPdoNeedsAMapping(PdoCobIdRules):
+    """A variant, not a fault: a PDO whose mapping's sub 0 is 0 is not made valid."""
+
+    def needs_a_mapping(self, index: int) -> bool:
+        return self._read(index + PDO_MAPPING_OFFSET, 0) == 0
