@@ -213,3 +213,13 @@ def _flags(bus: Bus, name: str) -> int:
                           timeout=WAIT_S, check=True)
     return int(done.stdout) & 0xFFFF
 
+
+
+def test_python_can_finds_the_interfaces_that_are_up(bus):
+    """python-can's socketcan detection (``ip -json link list up``, link type can) lists the bus's interfaces
+    that are up."""
+    assert bus.ip("link", "set", "can0", "down").returncode == 0
+    script = "import can; print(sorted(c['channel'] for c in can.detect_available_configs('socketcan')))"
+    done = subprocess.run([sys.executable, "-c", script], env=bus.env, capture_output=True, text=True,
+                          timeout=WAIT_S, check=True)
+    assert done.stdout.strip() == "['vcan0', 'vcan1']"
