@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.vcan import BuildError, add_interface, interfaces, library, up
+from encoder_conformance.vcan import BuildError, add_interface, interfaces, library, start_hub, stop_hub, up
 
 pytestmark = [
     pytest.mark.skipif(sys.platform != "linux", reason="the virtual CAN bus is Linux only"),
@@ -223,3 +223,14 @@ def test_python_can_finds_the_interfaces_that_are_up(bus):
     done = subprocess.run([sys.executable, "-c", script], env=bus.env, capture_output=True, text=True,
                           timeout=WAIT_S, check=True)
     assert done.stdout.strip() == "['vcan0', 'vcan1']"
+
+
+def test_without_a_hub_an_interface_has_no_carrier(bus):
+    """The hub stopped: the interfaces still exist (their files) but carry nothing, reported as the kernel reports
+    a link without carrier; a hub started again brings the carrier back."""
+    stop_hub(bus.directory)
+    link = bus.show("vcan0")
+    assert (link["flags"], link["operstate"]) == (["NO-CARRIER", "NOARP", "UP"], "DOWN")
+    assert _flags(bus, "vcan0") == 0x81  # IFF_UP | IFF_NOARP
+    start_hub(bus.directory, daemon=False)
+    assert bus.show("vcan0")["flags"] == ["NOARP", "UP", "LOWER_UP"]

@@ -1042,7 +1042,8 @@ int ioctl(int fd, unsigned long req, ...)
         break;
     case SIOCGIFFLAGS:
         if (ifr && vc_link_by_name(ifr->ifr_name, &link)) {
-            ifr->ifr_flags = (short)(link.up ? IFF_UP | IFF_RUNNING | IFF_NOARP : IFF_NOARP);
+            int running = link.up && vc_hub_alive(); /* without a hub: up, no carrier */
+            ifr->ifr_flags = (short)(IFF_NOARP | (link.up ? IFF_UP : 0) | (running ? IFF_RUNNING : 0));
             return 0;
         }
         break;

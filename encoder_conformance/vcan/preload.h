@@ -33,6 +33,7 @@ int vc_link_list(struct vc_link *links, int max); /* by ifindex; how many */
 int vc_links_lock(void);                          /* the directory's lock (an fd), -1 if none */
 void vc_links_unlock(int lock);
 int vc_link_store(const struct vc_link *link); /* with the lock held; 0 or -1 with errno */
+int vc_hub_alive(void);                        /* a hub serves the directory: the interfaces have a carrier */
 
 /* preload_netlink.c: socket() returns -2 when the socket is not one it emulates */
 int vc_nl_socket(int domain, int type, int protocol);

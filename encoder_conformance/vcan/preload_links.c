@@ -14,10 +14,14 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/file.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <unistd.h>
 #include "preload.h"
 
 static int (*links_close)(int);
+static int (*links_socket)(int, int, int);
+static int (*links_connect)(int, const struct sockaddr *, socklen_t);
 static ssize_t (*links_read)(int, void *, size_t);
 static ssize_t (*links_write)(int, const void *, size_t);
 
@@ -26,6 +30,8 @@ static void resolve(void)
     if (!links_close) {
         links_read = (ssize_t(*)(int, void *, size_t))vc_real("read");
         links_write = (ssize_t(*)(int, const void *, size_t))vc_real("write");
+        links_socket = (int (*)(int, int, int))vc_real("socket");
+        links_connect = (int (*)(int, const struct sockaddr *, socklen_t))vc_real("connect");
         links_close = (int (*)(int))vc_real("close");
     }
 }
@@ -178,4 +184,19 @@ int vc_link_store(const struct vc_link *link)
         return -1;
     }
     return 0;
+}
+
+/* whether a hub serves the directory: without one the interfaces carry nothing (no carrier) */
+int vc_hub_alive(void)
+{
+    const char *dir = vc_hub_dir();
+    struct sockaddr_un sun = {.sun_family = AF_UNIX};
+    resolve();
+    if (!dir || snprintf(sun.sun_path, sizeof sun.sun_path, "%s/hub.sock", dir) >= (int)sizeof sun.sun_path)
+        return 0;
+    int fd = links_socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
+    int alive = fd >= 0 && links_connect(fd, (struct sockaddr *)&sun, sizeof sun) == 0;
+    if (fd >= 0)
+        links_close(fd);
+    return alive;
 }

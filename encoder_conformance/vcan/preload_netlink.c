@@ -314,18 +314,19 @@ static void put_linkinfo(struct nlmsghdr *h, const struct vc_link *link)
     end_nest(h, info);
 }
 
-/* RTM_NEWLINK for one interface, filled as the kernel's rtnl_fill_ifinfo fills it for a vcan */
-static void put_link(struct reply *r, const struct nlmsghdr *req, const struct vc_link *link, int flags)
+/* RTM_NEWLINK for one interface, filled as the kernel's rtnl_fill_ifinfo fills it for a vcan. Without a hub
+ * (``carrier`` 0) an interface that is up carries nothing: reported as a link without carrier (NO-CARRIER). */
+static void put_link(struct reply *r, const struct nlmsghdr *req, const struct vc_link *link, int flags, int carrier)
 {
     size_t max = 512;
     struct nlmsghdr *h = begin(r, req, RTM_NEWLINK, flags, max);
     struct ifinfomsg *ifi = NLMSG_DATA(h);
     h->nlmsg_len = NLMSG_LENGTH(sizeof *ifi);
     ifi->ifi_family = AF_UNSPEC, ifi->ifi_type = ARPHRD_CAN, ifi->ifi_index = link->ifindex;
-    ifi->ifi_flags = IFF_NOARP | (link->up ? IFF_UP | IFF_RUNNING | IFF_LOWER_UP : 0);
+    ifi->ifi_flags = IFF_NOARP | (link->up ? IFF_UP : 0) | (link->up && carrier ? IFF_RUNNING | IFF_LOWER_UP : 0);
     put_str(h, IFLA_IFNAME, link->name);
     put_u32(h, IFLA_TXQLEN, link->txqlen);
-    put_u8(h, IFLA_OPERSTATE, link->up ? OPER_UNKNOWN : OPER_DOWN); /* vcan reports no carrier state */
+    put_u8(h, IFLA_OPERSTATE, link->up && carrier ? OPER_UNKNOWN : OPER_DOWN); /* a vcan: UNKNOWN when up */
     put_u8(h, IFLA_LINKMODE, 0);
     put_u32(h, IFLA_MTU, (uint32_t)link->mtu);
     put_u32(h, IFLA_MIN_MTU, 0);
@@ -334,7 +335,7 @@ static void put_link(struct reply *r, const struct nlmsghdr *req, const struct v
     put_u32(h, IFLA_PROMISCUITY, 0);
     put_u32(h, IFLA_NUM_TX_QUEUES, 1);
     put_u32(h, IFLA_NUM_RX_QUEUES, 1);
-    put_u8(h, IFLA_CARRIER, 1);
+    put_u8(h, IFLA_CARRIER, (uint8_t)(carrier != 0));
     put_str(h, IFLA_QDISC, link->up ? "noqueue" : "noop");
     put_u8(h, IFLA_PROTO_DOWN, 0);
     put_linkinfo(h, link);
@@ -438,8 +439,9 @@ static int get_link(struct reply *r, const struct nlmsghdr *req)
         linkinfo_kind(&t, kind); /* a dump filtered by kind (`ip link show type can`) */
         pthread_mutex_lock(&dump_lock);
         int n = kind[0] && strcmp(kind, "vcan") ? 0 : vc_link_list(links, LINKS_MAX);
+        int carrier = n ? vc_hub_alive() : 0;
         for (int i = 0; i < n; i++)
-            put_link(r, req, &links[i], NLM_F_MULTI);
+            put_link(r, req, &links[i], NLM_F_MULTI, carrier);
         pthread_mutex_unlock(&dump_lock);
         put_done(r, req);
         return 1; /* a dump is not acked */
@@ -447,7 +449,7 @@ static int get_link(struct reply *r, const struct nlmsghdr *req)
     int found = named_link(ifi, &t, &link);
     if (found <= 0)
         return found < 0 ? found : -ENODEV;
-    put_link(r, req, &link, 0);
+    put_link(r, req, &link, 0, vc_hub_alive());
     return 0;
 }
 
