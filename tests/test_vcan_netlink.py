@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.vcan import BuildError, add_interface, interfaces, library, start_hub, stop_hub, up
+from encoder_conformance.vcan import add_interface, interfaces, start_hub, stop_hub, up
 
 pytestmark = [
     pytest.mark.skipif(sys.platform != "linux", reason="the virtual CAN bus is Linux only"),
@@ -46,14 +46,6 @@ class Bus:
         (link,) = json.loads(done.stdout)
         assert isinstance(link, dict)
         return link
-
-
-@pytest.fixture(scope="module")
-def preload_library() -> Path:
-    try:
-        return library()
-    except BuildError as error:
-        pytest.skip(str(error))
 
 
 @pytest.fixture(scope="module")
