@@ -1,11 +1,15 @@
 """The self-tests never write into the repository's reports/history.sqlite: every conformance run they start,
-in this process or a child process, records into a temporary history database instead."""
+in this process or a child process, records into a temporary history database instead. ``preload_library``:
+the user-space SocketCAN bus's library, built once (its tests skip where it cannot be built)."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import pytest
 
 from encoder_conformance.history.db import ENV_VAR
+from encoder_conformance.vcan import BuildError, library
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -13,3 +17,11 @@ def _history_in_a_temporary_file(tmp_path_factory):
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv(ENV_VAR, str(tmp_path_factory.mktemp("history") / "history.sqlite"))
         yield
+
+
+@pytest.fixture(scope="session")
+def preload_library() -> Path:
+    try:
+        return library()
+    except BuildError as error:
+        pytest.skip(str(error))

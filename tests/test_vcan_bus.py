@@ -20,13 +20,11 @@ import pytest
 
 from encoder_conformance.cli import main as cli
 from encoder_conformance.vcan import (
-    BuildError,
     VirtualCan,
     add_interface,
     command,
     hub_pid,
     interfaces,
-    library,
     up,
 )
 
@@ -114,14 +112,6 @@ class Bench:
     def close(self) -> None:
         for program in self.programs:
             program.stop()
-
-
-@pytest.fixture(scope="module")
-def preload_library() -> Path:
-    try:
-        return library()
-    except BuildError as error:
-        pytest.skip(str(error))
 
 
 @pytest.fixture

@@ -57,7 +57,7 @@ def connect(kwargs: dict[str, Any], describe: str, frame_log: FrameLog) -> canop
     # the tester's own frames are logged as it sends them; echoed back they would pass for another node's
     bus = open_bus({**kwargs, "receive_own_messages": False}, describe)
     # cast: a TracingBus stands in for the bus it wraps (send and recv traced, every other attribute forwarded)
-    network = canopen.Network(cast(can.BusABC, TracingBus(bus, frame_log)))
+    network = canopen.Network(cast(can.BusABC, TracingBus(bus, frame_log, kwargs.get("channel"))))
     network.NOTIFIER_CYCLE = NOTIFIER_CYCLE_S
     network.NOTIFIER_SHUTDOWN_TIMEOUT = NOTIFIER_STOP_TIMEOUT_S
     network.listeners.append(frame_log)  # type: ignore[arg-type]  # why: canopen takes any can.Listener here

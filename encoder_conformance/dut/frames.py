@@ -76,8 +76,8 @@ class FrameLog(can.Listener):
                     log.warning("frame listener %r failed: %s", listener, exc)
             self._cond.notify_all()
 
-    def record_sent(self, msg: can.Message) -> None:
-        """Called by TracingBus for the tester's own frames."""
+    def record_sent(self, msg: can.Message, channel: str | int | None = None) -> None:
+        """Called by TracingBus for the tester's own frames; ``channel``: the bus's, where the frame names none."""
         copy = can.Message(
             timestamp=time.time(),
             arbitration_id=msg.arbitration_id,
@@ -86,7 +86,7 @@ class FrameLog(can.Listener):
             dlc=msg.dlc,
             data=msg.data,
             is_rx=False,
-            channel=msg.channel,
+            channel=msg.channel if msg.channel is not None else channel,
         )
         self.on_message_received(copy)
 

@@ -3,7 +3,9 @@
 Same idea as python-can's ThreadSafeBus proxy: everything else is forwarded unchanged, so
 canopen's Network and Notifier use it like the real bus. On top of that:
 
-- every transmitted frame is copied into the FrameLog (both directions traced);
+- every transmitted frame is copied into the FrameLog (both directions traced), and every frame, sent or
+  received, names the channel it was on (the bus's, where the interface leaves it unnamed: python-can's
+  trace writers would label it ``vcan0``);
 - the first send or receive error (connection closed, interface gone) closes the FrameLog with
   the reason: every wait then raises BusLostError at once, and later receives idle quietly
   instead of raising in a loop (python-can's Notifier would call them again and again);
@@ -32,12 +34,22 @@ SOCKET_TIMEOUT_S = 3.0
 SHUTDOWN_TIMEOUT_S = 1.0
 
 
+def _channel_of(bus: can.BusABC) -> str | int | None:
+    """The channel a python-can bus was opened on (socketcan, remote: ``channel``; virtual: ``channel_id``)."""
+    for name in ("channel", "channel_id"):
+        value = getattr(bus, name, None)
+        if isinstance(value, (str, int)) and value != "":
+            return value
+    return None
+
+
 class TracingBus:
     """Forwards to ``bus``; ``send`` also records the frame as a tester transmission."""
 
-    def __init__(self, bus: can.BusABC, log: FrameLog) -> None:
+    def __init__(self, bus: can.BusABC, log: FrameLog, channel: str | int | None = None) -> None:
         self._bus = bus
         self._log = log
+        self._channel = channel if channel is not None else _channel_of(bus)
         self._idle = threading.Event()  # never set: a lost bus's recv waits on it for its timeout
         sock = getattr(bus, "socket", None)
         if isinstance(sock, socket.socket):  # bound blocking reads/writes of network interfaces
@@ -53,7 +65,7 @@ class TracingBus:
             raise BusLostError(self.lost)
         # logged before it goes out: the device's answer can arrive (on the receive thread) before send()
         # returns, and the log and the traces keep the order the frames had on the bus
-        self._log.record_sent(msg)
+        self._log.record_sent(msg, self._channel)
         try:
             with BUDGET.booking("send"):  # the interface's time to take the frame: bus traffic, not the tester's
                 self._bus.send(msg, timeout)
@@ -76,6 +88,8 @@ class TracingBus:
             # or a user-space one) marks frames of other programs on the host (a firmware simulator) as
             # locally sent, which python-can's socketcan reports as is_rx False
             msg.is_rx = True
+            if msg.channel is None:
+                msg.channel = self._channel
         return msg
 
     def __getattr__(self, name: str) -> Any:

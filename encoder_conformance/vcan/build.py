@@ -1,8 +1,9 @@
-"""Compile preload.c with the machine's C compiler at first use, into a cache keyed by source and compiler.
+"""Compile the preload library (preload.c, with preload_links.c and preload_netlink.c) with the machine's C
+compiler at first use, into a cache keyed by sources and compiler.
 
 The library goes to ``$XDG_CACHE_HOME/encoder-conformance/`` (``~/.cache/...``; a per-user folder in the
 temporary directory when that is not writable) as ``vcan-preload-<hash>.so``, where the hash covers the
-source, the compiler command and its version and the flags: an edited source or another compiler builds
+sources, the compiler command and its version and the flags: an edited source or another compiler builds
 anew, an unchanged one is reused. ``$CC`` names the compiler (else ``cc``, ``gcc``, ``clang``).
 """
 
@@ -20,7 +21,8 @@ from pathlib import Path
 
 from encoder_conformance.errors import BuildError
 
-SOURCE = Path(__file__).with_name("preload.c")
+SOURCES = [Path(__file__).with_name(name) for name in ("preload.c", "preload_links.c", "preload_netlink.c")]
+HEADER = Path(__file__).with_name("preload.h")
 FLAGS = ["-shared", "-fPIC", "-O2", "-Wall", "-U_FORTIFY_SOURCE"]
 LIBS = ["-ldl", "-lpthread"]
 COMPILERS = ("cc", "gcc", "clang")
@@ -70,9 +72,9 @@ def library(*, force: bool = False) -> Path:
         raise BuildError(f"the virtual CAN bus is Linux only (it stands in for Linux SocketCAN through LD_PRELOAD "
                          f"of glibc's socket calls); this is {sys.platform}")
     command = compiler()
-    source = SOURCE.read_bytes()
     key = hashlib.sha256()
-    for part in (source, " ".join(command).encode(), _version(command).encode(), " ".join(FLAGS + LIBS).encode(),
+    sources = [path.read_bytes() for path in [*SOURCES, HEADER]]
+    for part in (*sources, " ".join(command).encode(), _version(command).encode(), " ".join(FLAGS + LIBS).encode(),
                  platform.machine().encode()):
         key.update(part)
         key.update(b"\0")
@@ -84,13 +86,14 @@ def library(*, force: bool = False) -> Path:
     handle, partial = tempfile.mkstemp(prefix=target.stem, suffix=".so.part", dir=target.parent)
     os.close(handle)
     try:
-        done = subprocess.run([*command, *FLAGS, "-o", partial, str(SOURCE), *LIBS],
+        done = subprocess.run([*command, *FLAGS, "-o", partial, *map(str, SOURCES), *LIBS],
                               capture_output=True, text=True, timeout=300, check=False)
         if done.returncode != 0:
             hint = ""
             if "linux/can" in done.stderr or "stdio.h" in done.stderr:
                 hint = " (missing headers: 'apt-get install libc6-dev linux-libc-dev')"
-            raise BuildError(f"compiling {SOURCE.name} with {command[0]} failed{hint}:\n{done.stderr.strip()}")
+            raise BuildError(f"compiling {', '.join(path.name for path in SOURCES)} with {command[0]} failed{hint}:\n"
+                             f"{done.stderr.strip()}")
         os.replace(partial, target)  # atomic: a concurrent build of the same key is harmless
     finally:
         if os.path.exists(partial):

@@ -89,7 +89,8 @@ def _status(directory: Path) -> int:
     print(f"hub directory: {directory}")
     print(f"hub: {'pid ' + str(pid) if pid else 'not running'}")
     for interface in interfaces(directory).values():
-        print(f"{interface.name}: ifindex {interface.ifindex}, mtu {interface.mtu}, mode {interface.mode}")
+        print(f"{interface.name}: ifindex {interface.ifindex}, mtu {interface.mtu}, mode {interface.mode}, "
+              f"{'up' if interface.up else 'down'}, qlen {interface.txqlen}")
     return 0
 
 

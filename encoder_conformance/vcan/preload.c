@@ -6,8 +6,8 @@
  *
  * socket(PF_CAN, SOCK_RAW, CAN_RAW) returns an AF_UNIX SOCK_SEQPACKET socket that this library
  * remembers; bind(sockaddr_can) connects it to $ENCODER_CONFORMANCE_VCAN_DIR/hub.sock and joins the
- * interface. Interfaces are files $DIR/if/<name> holding "<ifindex> <mtu> <vcan|wire>". Every other socket
- * passes through untouched (dlsym(RTLD_NEXT)).
+ * interface. Interfaces are files $DIR/if/<name> (preload_links.c). NETLINK_ROUTE sockets are answered by
+ * preload_netlink.c. Every other socket passes through untouched (dlsym(RTLD_NEXT)).
  *
  * Wire protocol (native byte order, kept in step with protocol.py):
  *   to the hub:   a CAN frame (16 bytes) or CAN FD frame (72 bytes) for the bound interface;
@@ -39,9 +39,8 @@
 #include <linux/can.h>
 #include <linux/can/raw.h>
 #include <linux/net_tstamp.h>
+#include "preload.h"
 
-#define ENV_DIR "ENCODER_CONFORMANCE_VCAN_DIR"
-#define MAX_FDS 65536
 #define FILTER_MAX 512 /* CAN_RAW_FILTER_MAX */
 #define RAW_MIN_NAMELEN 8
 #define ACK_TIMEOUT_MS 5000
@@ -110,6 +109,7 @@ static pthread_mutex_t pool_lock = PTHREAD_MUTEX_INITIALIZER;
 #define REAL(ret, name, ...) static ret (*real_##name)(__VA_ARGS__)
 REAL(int, socket, int, int, int);
 REAL(int, bind, int, const struct sockaddr *, socklen_t);
+REAL(int, connect, int, const struct sockaddr *, socklen_t);
 REAL(int, close, int);
 REAL(int, dup, int);
 REAL(int, dup2, int, int);
@@ -160,6 +160,8 @@ static void child_resume(void)
     pthread_mutex_unlock(&pool_lock);
 }
 static int in_owner(void) { return getpid() == owner_pid; }
+int vc_in_owner(void) { return in_owner(); }
+void *vc_real(const char *name) { return dlsym(RTLD_NEXT, name); }
 __attribute__((constructor)) static void vcan_init(void)
 {
     owner_pid = getpid();
@@ -218,6 +220,7 @@ static void forget(int fd)
 {
     if (fd < 0 || fd >= MAX_FDS || !in_owner())
         return;
+    vc_nl_forget(fd);
     struct vstate *st = __atomic_exchange_n(&table[fd], NULL, __ATOMIC_ACQ_REL);
     if (st)
         release(st);
@@ -235,81 +238,39 @@ static void share(int newfd, struct vstate *st)
         release(old);
 }
 
-/* ---- interfaces: $DIR/if/<name> holds "<ifindex> <mtu>" ---- */
+/* ---- interfaces (preload_links.c) ---- */
 static const char *hub_dir(void)
 {
     const char *dir = getenv(ENV_DIR);
     return dir && *dir ? dir : NULL;
 }
-
-static int read_if_file(const char *path, int *ifindex, int *mtu, int *wire)
-{
-    char buf[64], mode[16] = "vcan";
-    RESOLVE(read);
-    RESOLVE(close);
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-        return 0;
-    ssize_t n = real_read(fd, buf, sizeof buf - 1);
-    real_close(fd);
-    if (n <= 0)
-        return 0;
-    buf[n] = 0;
-    int idx = 0, m = CANFD_MTU;
-    if (sscanf(buf, "%d %d %15s", &idx, &m, mode) < 1 || idx <= 0)
-        return 0;
-    *ifindex = idx;
-    if (mtu)
-        *mtu = m;
-    if (wire)
-        *wire = strcmp(mode, "wire") == 0;
-    return 1;
-}
-
-static int valid_name(const char *name)
-{
-    size_t len = name ? strnlen(name, IF_NAMESIZE) : 0;
-    return len > 0 && len < IF_NAMESIZE && !strchr(name, '/') && name[0] != '.';
-}
+const char *vc_hub_dir(void) { return hub_dir(); }
 
 static int if_by_name(const char *name, int *ifindex, int *mtu, int *wire)
 {
-    const char *dir = hub_dir();
-    char path[4096];
-    if (!dir || !valid_name(name))
+    struct vc_link link;
+    if (!vc_link_by_name(name, &link))
         return 0;
-    if (snprintf(path, sizeof path, "%s/if/%s", dir, name) >= (int)sizeof path)
-        return 0;
-    return read_if_file(path, ifindex, mtu, wire);
+    *ifindex = link.ifindex;
+    if (mtu)
+        *mtu = link.mtu;
+    if (wire)
+        *wire = link.wire;
+    return 1;
 }
 
 static int if_by_index(int ifindex, char *name, int *mtu, int *wire)
 {
-    const char *dir = hub_dir();
-    char path[4096];
-    int found = 0;
-    if (!dir || ifindex <= 0 || snprintf(path, sizeof path, "%s/if", dir) >= (int)sizeof path)
+    struct vc_link link;
+    if (!vc_link_by_index(ifindex, &link))
         return 0;
-    DIR *d = opendir(path);
-    if (!d)
-        return 0;
-    struct dirent *e;
-    while (!found && (e = readdir(d)) != NULL) {
-        int idx = 0, m = CANFD_MTU, w = 0;
-        if (!valid_name(e->d_name))
-            continue;
-        if (if_by_name(e->d_name, &idx, &m, &w) && idx == ifindex) {
-            if (name)
-                memcpy(name, e->d_name, strlen(e->d_name) + 1);
-            if (mtu)
-                *mtu = m;
-            if (wire)
-                *wire = w;
-            found = 1;
-        }
-    }
-    closedir(d);
-    return found;
+    if (name)
+        memcpy(name, link.name, strlen(link.name) + 1);
+    if (mtu)
+        *mtu = link.mtu;
+    if (wire)
+        *wire = link.wire;
+    return 1;
 }
 
 /* ---- talking to the hub ---- */
@@ -843,6 +804,14 @@ static int sol_socket_getsockopt(struct vstate *st, int opt, void *val, socklen_
 int socket(int domain, int type, int protocol)
 {
     RESOLVE(socket);
+    int nl = vc_nl_socket(domain, type, protocol);
+    if (nl >= 0) {
+        struct vstate *stale = __atomic_exchange_n(&table[nl], NULL, __ATOMIC_ACQ_REL);
+        if (stale) /* an fd closed behind our back */
+            release(stale);
+    }
+    if (nl != -2)
+        return nl;
     if (domain != PF_CAN || (type & 0xf) != SOCK_RAW || protocol != CAN_RAW || !hub_dir())
         return real_socket(domain, type, protocol);
     int fd = real_socket(AF_UNIX, SOCK_SEQPACKET | (type & (SOCK_NONBLOCK | SOCK_CLOEXEC)), 0);
@@ -858,6 +827,7 @@ int socket(int domain, int type, int protocol)
     struct vstate *old = __atomic_exchange_n(&table[fd], st, __ATOMIC_ACQ_REL);
     if (old) /* an fd closed behind our back (not through close()) */
         release(old);
+    vc_nl_forget(fd);
     return fd;
 }
 
@@ -865,7 +835,15 @@ int bind(int fd, const struct sockaddr *addr, socklen_t len)
 {
     struct vstate *st = lookup(fd);
     RESOLVE(bind);
+    if (vc_nl_owns(fd))
+        return vc_nl_bind(fd, addr, len);
     return st ? vcan_bind(fd, st, addr, len) : real_bind(fd, addr, len);
+}
+
+int connect(int fd, const struct sockaddr *addr, socklen_t len)
+{
+    RESOLVE(connect);
+    return vc_nl_owns(fd) ? vc_nl_connect(fd, addr, len) : real_connect(fd, addr, len);
 }
 
 int close(int fd)
@@ -884,7 +862,7 @@ int close_range(unsigned int first, unsigned int last, int flags)
     }
     if (!(flags & CLOSE_RANGE_CLOEXEC))
         for (unsigned int fd = first; fd <= last && fd < MAX_FDS; fd++)
-            if (__atomic_load_n(&table[fd], __ATOMIC_RELAXED)) /* no write: no copied pages after fork() */
+            if (__atomic_load_n(&table[fd], __ATOMIC_RELAXED) || vc_nl_owns((int)fd)) /* no write: no copied pages */
                 forget((int)fd);
     return real_close_range(first, last, flags);
 }
@@ -896,6 +874,8 @@ int dup(int fd)
     struct vstate *st = lookup(fd);
     if (r >= 0 && st)
         share(r, st);
+    if (r >= 0)
+        vc_nl_dup(fd, r);
     return r;
 }
 
@@ -909,6 +889,7 @@ int dup2(int fd, int newfd)
             share(newfd, st);
         else
             forget(newfd);
+        vc_nl_dup(fd, newfd);
     }
     return r;
 }
@@ -923,6 +904,7 @@ int dup3(int fd, int newfd, int flags)
             share(newfd, st);
         else
             forget(newfd);
+        vc_nl_dup(fd, newfd);
     }
     return r;
 }
@@ -934,6 +916,7 @@ static int after_fcntl(int fd, int cmd, int r)
         struct vstate *st = lookup(fd);
         if (st)
             share(r, st);
+        vc_nl_dup(fd, r);
     }
     return r;
 }
@@ -967,6 +950,8 @@ int setsockopt(int fd, int level, int opt, const void *val, socklen_t len)
     int handled = 0, r;
     RESOLVE(setsockopt);
     RESOLVE(getsockopt);
+    if (vc_nl_owns(fd) && (r = vc_nl_setsockopt(fd, level, opt, val, len)) != -2)
+        return r;
     if (!st)
         return real_setsockopt(fd, level, opt, val, len);
     if (level == SOL_CAN_RAW)
@@ -984,6 +969,8 @@ int getsockopt(int fd, int level, int opt, void *val, socklen_t *len)
     struct vstate *st = lookup(fd);
     int handled = 0, r;
     RESOLVE(getsockopt);
+    if (vc_nl_owns(fd) && (r = vc_nl_getsockopt(fd, level, opt, val, len)) != -2)
+        return r;
     if (!st)
         return real_getsockopt(fd, level, opt, val, len);
     if (level == SOL_CAN_RAW)
@@ -1000,6 +987,8 @@ int getsockname(int fd, struct sockaddr *addr, socklen_t *len)
 {
     struct vstate *st = lookup(fd);
     RESOLVE(getsockname);
+    if (vc_nl_owns(fd))
+        return vc_nl_getsockname(fd, addr, len);
     if (!st)
         return real_getsockname(fd, addr, len);
     struct sockaddr_can a;
@@ -1032,6 +1021,7 @@ int ioctl(int fd, unsigned long req, ...)
     va_end(ap);
     RESOLVE(ioctl);
     struct ifreq *ifr = arg;
+    struct vc_link link;
     int idx, mtu;
     switch (req) {
     case SIOCGIFINDEX:
@@ -1051,8 +1041,15 @@ int ioctl(int fd, unsigned long req, ...)
         }
         break;
     case SIOCGIFFLAGS:
-        if (ifr && if_by_name(ifr->ifr_name, &idx, NULL, NULL)) {
-            ifr->ifr_flags = IFF_UP | IFF_RUNNING | IFF_NOARP;
+        if (ifr && vc_link_by_name(ifr->ifr_name, &link)) {
+            int running = link.up && vc_hub_alive(); /* without a hub: up, no carrier */
+            ifr->ifr_flags = (short)(IFF_NOARP | (link.up ? IFF_UP : 0) | (running ? IFF_RUNNING : 0));
+            return 0;
+        }
+        break;
+    case SIOCGIFTXQLEN:
+        if (ifr && vc_link_by_name(ifr->ifr_name, &link)) {
+            ifr->ifr_qlen = (int)link.txqlen;
             return 0;
         }
         break;
@@ -1096,6 +1093,8 @@ ssize_t recvmsg(int fd, struct msghdr *msg, int flags)
 {
     struct vstate *st = lookup(fd);
     RESOLVE(recvmsg);
+    if (!st && vc_nl_owns(fd))
+        return vc_nl_recvmsg(fd, msg, flags);
     return st ? vcan_recv(fd, st, msg, flags) : real_recvmsg(fd, msg, flags);
 }
 
@@ -1103,6 +1102,8 @@ ssize_t recvfrom(int fd, void *buf, size_t len, int flags, struct sockaddr *from
 {
     struct vstate *st = lookup(fd);
     RESOLVE(recvfrom);
+    if (!st && vc_nl_owns(fd))
+        return vc_nl_recvfrom(fd, buf, len, flags, from, fromlen);
     return st ? recv_plain(fd, st, buf, len, flags, from, fromlen) : real_recvfrom(fd, buf, len, flags, from, fromlen);
 }
 
@@ -1159,6 +1160,8 @@ ssize_t __recvfrom_chk(int fd, void *buf, size_t len, size_t buflen, int flags, 
 {
     struct vstate *st = lookup(fd);
     RESOLVE(__recvfrom_chk);
+    if (!st && vc_nl_owns(fd) && len <= buflen)
+        return vc_nl_recvfrom(fd, buf, len, flags, from, fromlen);
     if (!st || len > buflen)
         return real___recvfrom_chk(fd, buf, len, buflen, flags, from, fromlen);
     return recv_plain(fd, st, buf, len, flags, from, fromlen);
@@ -1187,9 +1190,11 @@ ssize_t write(int fd, const void *buf, size_t len)
 {
     struct vstate *st = lookup(fd);
     RESOLVE(write);
+    struct iovec iov = {(void *)buf, len};
+    if (!st && vc_nl_owns(fd))
+        return vc_nl_send(fd, &iov, 1);
     if (!st)
         return real_write(fd, buf, len);
-    struct iovec iov = {(void *)buf, len};
     return vcan_send(fd, st, &iov, 1, 0, NULL, 0);
 }
 
@@ -1197,6 +1202,8 @@ ssize_t writev(int fd, const struct iovec *iov, int iovcnt)
 {
     struct vstate *st = lookup(fd);
     RESOLVE(writev);
+    if (!st && vc_nl_owns(fd))
+        return vc_nl_send(fd, iov, iovcnt < 0 ? 0 : (size_t)iovcnt);
     if (!st)
         return real_writev(fd, iov, iovcnt);
     return vcan_send(fd, st, iov, iovcnt < 0 ? 0 : (size_t)iovcnt, 0, NULL, 0);
@@ -1206,9 +1213,11 @@ ssize_t send(int fd, const void *buf, size_t len, int flags)
 {
     struct vstate *st = lookup(fd);
     RESOLVE(send);
+    struct iovec iov = {(void *)buf, len};
+    if (!st && vc_nl_owns(fd))
+        return vc_nl_send(fd, &iov, 1);
     if (!st)
         return real_send(fd, buf, len, flags);
-    struct iovec iov = {(void *)buf, len};
     return vcan_send(fd, st, &iov, 1, flags, NULL, 0);
 }
 
@@ -1216,9 +1225,11 @@ ssize_t sendto(int fd, const void *buf, size_t len, int flags, const struct sock
 {
     struct vstate *st = lookup(fd);
     RESOLVE(sendto);
+    struct iovec iov = {(void *)buf, len};
+    if (!st && vc_nl_owns(fd))
+        return vc_nl_send(fd, &iov, 1); /* to the kernel, whatever the address says */
     if (!st)
         return real_sendto(fd, buf, len, flags, addr, alen);
-    struct iovec iov = {(void *)buf, len};
     return vcan_send(fd, st, &iov, 1, flags, addr, alen);
 }
 
@@ -1226,6 +1237,8 @@ ssize_t sendmsg(int fd, const struct msghdr *msg, int flags)
 {
     struct vstate *st = lookup(fd);
     RESOLVE(sendmsg);
+    if (!st && vc_nl_owns(fd))
+        return vc_nl_send(fd, msg->msg_iov, msg->msg_iovlen);
     if (!st)
         return real_sendmsg(fd, msg, flags);
     return vcan_send(fd, st, msg->msg_iov, msg->msg_iovlen, flags, msg->msg_name, msg->msg_namelen);

@@ -1,9 +1,11 @@
 """The hub directory: its interfaces, its hub process, and the environment a program runs under.
 
 A hub directory holds ``hub.sock`` (the hub's socket), ``hub.pid``, ``hub.log`` and ``if/<name>``, one file
-per interface with ``"<ifindex> <mtu> <mode>"``: what the preload library reads to answer ``if_nametoindex``,
-``SIOCGIFINDEX``, ``SIOCGIFMTU`` and to let ``bind`` join. Creating that file is ``ip link add``; the hub
-needs no telling. ifindexes start at 1000, clear of the host's real interfaces.
+per interface with ``"<ifindex> <mtu> <mode> <up> <txqlen>"``: what the preload library reads to answer
+``if_nametoindex``, the ``SIOCGIF*`` ioctls and rtnetlink, and to let ``bind`` join. Creating that file is
+``ip link add``; the hub needs no telling. The file is the interface's state shared by every process of the
+bus: ``ip link set`` (netlink, preload_netlink.c) rewrites it under the directory's lock, as this module does.
+ifindexes start at 1000, clear of the host's real interfaces.
 
 The mode: ``vcan`` (default) flags every received frame MSG_DONTROUTE, sent on this host, as the kernel's
 vcan does (python-can then marks every frame ``is_rx=False``); ``wire`` flags only a socket's own frames so,
@@ -37,6 +39,7 @@ FIRST_IFINDEX = 1000
 IF_NAMESIZE = 16
 LOG_FILE = "hub.log"
 MODES = ("vcan", "wire")
+DEFAULT_TXQLEN = 1000  # a vcan's qlen as the kernel reports it
 
 
 def default_directory() -> Path:
@@ -72,6 +75,21 @@ class Interface:
     ifindex: int
     mtu: int = CANFD_MTU
     mode: str = "vcan"
+    up: bool = True
+    txqlen: int = DEFAULT_TXQLEN
+
+    def line(self) -> str:
+        """The interface file's content."""
+        return f"{self.ifindex} {self.mtu} {self.mode} {int(self.up)} {self.txqlen}\n"
+
+
+def _parse(name: str, text: str) -> Interface:
+    """An interface file: ``ifindex mtu mode`` and, written since netlink is answered, ``up txqlen``."""
+    fields = text.split()
+    if len(fields) not in (3, 5):
+        raise ValueError(f"not an interface file: {text!r}")
+    up, txqlen = (bool(int(fields[3])), int(fields[4])) if len(fields) == 5 else (True, DEFAULT_TXQLEN)
+    return Interface(name, int(fields[0]), int(fields[1]), fields[2], up, txqlen)
 
 
 def interfaces(directory: Path) -> dict[str, Interface]:
@@ -80,14 +98,13 @@ def interfaces(directory: Path) -> dict[str, Interface]:
     folder = Path(directory) / "if"
     for path in sorted(folder.iterdir()) if folder.is_dir() else []:
         with contextlib.suppress(OSError, ValueError):
-            ifindex, mtu, mode = path.read_text(encoding="ascii").split()
-            found[path.name] = Interface(path.name, int(ifindex), int(mtu), mode)
+            found[path.name] = _parse(path.name, path.read_text(encoding="ascii"))
     return found
 
 
 def add_interface(directory: Path, name: str, mtu: int = CANFD_MTU, mode: str = "vcan") -> Interface:
     """Create interface ``name`` (CAN FD capable with mtu 72, classic only with 16; ``mode`` vcan or wire).
-    An interface that exists keeps its ifindex (mtu and mode are updated)."""
+    An interface that exists keeps its ifindex, up/down state and txqlen (mtu and mode are updated)."""
     check_name(name)
     if mtu not in (CAN_MTU, CANFD_MTU):
         raise ValueError(f"mtu must be {CAN_MTU} (classic CAN) or {CANFD_MTU} (CAN FD), not {mtu}")
@@ -99,12 +116,15 @@ def add_interface(directory: Path, name: str, mtu: int = CANFD_MTU, mode: str = 
         taken = {interface.ifindex for interface in known.values()}
         ifindex = known[name].ifindex if name in known else next(
             i for i in range(FIRST_IFINDEX, FIRST_IFINDEX + len(taken) + 1) if i not in taken)
+        interface = Interface(name, ifindex, mtu, mode)
+        if name in known:
+            interface = Interface(name, ifindex, mtu, mode, known[name].up, known[name].txqlen)
         folder = directory / "if"
         folder.mkdir(exist_ok=True)
         partial = folder / f".{name}.part"
-        partial.write_text(f"{ifindex} {mtu} {mode}\n", encoding="ascii")
+        partial.write_text(interface.line(), encoding="ascii")
         os.replace(partial, folder / name)
-    return Interface(name, ifindex, mtu, mode)
+    return interface
 
 
 def remove_interface(directory: Path, name: str) -> bool:
