@@ -7,7 +7,8 @@
    store/restore and LSS tests that need a power cycle run; power off is SIGTERM to its whole process group
    and a wait (up to STOP_GRACE_S) until every process of it has ended, so it stores what it keeps at
    shutdown as a device keeps it in flash; only then SIGKILL;
-3. wait until the device answers an SDO read of 1000h (its boot time, up to ``--boot-timeout``);
+3. wait until the device answers an SDO read of 1000h (its boot time, up to ``--boot-timeout``); with ``--probe
+   EDS`` the profile is probed from it then (``firmware_probe.py``: kept as probed-profile.yaml in the report);
 4. the conformance run (``run``, every option of it; ``--history off`` unless you give ``--history``: a CI
    job has no use for the station history), its exit code returned unchanged: 0 conformant,
    1 firmware non-conformant, 69 infrastructure (bus, simulator silent or dead), 70 not restored, 3 a bug of
@@ -33,6 +34,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+from encoder_conformance.cli import firmware_probe
 from encoder_conformance.errors import UsageError
 from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit
 
@@ -68,6 +70,10 @@ def add_firmware_ci_parser(sub: argparse._SubParsersAction) -> None:
                          "'./build/fw_sim vcan0' (run by the shell; it must stay in the foreground and keep "
                          "running across NMT reset node: restart it in a loop if it ends there)")
     ci.add_argument("--profile", help="your device profile (YAML file or shipped id)")
+    ci.add_argument("--probe", metavar="EDS",
+                    help="instead of --profile: probe the simulator (profile from-eds EDS --probe, with the same "
+                         "command, bus and restart handling as the run), keep the profile as probed-profile.yaml in "
+                         "the report folder and run with it")
     ci.add_argument("--can-channel", default="vcan0", help="the SocketCAN channel (default vcan0)")
     ci.add_argument("--report-dir", default="conformance-report", type=Path,
                     help="where junit.xml, report.html, run-summary.json and the simulator's log go "
@@ -86,11 +92,16 @@ def cmd_firmware_ci(args: argparse.Namespace, extra: list[str]) -> int:
     if args.example:
         print((PIPELINE_DIR / PIPELINES[args.example]).read_text(encoding="utf-8"), end="")
         return 0
-    missing = [option for option, value in (("--simulator", args.simulator), ("--profile", args.profile)) if not value]
+    missing = [option for option, value in (("--simulator", args.simulator),
+                                            ("--profile (or --probe EDS)", args.profile or args.probe)) if not value]
     if missing:
         raise UsageError(f"give {' and '.join(missing)} (or --example github|gitlab for a pipeline file)")
-    check_profile("--profile", args.profile)
-    node_id = _node_id(extra) or load_profile(args.profile).profile.bus.node_id
+    if args.probe:
+        default_node_id = firmware_probe.check_probe(args)  # the EDS's
+    else:
+        check_profile("--profile", args.profile)
+        default_node_id = load_profile(args.profile).profile.bus.node_id
+    node_id = _node_id(extra) or default_node_id
     report = args.report_dir.resolve()
     report.mkdir(parents=True, exist_ok=True)
     state = Path(tempfile.mkdtemp(prefix="fwci-"))  # short: the hub's socket path is limited to 107 bytes
@@ -130,6 +141,11 @@ def _run_when_booted(args: argparse.Namespace, extra: list[str], node_id: int, r
                   f"(see {env['FWCI_LOG']}); {KEEP_RUNNING}; exit {RunExit.COULD_NOT_TEST}: infrastructure",
                   file=sys.stderr)
         return RunExit.COULD_NOT_TEST
+    if args.probe:
+        probed = firmware_probe.probe(args, node_id, report, env, lambda: _exited_by_itself(state))
+        if isinstance(probed, int):
+            return probed
+        args.profile = str(probed)
     status = subprocess.run(_run_command(args, extra, report, helper), env=env, check=False).returncode
     exited = _exited_by_itself(state)
     if exited is not None and status != RunExit.PASSED:

@@ -1,4 +1,4 @@
-"""Command line: ``encoder-conformance run | accept | restore | lss | sim | sim-control | profile | faults |
+"""Command line: ``encoder-conformance run | accept | restore | store | lss | sim | sim-control | profile | faults |
 fault-matrix | readings | variant-matrix | vcan | firmware-ci``.
 
 Exit codes of ``run``, ``restore`` and ``lss`` follow exit_codes.RunExit; a usage error (bad option,
@@ -27,6 +27,7 @@ from encoder_conformance.cli.readings import add_readings_parsers
 from encoder_conformance.cli.restore import add_restore_parser
 from encoder_conformance.cli.run import add_run_parser
 from encoder_conformance.cli.sim import add_sim_parsers
+from encoder_conformance.cli.store import add_store_parser
 from encoder_conformance.cli.usage import OneLineParser, UsageError, bus_arguments
 from encoder_conformance.cli.vcan_command import add_vcan_parser
 from encoder_conformance.errors import ProfileError
@@ -36,6 +37,7 @@ from encoder_conformance.exit_codes import RunExit, interrupted_by
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     add_run_parser,
     add_restore_parser,
+    add_store_parser,
     partial(add_lss_parser, parser_class=OneLineParser, bus_arguments=bus_arguments),
     partial(add_history_parser, parser_class=OneLineParser),
     partial(add_accept_parser, bus_arguments=bus_arguments),
