@@ -319,8 +319,14 @@ def test_example_pipeline_is_printed_valid_and_in_the_readme(name: str, capsys):
     line = next(part for part in text.splitlines() if "encoder-conformance firmware-ci" in part and "#" not in part)
     words = shlex.split(line[line.index("encoder-conformance") :])[1:]
     args, extra = build_parser().parse_known_args(words)
-    assert (args.simulator, args.profile, extra) == ("./build/fw_sim vcan0", "ci/my-encoder.yaml", [])
-    assert text in (REPO / "README.md").read_text(encoding="utf-8")
+    assert (args.simulator, args.profile, extra) == ("sh ci/fw_sim_loop.sh", "ci/my-encoder.yaml", ["--node-id", "4"])
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    assert text in readme
+    loop = re.search(r"```sh\n(\s*trap .*?)```", readme, re.S)
+    assert loop is not None
+    for line in loop.group(1).strip().splitlines():  # the loop the pipeline writes is the README's (tested above)
+        assert line.strip() in text, line
+    assert "placeholder: your simulator's line inside" in text
 
 
 @pytest.mark.parametrize(("argv", "message"), [

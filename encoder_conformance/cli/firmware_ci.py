@@ -11,8 +11,9 @@
    EDS`` the profile is probed from it then (``firmware_probe.py``: kept as probed-profile.yaml in the report);
 4. the conformance run (``run``, every option of it; ``--history off`` unless you give ``--history``: a CI
    job has no use for the station history), its exit code returned unchanged: 0 conformant,
-   1 firmware non-conformant, 69 infrastructure (bus, simulator silent or dead), 70 not restored, 3 a bug of
-   the tool, 4 usage. The report folder keeps junit.xml, report.html and run-summary.json for the artifacts.
+   1 firmware non-conformant, 6 incomplete, 69 infrastructure (bus, simulator silent or dead), 70 not restored,
+   3 a bug of the tool, 4 usage, 5 no tests selected; 130 Ctrl-C, 143 SIGTERM. The report folder keeps
+   junit.xml, report.html and run-summary.json for the artifacts.
 
 A simulator that ends by itself (CANopenLinux ends its process on NMT reset node unless it is restarted in a
 loop) is named as such (exit 69). The simulator and the hub are stopped and the state folder is removed at the
@@ -36,7 +37,7 @@ from pathlib import Path
 
 from encoder_conformance.cli import firmware_probe
 from encoder_conformance.errors import UsageError
-from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit
+from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit, interrupted_by
 
 #: the helper process: the power switch and the boot wait, started under the bus's environment
 HELPER = [sys.executable, "-m", "encoder_conformance.cli.firmware_ci"]
@@ -116,12 +117,16 @@ def cmd_firmware_ci(args: argparse.Namespace, extra: list[str]) -> int:
             finally:
                 _power(state, env, on=False)
     except KeyboardInterrupt:
-        return RunExit.INTERRUPTED
+        return interrupted_by(_SIGNALS[-1]) if _SIGNALS else RunExit.INTERRUPTED  # 143 for SIGTERM, else 130
     finally:
         shutil.rmtree(state, ignore_errors=True)  # the hub's folder and the power switch's files
 
 
+_SIGNALS: list[int] = []  # the signals that ended firmware-ci (its exit code says which)
+
+
 def _interrupt(signum: int, frame: object) -> None:
+    _SIGNALS.append(signum)
     raise KeyboardInterrupt  # SIGTERM (a CI job cancelled): stop the simulator and the bus as Ctrl-C does
 
 
