@@ -16,7 +16,6 @@ from canopen.sdo.exceptions import SdoAbortedError
 from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.dut import connection
 from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
-from encoder_conformance.dut.frames import FrameLog
 from encoder_conformance.dut.identity import identity_mismatch, read_identity
 from encoder_conformance.dut.persist import CannotPersist, StoreCommand, store_commands_for
 from encoder_conformance.dut.sdo_frames import abort_name
@@ -54,21 +53,17 @@ def factory_commands(profile: DeviceProfile) -> list[StoreCommand]:
 def store_parameters(request: StoreRequest) -> int:
     """Connect, check the node is the profile's product, send each store command; the exit code (RunExit)."""
     commands = factory_commands(request.profile)
-    frames = FrameLog()
     try:
-        network = connection.connect(request.bus.kwargs, request.bus.describe(), frames)
+        with connection.connected(request.bus.kwargs, request.bus.describe()) as (network, frames):
+            dut = DeviceUnderTest(network, frames, request.profile, request.node_id)
+            problem = _not_the_device(dut)
+            if problem:
+                return _fail(problem, RunExit.COULD_NOT_TEST)
+            store_s = request.profile.timing.store_max_ms / 1000
+            dut.node.sdo.RESPONSE_TIMEOUT = max(dut.sdo_timeout, store_s)  # a store may take its documented time
+            return _send(dut, commands)
     except BusSetupError as exc:
         return _fail(str(exc), RunExit.COULD_NOT_TEST)
-    try:
-        dut = DeviceUnderTest(network, frames, request.profile, request.node_id)
-        problem = _not_the_device(dut)
-        if problem:
-            return _fail(problem, RunExit.COULD_NOT_TEST)
-        store_s = request.profile.timing.store_max_ms / 1000
-        dut.node.sdo.RESPONSE_TIMEOUT = max(dut.sdo_timeout, store_s)  # a store may take its documented time
-        return _send(dut, commands)
-    finally:
-        connection.disconnect(network)
 
 
 def _not_the_device(dut: DeviceUnderTest) -> str | None:
