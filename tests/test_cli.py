@@ -142,8 +142,7 @@ def test_a_bug_of_the_tool_exits_3_not_1(monkeypatch, capsys):
     assert "internal error of the tool" in err
 
 
-@pytest.mark.parametrize("argv", [["profile", "list"], ["readings"]], ids=["profile-list", "readings"])
-def test_a_closed_output_pipe_ends_the_command_quietly(argv):
+def test_a_closed_output_pipe_ends_the_command_quietly():
     """`encoder-conformance profile list | head -1`: the reader is gone before the output comes (the pipe's read end
     is closed before the command starts, so the write fails every time); exit 141 as after SIGPIPE, no traceback."""
     import os
@@ -151,8 +150,8 @@ def test_a_closed_output_pipe_ends_the_command_quietly(argv):
     read_end, write_end = os.pipe()
     os.close(read_end)
     try:
-        done = subprocess.run([sys.executable, "-m", "encoder_conformance", *argv], cwd=REPO, stdout=write_end,
-                              stderr=subprocess.PIPE, text=True, timeout=120, check=False)
+        done = subprocess.run([sys.executable, "-m", "encoder_conformance", "profile", "list"], cwd=REPO,
+                              stdout=write_end, stderr=subprocess.PIPE, text=True, timeout=120, check=False)
     finally:
         os.close(write_end)
     assert done.returncode == 141, done.stderr

@@ -113,12 +113,6 @@ def test_a_conformant_simulator_passes_with_its_artifacts(tmp_path):
     assert "the user-space SocketCAN bus" in done.stderr
 
 
-def test_a_faulty_simulator_fails(tmp_path):
-    done = firmware_ci(tmp_path, twin(tmp_path / "nvm.json", "heartbeat_slow_20pct"), "-k", "heartbeat")
-    assert done.returncode == 1, done.stdout[-4000:] + done.stderr[-2000:]
-    assert "exit 1: device non-conformant" in done.stderr
-
-
 @pytest.fixture
 def short_tmp() -> Iterator[Path]:
     """A TMPDIR for firmware-ci with a short path (the hub's socket path is limited to 107 bytes)."""
@@ -144,17 +138,21 @@ def probe_and_run(folder: Path, simulator: str, eds: Path, *extra: str) -> subpr
                           timeout=300)
 
 
-def test_the_probe_and_the_run_in_one_job(tmp_path, waycon_eds):
-    """The profile probed from the simulator firmware-ci started, kept beside the report, is the run's profile."""
-    done = probe_and_run(tmp_path, twin(tmp_path / "nvm.json"), waycon_eds, "-k", "identity")
-    assert done.returncode == 0, done.stdout[-4000:] + done.stderr[-2000:]
-    report = tmp_path / "conformance-report"
-    probed = report / "probed-profile.yaml"
-    assert probed.is_file()
+def test_a_faulty_simulator_fails_on_the_profile_probed_in_the_same_job(tmp_path, waycon_eds):
+    """--probe: the profile probed from the simulator firmware-ci started, kept beside the report, is the run's
+    profile; the simulator's fault fails the run (1) on it."""
+    simulator = twin(tmp_path / "nvm.json", "heartbeat_slow_20pct")
+    done = probe_and_run(tmp_path, simulator, waycon_eds, "-k", "heartbeat")
+    assert done.returncode == 1, done.stdout[-4000:] + done.stderr[-2000:]
+    assert "exit 1: device non-conformant" in done.stderr
     assert "every value written was put back and read back" in done.stdout
+    report = tmp_path / "conformance-report"
+    assert (report / "probed-profile.yaml").is_file()
     summary = json.loads((report / "run-summary.json").read_text(encoding="utf-8"))
     assert summary["profile_id"] == "probed-profile"
-    assert Counter(result["outcome"] for result in summary["results"])["passed"] >= 3
+    failed = [result["nodeid"] for result in summary["results"] if result["outcome"] == "failed"]
+    assert failed, summary["results"]
+    assert all("heartbeat" in nodeid for nodeid in failed), failed
 
 
 def test_a_probe_whose_simulator_ends_at_reset_node_is_infrastructure(tmp_path, waycon_eds):
