@@ -139,7 +139,8 @@ def _run_when_booted(args: argparse.Namespace, extra: list[str], node_id: int, r
         exited = _exited_by_itself(state)
         if exited is None:
             print(f"firmware-ci: the simulator did not answer an SDO read of 1000h at node-ID {node_id} within "
-                  f"{args.boot_timeout} s (see {env['FWCI_LOG']}); exit {RunExit.COULD_NOT_TEST}: infrastructure",
+                  f"{args.boot_timeout} s (see {env['FWCI_LOG']}; --node-id N where it has another); exit "
+                  f"{RunExit.COULD_NOT_TEST}: infrastructure",
                   file=sys.stderr)
         else:
             print(f"firmware-ci: the simulator exited by itself ({exited}) before it answered an SDO read of 1000h "

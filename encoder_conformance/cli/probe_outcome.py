@@ -3,6 +3,7 @@ its process at NMT reset node, with nothing restarting it) would write a draft o
 
 from __future__ import annotations
 
+from encoder_conformance.errors import BusSetupError
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.probe.findings import Findings
 from encoder_conformance.probe.link import ProbeLink
@@ -15,7 +16,11 @@ RESTART_HINT = ("a firmware simulator that ends its process at NMT reset node ne
 def vanished(options: ProbeOptions, findings: Findings) -> str | None:
     """Why the probe's result cannot be trusted (the device stopped answering), or None: it still answers 1000h
     (asked again for up to the boot time-out, as the probe asks at its start)."""
-    link = ProbeLink(options.bus, options.node_id, options.sdo_timeout_s)
+    try:
+        link = ProbeLink(options.bus, options.node_id, options.sdo_timeout_s)
+    except BusSetupError as exc:
+        return f"the bus could not be opened again after the probe: {exc}; nothing written; exit " \
+               f"{RunExit.COULD_NOT_TEST}"
     try:
         answers = not link.first_answer(options.boot_timeout_s).silent
     finally:
