@@ -140,3 +140,19 @@ def test_a_bug_of_the_tool_exits_3_not_1(monkeypatch, capsys):
     err = capsys.readouterr().err
     assert "RuntimeError: boom" in err
     assert "internal error of the tool" in err
+
+
+def test_a_closed_output_pipe_ends_the_command_quietly():
+    """`encoder-conformance profile list | head -1`: the reader is gone before the output comes (the pipe's read end
+    is closed before the command starts, so the write fails every time); exit 141 as after SIGPIPE, no traceback."""
+    import os
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        done = subprocess.run([sys.executable, "-m", "encoder_conformance", "profile", "list"], cwd=REPO,
+                              stdout=write_end, stderr=subprocess.PIPE, text=True, timeout=120, check=False)
+    finally:
+        os.close(write_end)
+    assert done.returncode == 141, done.stderr
+    assert done.stderr == ""

@@ -51,6 +51,23 @@ time.sleep(0.5)
 (folder / "stored").write_text("node-ID 5")
 """
 
+#: CANopenLinux's behaviour without the restart loop: the twin (the arguments), ended with its process at the first
+#: NMT reset node addressed to it (or to all)
+ENDS_AT_RESET = """
+import subprocess, sys
+import can
+node = int(sys.argv[1])
+twin = subprocess.Popen(sys.argv[2:])
+with can.Bus(interface="socketcan", channel="vcan0") as bus:
+    bus.set_filters([{"can_id": 0, "can_mask": 0x7FF}])
+    while twin.poll() is None:
+        frame = bus.recv(0.5)
+        if frame is not None and frame.data[0] == 0x81 and frame.data[1] in (0, node):
+            break
+twin.terminate()
+twin.wait()
+"""
+
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="SocketCAN (and the user-space bus) is Linux only")
 
 
@@ -96,18 +113,78 @@ def test_a_conformant_simulator_passes_with_its_artifacts(tmp_path):
     assert "the user-space SocketCAN bus" in done.stderr
 
 
-def test_a_faulty_simulator_fails(tmp_path):
-    done = firmware_ci(tmp_path, twin(tmp_path / "nvm.json", "heartbeat_slow_20pct"), "-k", "heartbeat")
-    assert done.returncode == 1, done.stdout[-4000:] + done.stderr[-2000:]
-    assert "exit 1: device non-conformant" in done.stderr
-
-
 @pytest.fixture
 def short_tmp() -> Iterator[Path]:
     """A TMPDIR for firmware-ci with a short path (the hub's socket path is limited to 107 bytes)."""
     folder = Path(tempfile.mkdtemp(prefix="fwt-", dir="/tmp"))
     yield folder
     shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.fixture
+def waycon_eds(tmp_path: Path) -> Path:
+    """The EDS a firmware team would start from (the twin's, exported without its node-ID)."""
+    from encoder_conformance.profile.eds import export_eds
+    from encoder_conformance.profile.loader import load_profile
+
+    return export_eds(load_profile("waycon-sx").profile, tmp_path / "waycon.eds", None)
+
+
+def probe_and_run(folder: Path, simulator: str, eds: Path, *extra: str) -> subprocess.CompletedProcess[str]:
+    """firmware-ci --probe EDS (no --profile), as the README's probe line: the node-ID given."""
+    env = {k: v for k, v in os.environ.items() if k not in ("LD_PRELOAD", "ENCODER_CONFORMANCE_VCAN_DIR")}
+    return subprocess.run([*PYTHON, "firmware-ci", "--simulator", simulator, "--probe", str(eds), "--node-id", "7",
+                           "--history", "off", *extra], cwd=folder, env=env, capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_a_faulty_simulator_fails_on_the_profile_probed_in_the_same_job(tmp_path, waycon_eds):
+    """--probe: the profile probed from the simulator firmware-ci started, kept beside the report, is the run's
+    profile; the simulator's fault fails the run (1) on it."""
+    simulator = twin(tmp_path / "nvm.json", "heartbeat_slow_20pct")
+    done = probe_and_run(tmp_path, simulator, waycon_eds, "-k", "heartbeat")
+    assert done.returncode == 1, done.stdout[-4000:] + done.stderr[-2000:]
+    assert "exit 1: device non-conformant" in done.stderr
+    assert "every value written was put back and read back" in done.stdout
+    report = tmp_path / "conformance-report"
+    assert (report / "probed-profile.yaml").is_file()
+    summary = json.loads((report / "run-summary.json").read_text(encoding="utf-8"))
+    assert summary["profile_id"] == "probed-profile"
+    failed = [result["nodeid"] for result in summary["results"] if result["outcome"] == "failed"]
+    assert failed, summary["results"]
+    assert all("heartbeat" in nodeid for nodeid in failed), failed
+
+
+def test_a_probe_whose_simulator_ends_at_reset_node_is_infrastructure(tmp_path, waycon_eds):
+    """Without the restart loop the probe's NMT reset node ends the simulator: 69 at once, naming the loop; no
+    profile, no run (it had taken 2 min 19 s and ended 0 with a profile of silences)."""
+    (tmp_path / "ends_at_reset.py").write_text(ENDS_AT_RESET, encoding="utf-8")
+    simulator = f"{sys.executable} ends_at_reset.py 7 {twin(tmp_path / 'nvm.json')}"
+    start = time.monotonic()
+    done = probe_and_run(tmp_path, simulator, waycon_eds)
+    assert done.returncode == 69, done.stdout[-4000:] + done.stderr[-2000:]
+    assert "the simulator exited by itself during the probe" in done.stderr
+    assert "restarted in a loop" in done.stderr
+    assert not (tmp_path / "conformance-report" / "probed-profile.yaml").exists()
+    assert not (tmp_path / "conformance-report" / "run-summary.json").exists()
+    assert time.monotonic() - start < 30
+
+
+def test_a_probe_of_a_device_that_vanished_is_no_profile():
+    """from-eds --probe on its own (the README's probe line beside a simulator without the loop): a device that no
+    longer answers at the end is said, with the loop to use, not written as a profile."""
+    import uuid
+
+    from encoder_conformance.cli.probe_outcome import vanished
+    from encoder_conformance.config.bus import BusConfig
+    from encoder_conformance.probe.findings import Findings
+    from encoder_conformance.probe.session import ProbeOptions
+
+    bus = BusConfig({"interface": "virtual", "channel": f"nobody-{uuid.uuid4().hex[:6]}"})
+    why = vanished(ProbeOptions(bus, 7, sdo_timeout_s=0.05, boot_timeout_s=0.2), Findings())
+    assert why is not None
+    assert "node 7 stopped answering during the probe (no boot-up after the probe's NMT reset node)" in why
+    assert "restart loop" in why
 
 
 def test_a_simulator_that_never_answers_is_infrastructure(tmp_path, short_tmp):
@@ -240,8 +317,25 @@ def test_example_pipeline_is_printed_valid_and_in_the_readme(name: str, capsys):
     line = next(part for part in text.splitlines() if "encoder-conformance firmware-ci" in part and "#" not in part)
     words = shlex.split(line[line.index("encoder-conformance") :])[1:]
     args, extra = build_parser().parse_known_args(words)
-    assert (args.simulator, args.profile, extra) == ("./build/fw_sim vcan0", "ci/my-encoder.yaml", [])
-    assert text in (REPO / "README.md").read_text(encoding="utf-8")
+    assert (args.simulator, args.profile, extra) == ("sh ci/fw_sim_loop.sh", "ci/my-encoder.yaml", ["--node-id", "4"])
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    assert text in readme
+    loop = re.search(r"```sh\n(\s*trap .*?)```", readme, re.S)
+    assert loop is not None
+    for line in loop.group(1).strip().splitlines():  # the loop the pipeline writes is the README's (tested above)
+        assert line.strip() in text, line
+    assert "placeholder: your simulator's line inside" in text
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--profile", "waycon-sx", "--probe", "x.eds"], "give --profile or --probe, not both"),
+    (["--probe", "no-such.eds"], "--probe no-such.eds: no such file; give the path of your device's EDS"),
+], ids=["both", "missing-eds"])
+def test_firmware_ci_probe_names_the_option_at_fault(argv, message, capsys):
+    from encoder_conformance.cli.main import main
+
+    assert main(["firmware-ci", "--simulator", "./fw_sim vcan0", *argv]) == 4
+    assert message in capsys.readouterr().err
 
 
 def test_firmware_ci_without_simulator_names_what_is_missing(capsys):

@@ -7,11 +7,13 @@
    store/restore and LSS tests that need a power cycle run; power off is SIGTERM to its whole process group
    and a wait (up to STOP_GRACE_S) until every process of it has ended, so it stores what it keeps at
    shutdown as a device keeps it in flash; only then SIGKILL;
-3. wait until the device answers an SDO read of 1000h (its boot time, up to ``--boot-timeout``);
+3. wait until the device answers an SDO read of 1000h (its boot time, up to ``--boot-timeout``); with ``--probe
+   EDS`` the profile is probed from it then (``firmware_probe.py``: kept as probed-profile.yaml in the report);
 4. the conformance run (``run``, every option of it; ``--history off`` unless you give ``--history``: a CI
    job has no use for the station history), its exit code returned unchanged: 0 conformant,
-   1 firmware non-conformant, 69 infrastructure (bus, simulator silent or dead), 70 not restored, 3 a bug of
-   the tool, 4 usage. The report folder keeps junit.xml, report.html and run-summary.json for the artifacts.
+   1 firmware non-conformant, 6 incomplete, 69 infrastructure (bus, simulator silent or dead), 70 not restored,
+   3 a bug of the tool, 4 usage, 5 no tests selected; 130 Ctrl-C, 143 SIGTERM. The report folder keeps
+   junit.xml, report.html and run-summary.json for the artifacts.
 
 A simulator that ends by itself (CANopenLinux ends its process on NMT reset node unless it is restarted in a
 loop) is named as such (exit 69). The simulator and the hub are stopped and the state folder is removed at the
@@ -33,8 +35,9 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+from encoder_conformance.cli import firmware_probe
 from encoder_conformance.errors import UsageError
-from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit
+from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit, interrupted_by
 
 #: the helper process: the power switch and the boot wait, started under the bus's environment
 HELPER = [sys.executable, "-m", "encoder_conformance.cli.firmware_ci"]
@@ -68,6 +71,10 @@ def add_firmware_ci_parser(sub: argparse._SubParsersAction) -> None:
                          "'./build/fw_sim vcan0' (run by the shell; it must stay in the foreground and keep "
                          "running across NMT reset node: restart it in a loop if it ends there)")
     ci.add_argument("--profile", help="your device profile (YAML file or shipped id)")
+    ci.add_argument("--probe", metavar="EDS",
+                    help="instead of --profile: probe the simulator (profile from-eds EDS --probe, with the same "
+                         "command, bus and restart handling as the run), keep the profile as probed-profile.yaml in "
+                         "the report folder and run with it")
     ci.add_argument("--can-channel", default="vcan0", help="the SocketCAN channel (default vcan0)")
     ci.add_argument("--report-dir", default="conformance-report", type=Path,
                     help="where junit.xml, report.html, run-summary.json and the simulator's log go "
@@ -86,11 +93,16 @@ def cmd_firmware_ci(args: argparse.Namespace, extra: list[str]) -> int:
     if args.example:
         print((PIPELINE_DIR / PIPELINES[args.example]).read_text(encoding="utf-8"), end="")
         return 0
-    missing = [option for option, value in (("--simulator", args.simulator), ("--profile", args.profile)) if not value]
+    missing = [option for option, value in (("--simulator", args.simulator),
+                                            ("--profile (or --probe EDS)", args.profile or args.probe)) if not value]
     if missing:
         raise UsageError(f"give {' and '.join(missing)} (or --example github|gitlab for a pipeline file)")
-    check_profile("--profile", args.profile)
-    node_id = _node_id(extra) or load_profile(args.profile).profile.bus.node_id
+    if args.probe:
+        default_node_id = firmware_probe.check_probe(args)  # the EDS's
+    else:
+        check_profile("--profile", args.profile)
+        default_node_id = load_profile(args.profile).profile.bus.node_id
+    node_id = _node_id(extra) or default_node_id
     report = args.report_dir.resolve()
     report.mkdir(parents=True, exist_ok=True)
     state = Path(tempfile.mkdtemp(prefix="fwci-"))  # short: the hub's socket path is limited to 107 bytes
@@ -105,12 +117,16 @@ def cmd_firmware_ci(args: argparse.Namespace, extra: list[str]) -> int:
             finally:
                 _power(state, env, on=False)
     except KeyboardInterrupt:
-        return RunExit.INTERRUPTED
+        return interrupted_by(_SIGNALS[-1]) if _SIGNALS else RunExit.INTERRUPTED  # 143 for SIGTERM, else 130
     finally:
         shutil.rmtree(state, ignore_errors=True)  # the hub's folder and the power switch's files
 
 
+_SIGNALS: list[int] = []  # the signals that ended firmware-ci (its exit code says which)
+
+
 def _interrupt(signum: int, frame: object) -> None:
+    _SIGNALS.append(signum)
     raise KeyboardInterrupt  # SIGTERM (a CI job cancelled): stop the simulator and the bus as Ctrl-C does
 
 
@@ -123,13 +139,19 @@ def _run_when_booted(args: argparse.Namespace, extra: list[str], node_id: int, r
         exited = _exited_by_itself(state)
         if exited is None:
             print(f"firmware-ci: the simulator did not answer an SDO read of 1000h at node-ID {node_id} within "
-                  f"{args.boot_timeout} s (see {env['FWCI_LOG']}); exit {RunExit.COULD_NOT_TEST}: infrastructure",
+                  f"{args.boot_timeout} s (see {env['FWCI_LOG']}; --node-id N where it has another); exit "
+                  f"{RunExit.COULD_NOT_TEST}: infrastructure",
                   file=sys.stderr)
         else:
             print(f"firmware-ci: the simulator exited by itself ({exited}) before it answered an SDO read of 1000h "
                   f"(see {env['FWCI_LOG']}); {KEEP_RUNNING}; exit {RunExit.COULD_NOT_TEST}: infrastructure",
                   file=sys.stderr)
         return RunExit.COULD_NOT_TEST
+    if args.probe:
+        probed = firmware_probe.probe(args, node_id, report, env, lambda: _exited_by_itself(state))
+        if isinstance(probed, int):
+            return probed
+        args.profile = str(probed)
     status = subprocess.run(_run_command(args, extra, report, helper), env=env, check=False).returncode
     exited = _exited_by_itself(state)
     if exited is not None and status != RunExit.PASSED:

@@ -1,14 +1,16 @@
-"""Command line: ``encoder-conformance run | accept | restore | lss | sim | sim-control | profile | faults |
+"""Command line: ``encoder-conformance run | accept | restore | store | lss | sim | sim-control | profile | faults |
 fault-matrix | readings | variant-matrix | vcan | firmware-ci``.
 
 Exit codes of ``run``, ``restore`` and ``lss`` follow exit_codes.RunExit; a usage error (bad option,
-unreadable profile) is 4 for every command.
+unreadable profile) is 4 for every command; a command whose output pipe closed (``| head``) ends quietly with 141.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import signal
 import sys
 import traceback
 from collections.abc import Callable
@@ -25,6 +27,7 @@ from encoder_conformance.cli.readings import add_readings_parsers
 from encoder_conformance.cli.restore import add_restore_parser
 from encoder_conformance.cli.run import add_run_parser
 from encoder_conformance.cli.sim import add_sim_parsers
+from encoder_conformance.cli.store import add_store_parser
 from encoder_conformance.cli.usage import OneLineParser, UsageError, bus_arguments
 from encoder_conformance.cli.vcan_command import add_vcan_parser
 from encoder_conformance.errors import ProfileError
@@ -34,6 +37,7 @@ from encoder_conformance.exit_codes import RunExit, interrupted_by
 COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     add_run_parser,
     add_restore_parser,
+    add_store_parser,
     partial(add_lss_parser, parser_class=OneLineParser, bus_arguments=bus_arguments),
     partial(add_history_parser, parser_class=OneLineParser),
     partial(add_accept_parser, bus_arguments=bus_arguments),
@@ -73,6 +77,8 @@ def main(argv: list[str] | None = None) -> int:
         return usage.report(f"encoder-conformance {args.command}", str(exc))
     except ProfileError as exc:
         return usage.report(f"encoder-conformance {args.command}", usage.profile_error_text(exc))
+    except BrokenPipeError:  # the reader of our output went away (`| head`): no bug of the tool
+        return output_closed()
     except Exception:  # a bug of the tool: exit 3, never 1 (which says the device is non-conformant)
         traceback.print_exc()
         print(f"encoder-conformance {args.command}: internal error of the tool: please report it with the output "
@@ -95,11 +101,23 @@ def console_main() -> None:
     daemon threads are left."""
     import logging
 
-    status = main()
+    try:
+        status = main()
+        sys.stdout.flush()  # what is still buffered: a closed pipe shows here
+    except BrokenPipeError:
+        status = output_closed()
     logging.shutdown()
-    sys.stdout.flush()
-    sys.stderr.flush()
+    with contextlib.suppress(BrokenPipeError):
+        sys.stderr.flush()
     os._exit(status)
+
+
+def output_closed() -> int:
+    """stdout's reader went away (``| head``): stop quietly, as Python's docs advise (note on SIGPIPE): what is left
+    of the output goes to devnull; exit 141, as a program ended by SIGPIPE."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    return interrupted_by(signal.SIGPIPE)
 
 
 if __name__ == "__main__":

@@ -101,11 +101,12 @@ def _cmd_profile_from_eds(args: argparse.Namespace, extra: list[str]) -> int:
           f"the manual (listed under todo:, and by `profile validate --todo`):")
     for number, todo in enumerate(todos, 1):
         print(f"  TODO {number}: {todo}")
-    return 0
+    return int(getattr(args, "exit_status", RunExit.PASSED))  # the probe's: 70 where a value did not come back
 
 
 def _probe(args: argparse.Namespace, draft: dict, todos: list[str]) -> list[str] | int:
     """The live probe's corrections to ``draft``: the todos after it, or an exit code."""
+    from encoder_conformance.cli.probe_outcome import vanished
     from encoder_conformance.errors import BusSetupError, DutLostError
     from encoder_conformance.probe.session import ProbeOptions, probe_device
 
@@ -118,6 +119,10 @@ def _probe(args: argparse.Namespace, draft: dict, todos: list[str]) -> list[str]
         print(f"from-eds --probe: {exc}; nothing written", file=sys.stderr)
         return RunExit.COULD_NOT_TEST
     findings = result.findings
+    gone = vanished(options, findings)
+    if gone is not None:
+        print(f"from-eds --probe: {gone}", file=sys.stderr)
+        return RunExit.COULD_NOT_TEST
     print(f"probe: node {node_id}, {result.requests} SDO requests in {result.seconds:.1f} s"
           + (f", boot-up {findings.boot_up_ms:.0f} ms after reset node" if findings.boot_up_ms is not None else "")
           + ("; every value written was put back and read back" if result.restored else ""))

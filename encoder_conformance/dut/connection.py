@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
+from collections.abc import Iterator
 from typing import Any, cast
 
 import can
@@ -63,6 +64,17 @@ def connect(kwargs: dict[str, Any], describe: str, frame_log: FrameLog) -> canop
     network.listeners.append(frame_log)  # type: ignore[arg-type]  # why: canopen takes any can.Listener here
     network.connect()
     return network
+
+
+@contextlib.contextmanager
+def connected(kwargs: dict[str, Any], describe: str) -> Iterator[tuple[canopen.Network, FrameLog]]:
+    """``connect`` with a frame log of its own, disconnected at the end; BusSetupError where the bus does not open."""
+    frames = FrameLog()
+    network = connect(kwargs, describe, frames)
+    try:
+        yield network, frames
+    finally:
+        disconnect(network)
 
 
 def disconnect(network: canopen.Network) -> None:
