@@ -42,6 +42,8 @@ EXPLAINED: dict[str, dict[str, str]] = {
     "faulhaber-mc5005": {"lss": NOT_PROBED_LSS + ": configure_bit_timing"},
     "fraba-posital-awc58-c2-mt": {
         "segmented_sdo": "the manual documents expedited transfer only; the twin's SDO server takes segmented too",
+        "tpdo_transmission_types": "the manual's sync counter takes 1..255 (UMD-CA §4.2.3), CiA's reserved 241..251 "
+                                   "included: the probe names them a deviation and keeps CiA's list (issue 40)",
     },
     "siko-wx58m-1212-mt": {
         "segmented_sdo": "the manual documents expedited transfer only; the twin's SDO server takes segmented too",

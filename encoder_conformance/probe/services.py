@@ -8,7 +8,7 @@ from typing import Any
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, COB_ID_SYNC_GENERATE, SdoAbortCode
 from encoder_conformance.probe.findings import Findings, TpdoTypes
-from encoder_conformance.probe.link import Answer, ProbeLink
+from encoder_conformance.probe.link import Answer, ProbeLink, download
 from encoder_conformance.probe.put_back import PutBack
 
 GUARD_WINDOW_S = 0.2
@@ -40,13 +40,15 @@ def tpdo_transmission_types(link: ProbeLink, put_back: PutBack, objects: dict[in
                                   "transmission types were tried on the valid PDO")
     accepted: list[int] = []
     refused: dict[int, list[int]] = {}
+    frames: dict[int, str] = {}
     for value in range(256):
         answer = put_back.write(comm, 2, bytes([value]))
+        frames[value] = download(comm, 2, bytes([value]), answer)
         if answer.ok:
             accepted.append(value)
         else:
             refused.setdefault(answer.abort or 0, []).append(value)
-    findings.tpdo_types = TpdoTypes(comm, accepted, refused)
+    findings.tpdo_types = TpdoTypes(comm, accepted, refused, frames)
 
 
 def block_and_segmented(link: ProbeLink, put_back: PutBack, objects: dict[int, dict[str, Any]],

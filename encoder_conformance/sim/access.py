@@ -250,26 +250,24 @@ class ReservedTransmissionTypesAccepted(ObjectAccess):
 
 @breaks(ObjectAccess, "empty_arrays")
 class EmptyArrays(ObjectAccess):
-    """A variant, not a fault: every ARRAY from 2000h on whose sub 0 is read-only holds no element, as a stack
-    that loaded an EDS without a sub 0 DefaultValue does (CiA 306): sub 0 reads 0, and an upload or download of
-    an element answers 08000024h (no data available). Only a profile probed from it declares the elements so."""
+    """A variant, not a fault: an ARRAY from 2000h on with a read-only sub 0 holds as many elements as sub 0 counts;
+    an upload or download of an element above the count answers 08000024h (no data available), as a stack does
+    that loaded an EDS without a sub 0 DefaultValue (CiA 306): sub 0 is then 0 and no element holds data."""
 
     def _empty(self, index: int, sub: int) -> bool:
         obj = self._profile.objects.get(index)
-        if index < 0x2000 or obj is None or obj.object_kind != "array" or not self._store.has((index, sub)):
+        if index < 0x2000 or sub == 0 or obj is None or obj.object_kind != "array" or not self._store.has((index, sub)):
             return False
         count = obj.entry_table.get(0)
-        return count is not None and count.access in ("ro", "const")
+        return count is not None and count.access in ("ro", "const") and sub > int(self._store.get((index, 0)))
 
     def sdo_read(self, index: int, sub: int) -> bytes:
         if self._empty(index, sub):
-            if sub == 0:
-                return bytes(datatypes.size_bytes(self._store.entries[index, 0].type) or 1)
             raise SdoAbort(Abort.NO_DATA)
         return super().sdo_read(index, sub)
 
     def sdo_write(self, index: int, sub: int, data: bytes) -> None:
-        if sub > 0 and self._empty(index, sub):
+        if self._empty(index, sub):
             raise SdoAbort(Abort.NO_DATA)
         super().sdo_write(index, sub, data)
 

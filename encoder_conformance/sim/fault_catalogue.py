@@ -345,8 +345,8 @@ ABORT_FAMILY_VARIANTS: dict[str, str] = {
 #: conformant variants a shipped profile cannot judge: the device of a vendor EDS the profile must be probed from
 #: (``profile from-eds --probe``); tests/test_probe_no_data.py runs each with its probed profile
 PROBED_VARIANTS: dict[str, str] = {
-    "empty_arrays": "every ARRAY from 2000h on whose sub 0 is read-only holds no element (an EDS without a sub 0 "
-                    "DefaultValue, CiA 306): sub 0 reads 0, an element's upload or download aborts 08000024h",
+    "empty_arrays": "an ARRAY from 2000h on with a read-only sub 0 holds as many elements as sub 0 counts: an element "
+                    "above it aborts 08000024h (all of them where the EDS gave sub 0 no DefaultValue, CiA 306)",
 }
 #: conformant variants: each open reading's (encoder_conformance.readings), the abort-family and the probed ones
 VARIANTS: dict[str, str] = {**variants(), **ABORT_FAMILY_VARIANTS, **PROBED_VARIANTS}
