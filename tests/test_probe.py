@@ -128,7 +128,12 @@ def test_an_object_the_device_lacks_is_removed_with_a_todo(tmp_path: Path):
     with twin_of(shipped) as twin:
         draft, result = probed(eds, twin, shipped.bus.node_id, reset=False)
     assert 0x2345 not in draft["objects"]
-    assert any("2345h" in todo and "removed" in todo for todo in result.todos)
+    warning = [todo for todo in result.todos if "2345h" in todo and "removed" in todo]
+    assert len(warning) == 1
+    assert warning[0].startswith("warning: ")
+    assert "CiA 306" in warning[0]
+    assert "EDS extra.eds [2345]" in warning[0]
+    assert "upload 2345h.00 -> abort 06020000h" in warning[0]
 
 
 def test_a_value_that_changes_across_a_reset_is_no_default():
