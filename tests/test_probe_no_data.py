@@ -62,8 +62,10 @@ def test_08000024h_is_recorded_as_no_data_with_the_count_from_sub_0_and_its_fram
     findings.readings[0x2100, 2] = [Answer(abort=NO_DATA)]
     findings.readings[0x1003, 0] = [Answer(b"\x00")]
     findings.readings[0x1003, 1] = [Answer(abort=NO_DATA)]  # an empty error history entry: fills at run time
+    draft["objects"][0x2100]["subs"][2].update(dynamic=True, default=None)  # a run-time value (e.g. 6030h speed)
     todos = apply_findings(draft, [], findings, 4)
     subs = draft["objects"][0x2100]["subs"]
+    assert subs[2]["no_data"] is True, "a run-time value without data is no_data too (kacanopen's 6030h)"
     assert subs[1]["no_data"] is True
     assert "default" not in subs[1]
     assert subs[0]["default"] == 0, "the count is taken from sub 0 where the EDS gives none"

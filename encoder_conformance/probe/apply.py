@@ -101,7 +101,7 @@ def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: in
         if first.silent:
             todos.append(f"probe: {where} was not answered ({frame}); check that the device has it")
             continue
-        if holds_no_data(entry, first):
+        if holds_no_data(key, first):
             empty.append(key)
             continue
         if first.abort == SdoAbortCode.READ_WO:

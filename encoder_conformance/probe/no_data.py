@@ -3,23 +3,24 @@ count its sub 0 gives (CANopenNode's empty 1003h entries, a stack built from an 
 
 They are recorded ``no_data: true``, never readable: no test reads or writes them. Where their object's sub 0 is
 read-only and the EDS gives it no default, the count the device reads is taken as its default. The error history
-(1003h, dynamic) stays as it is: its entries fill at run time and the suites allow 08000024h there.
+(1003h) stays as it is: its entries fill as errors come, and the suites allow 08000024h there. A run-time value
+(marked dynamic) that holds no data is no_data too: sub 0 counts 0 elements in it.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from encoder_conformance.cia.cia301 import SdoAbortCode
+from encoder_conformance.cia.cia301 import ERROR_HISTORY, SdoAbortCode
 from encoder_conformance.probe.findings import Findings, Key
 from encoder_conformance.probe.link import Answer, upload
 
 NO_DATA_CLAUSE = "CiA 301 v4.2.0 §7.2.4.3.17 table 22: 08000024h no data available"
 
 
-def holds_no_data(entry: dict[str, Any], first: Answer) -> bool:
-    """The first read answered 08000024h and the entry is no run-time value that may fill later."""
-    return first.abort == SdoAbortCode.NO_DATA and not entry.get("dynamic")
+def holds_no_data(key: Key, first: Answer) -> bool:
+    """The first read answered 08000024h, outside the error history (whose entries fill as errors come)."""
+    return first.abort == SdoAbortCode.NO_DATA and key[0] != ERROR_HISTORY
 
 
 def _span(subs: list[int]) -> str:
