@@ -19,6 +19,7 @@ from encoder_conformance.plugin.selection import ENTRY_FIXTURES
 from encoder_conformance.probe.apply import apply_findings
 from encoder_conformance.probe.findings import Findings, TpdoTypes
 from encoder_conformance.probe.link import Answer
+from encoder_conformance.probe.services import store_restore_subindices
 from encoder_conformance.profile.eds import profile_draft_from_eds
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import EntrySpec
@@ -175,3 +176,18 @@ def test_a_twin_accepting_reserved_types_probed_then_run_fails_naming_1800h_sub_
     assert run.returncode == 1, run.output[-3000:]
     assert "1800h.02 Transmission type" in run.output
     assert "write of 241 (0xF1)" in run.output
+
+
+def test_store_commands_without_data_are_no_capability():
+    """1010h with sub 0 = 0 (its elements answer 08000024h): the device stores on no command."""
+    draft: dict[str, Any] = {"bus": {"node_id": 4}, "identity": {}, "capabilities": {"store_subindices": [1]},
+                             "objects": {0x1010: {"name": "Store parameters", "kind": "array", "subs": {
+                                 0: {"name": "Count", "type": "U8", "access": "ro"},
+                                 1: {"name": "Save all", "type": "U32", "access": "rw", "default": 1}}}}}
+    findings = Findings()
+    findings.readings[0x1010, 0] = [Answer(b"\x00")]
+    findings.readings[0x1010, 1] = [Answer(abort=NO_DATA)]
+    store_restore_subindices(findings)
+    apply_findings(draft, [], findings, 4)
+    assert draft["capabilities"]["store_subindices"] == []
+    assert draft["objects"][0x1010]["subs"][1]["no_data"] is True

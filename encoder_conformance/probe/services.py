@@ -137,6 +137,11 @@ def store_restore_subindices(findings: Findings) -> None:
     for index, attribute in ((0x1010, "store_subindices"), (0x1011, "restore_subindices")):
         values = {sub: reads[0].data for (i, sub), reads in findings.readings.items()
                   if i == index and sub > 0 and reads and reads[0].data}
+        empty = [sub for (i, sub), reads in findings.readings.items()
+                 if i == index and sub > 0 and reads and reads[0].abort == SdoAbortCode.NO_DATA]
+        if not values and empty:  # sub 0 counts no command (an EDS without its default): none to give
+            setattr(findings, attribute, [])
+            continue
         if not values:
             continue
         if not any(any(data) for data in values.values()):
