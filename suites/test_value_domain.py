@@ -144,7 +144,9 @@ def test_write_outside_declared_domain_is_refused(dut, value_domain_entry, setti
             _put_back(dut, settings_journal, index, sub, original)
     bases = {basis for basis, _ in basis_of.values()}
     firm = [b for b in ("manual", "cia") if b in bases]
-    evidence.rests_on(firm[0] if firm else "inferred", entry.manual or where)
+    clause = next((text for basis, text in basis_of.values() if basis == "cia" and text.startswith("CiA")), None)
+    evidence.rests_on(firm[0] if firm else "inferred",
+                      clause if firm == ["cia"] and clause else entry.manual or where)
     required = sum(1 for basis, _ in basis_of.values() if basis != "inferred")
     evidence.measure("probe values refused", refused, "", low=required, high=len(probes))
     if required < len(probes):

@@ -126,11 +126,11 @@ class Twin:
 
 
 @contextmanager
-def twin_of(profile: DeviceProfile, node_id: int | None = None) -> Iterator[Twin]:
+def twin_of(profile: DeviceProfile, node_id: int | None = None, faults: tuple[str, ...] = ()) -> Iterator[Twin]:
     channel = f"probe-{uuid.uuid4().hex[:8]}"
     host = SimulatorHost(channel=channel)
     try:
-        node = host.add_node(profile, node_id or profile.bus.node_id)
+        node = host.add_node(profile, node_id or profile.bus.node_id, faults=FaultSet(faults))
         yield Twin(host, node, BusConfig({"interface": "virtual", "channel": channel}))
     finally:
         host.shutdown()

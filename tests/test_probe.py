@@ -42,6 +42,8 @@ EXPLAINED: dict[str, dict[str, str]] = {
     "faulhaber-mc5005": {"lss": NOT_PROBED_LSS + ": configure_bit_timing"},
     "fraba-posital-awc58-c2-mt": {
         "segmented_sdo": "the manual documents expedited transfer only; the twin's SDO server takes segmented too",
+        "tpdo_transmission_types": "the manual's sync counter takes 1..255 (UMD-CA §4.2.3), CiA's reserved 241..251 "
+                                   "included: the probe names them a deviation and keeps CiA's list (issue 40)",
     },
     "siko-wx58m-1212-mt": {
         "segmented_sdo": "the manual documents expedited transfer only; the twin's SDO server takes segmented too",
@@ -126,7 +128,12 @@ def test_an_object_the_device_lacks_is_removed_with_a_todo(tmp_path: Path):
     with twin_of(shipped) as twin:
         draft, result = probed(eds, twin, shipped.bus.node_id, reset=False)
     assert 0x2345 not in draft["objects"]
-    assert any("2345h" in todo and "removed" in todo for todo in result.todos)
+    warning = [todo for todo in result.todos if "2345h" in todo and "removed" in todo]
+    assert len(warning) == 1
+    assert warning[0].startswith("warning: ")
+    assert "CiA 306" in warning[0]
+    assert "EDS extra.eds [2345]" in warning[0]
+    assert "upload 2345h.00 -> abort 06020000h" in warning[0]
 
 
 def test_a_value_that_changes_across_a_reset_is_no_default():

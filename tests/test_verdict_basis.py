@@ -31,7 +31,8 @@ def _properties(junit: Path) -> dict[str, list[tuple[str, str]]]:
 def test_refusal_basis_of_transmission_types_and_manual_ranges():
     profile = load_profile(WDGA).profile
     assert refusal_basis(profile, 0x1800, 2, 0)[0] == "inferred"  # the manual does not list type 0
-    assert refusal_basis(profile, 0x1800, 2, 241)[0] == "inferred"
+    assert refusal_basis(profile, 0x1800, 2, 241)[0] == "cia"  # reserved by CiA 301 table 72 (issue 40)
+    assert refusal_basis(profile, 0x1800, 2, 253)[0] == "inferred"  # CiA's, and not in the manual's list
     assert refusal_basis(profile, 0x2101, 0, 0)[0] == "manual"  # node-ID range printed in the manual
 
 

@@ -163,6 +163,7 @@ def cob_id_valid(cob_id: int) -> int:
 #: TPDO transmission types (CiA 301 §7.5.2.37 table 72)
 SYNC_ACYCLIC = 0
 SYNC_CYCLIC = range(1, 241)
+RESERVED_TRANSMISSION_TYPES = range(241, 252)  # reserved by CiA 301 table 72: never a device's capability
 RTR_SYNCHRONOUS = 252
 RTR_EVENT = 253
 EVENT_MANUFACTURER = 254

@@ -101,7 +101,17 @@ def _cmd_profile_from_eds(args: argparse.Namespace, extra: list[str]) -> int:
           f"the manual (listed under todo:, and by `profile validate --todo`):")
     for number, todo in enumerate(todos, 1):
         print(f"  TODO {number}: {todo}")
+    _print_warnings(eds, todos)
     return int(getattr(args, "exit_status", RunExit.PASSED))  # the probe's: 70 where a value did not come back
+
+
+def _print_warnings(eds: Path, todos: list[str]) -> None:
+    """The EDS's inconsistencies and what the device contradicts (todos that are warnings), on stderr as well."""
+    from encoder_conformance.profile.eds.consistency import WARNING
+
+    for number, todo in enumerate(todos, 1):
+        if todo.startswith(WARNING):
+            print(f"from-eds: {eds.name}: WARNING (TODO {number}): {todo.removeprefix(WARNING)}", file=sys.stderr)
 
 
 def _probe(args: argparse.Namespace, draft: dict, todos: list[str]) -> list[str] | int:

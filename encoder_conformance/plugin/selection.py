@@ -16,8 +16,8 @@ from encoder_conformance.profile.value_domain import probe_values
 ENTRY_FIXTURES = {
     "od_entry": lambda e: True,
     "readable_entry": lambda e: e.readable,
-    "read_only_entry": lambda e: e.access in ("ro", "const"),
-    "write_only_entry": lambda e: e.access == "wo",
+    "read_only_entry": lambda e: e.access in ("ro", "const") and not e.no_data,
+    "write_only_entry": lambda e: e.access == "wo" and not e.no_data,
     "default_entry": lambda e: e.checks_default,
 }
 #: fixture name -> which entries, where the choice needs the profile: (profile, index, sub, entry)

@@ -7,12 +7,16 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
-from encoder_conformance.cia.cia301 import SdoAbortCode
+from encoder_conformance.cia.cia301 import RESERVED_TRANSMISSION_TYPES, SdoAbortCode
+from encoder_conformance.probe import eds_checks
 from encoder_conformance.probe.entries import draft_entries
-from encoder_conformance.probe.findings import Findings, Key
+from encoder_conformance.probe.findings import Findings, Key, TpdoTypes
+from encoder_conformance.probe.link import upload
+from encoder_conformance.probe.no_data import holds_no_data, record_no_data
 from encoder_conformance.profile.datatypes import canonical_name, size_bytes, string_bytes
 from encoder_conformance.profile.eds.draft import flag_unchecked
 from encoder_conformance.profile.model import resolve_node_id_expression
+from encoder_conformance.profile.value_domain import RESERVED_TYPES_CLAUSE
 
 #: draft todos a probe settles, by their start, with what must have been seen to settle each
 SETTLED: dict[str, Callable[[Findings], bool]] = {
@@ -65,8 +69,24 @@ def _remove(objects: dict[int, dict[str, Any]], key: Key) -> None:
         objects.pop(index)
 
 
+def _missing(objects: dict[int, dict[str, Any]], findings: Findings, missing: list[Key], todos: list[str]) -> None:
+    """The objects and sub-indices the device lacks, named with their EDS section and frames, then removed."""
+    if not missing:
+        return
+    found = []
+    for index, sub in missing:
+        obj = objects[index]
+        entry = obj["subs"].get(sub, obj) if "subs" in obj and sub else obj
+        found.append((f"{index:04X}h" + (f" sub {sub}" if sub else ""), entry,
+                      upload(index, sub, findings.readings[index, sub][0])))
+    todos.append(eds_checks.objects_missing(found))
+    for key in missing:
+        _remove(objects, key)
+
+
 def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: int, todos: list[str]) -> None:
     missing: list[Key] = []
+    empty: list[Key] = []
     refused: dict[str, list[str]] = {}
     for key, entry in list(draft_entries(objects)):
         reads = findings.readings.get(key)
@@ -74,11 +94,18 @@ def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: in
             continue
         first = reads[0]
         where = f"{key[0]:04X}h sub {key[1]}"
+        frame = upload(*key, first)
         if first.abort in (SdoAbortCode.NO_OBJECT, SdoAbortCode.NO_SUBINDEX):
             missing.append(key)
             continue
         if first.silent:
-            todos.append(f"probe: {where} was not answered; check that the device has it")
+            todos.append(f"probe: {where} was not answered ({frame}); check that the device has it")
+            continue
+        if holds_no_data(key, first):
+            empty.append(key)
+            continue
+        if first.abort == SdoAbortCode.READ_WO:
+            todos.append(eds_checks.access_contradicted(entry, frame))
             continue
         if not first.ok:
             if not (first.abort == SdoAbortCode.NO_DATA and entry.get("dynamic")):  # an empty error-history entry
@@ -87,8 +114,7 @@ def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: in
         assert first.data is not None
         size = size_bytes(canonical_name(str(entry.get("type", ""))))
         if size is not None and len(first.data) != size:
-            todos.append(f"probe: {where} is {entry.get('type')} ({size} bytes) in the EDS but the device sends "
-                         f"{len(first.data)} bytes")
+            todos.append(eds_checks.size_contradicted(entry, size, len(first.data), frame))
         values = [r.data for r in reads if r.data is not None]
         changed_alone = len(values) >= 2 and values[0] != values[1]
         changed_at_reset = findings.reset and values[-1] != values[0]
@@ -99,25 +125,23 @@ def _entries(objects: dict[int, dict[str, Any]], findings: Findings, node_id: in
                 entry.pop("per_unit", None)
                 flag_unchecked(entry, "dynamic", f"the probe saw it {why.removeprefix('changes ')} "
                                f"({_hex(values[0])} -> {_hex(values[-1])})")
-                todos.append(f"probe: {where} {why}: marked dynamic (no default checked)")
+                todos.append(f"probe: {where} {why} ({_hex(values[0])} -> {_hex(values[-1])} in {len(values)} "
+                             f"uploads of {key[0]:04X}h.{key[1]:02X}): marked dynamic (no default checked)")
             continue
         if changed_at_reset:
-            todos.append(f"probe: {where} was {_hex(values[0])} and {_hex(values[-1])} after a reset: an unsaved "
-                         "setting (put back); check its default")
+            todos.append(f"probe: {where} was {_hex(values[0])} and {_hex(values[-1])} after a reset (uploads of "
+                         f"{key[0]:04X}h.{key[1]:02X} before and after NMT reset node): an unsaved setting (put back); "
+                         "check its default")
         expected = expected_bytes(entry, node_id)
         if expected is not None and not entry.get("dynamic") and not entry.get("per_unit") and expected != values[-1]:
-            todos.append(f"probe: {where} reads {_hex(values[-1])}, the EDS default is {entry.get('default')!r}: "
-                         "a value changed and stored by the device's owner, or the EDS and the firmware disagree "
-                         "(a run fails it)")
+            todos.append(f"probe: {where} reads {_hex(values[-1])} ({upload(*key, reads[-1])}), the EDS default is "
+                         f"{entry.get('default')!r}: a value changed and stored by the device's owner, or the EDS and "
+                         "the firmware disagree (a run fails it)")
     for answer, places in refused.items():
         todos.append(f"probe: reading {', '.join(places)} was refused with {answer} although the EDS gives read "
-                     "access")
-    for key in missing:
-        _remove(objects, key)
-    if missing:
-        names = ", ".join(f"{i:04X}h" + (f" sub {s}" if s else "") for i, s in missing)
-        todos.append(f"probe: the device has no {names}; removed from the draft (if the device should have them, "
-                     "that is the firmware's fault)")
+                     f"access (upload -> {answer})")
+    record_no_data(objects, findings, empty, todos)
+    _missing(objects, findings, missing, todos)
 
 
 def _identity(draft: dict[str, Any], findings: Findings, todos: list[str]) -> None:
@@ -153,19 +177,32 @@ def _capabilities(draft: dict[str, Any], findings: Findings, todos: list[str]) -
         value = getattr(findings, attribute)
         if value is not None:
             caps[attribute] = value
-    types = findings.tpdo_types
-    if types is not None:
-        caps["tpdo_transmission_types"] = types.accepted
-        refused = "; ".join(f"{_span(values)} ({'no answer' if code == 0 else f'{code:08X}h'})"
-                            for code, values in types.refused.items())
-        todos.append(f"probe: {types.communication_index:04X}h sub 2 accepted {len(types.accepted)} transmission "
-                     f"types; refused: {refused or 'none'}; the manual decides whether refusing is documented "
-                     "(tpdo_transmission_types_refusal)")
-    for situation, (cia_code, answer) in findings.aborts.items():
+    if findings.tpdo_types is not None:
+        _tpdo_types(caps, findings.tpdo_types, todos)
+    for situation, (cia_code, answer, frames) in findings.aborts.items():
         if answer.abort != cia_code:
-            todos.append(f"probe: {situation.replace('_', ' ')}: the device answered {answer.describe()}, CiA 301 "
-                         f"names {cia_code:08X}h (the SDO suites judge it; declare an abort_code quirk only where the "
-                         "manual documents it)")
+            todos.append(f"probe: {situation.replace('_', ' ')}: the device answered {answer.describe()} ({frames}), "
+                         f"CiA 301 names {cia_code:08X}h (the SDO suites judge it; declare an abort_code quirk only "
+                         "where the manual documents it)")
+
+
+def _tpdo_types(caps: dict[str, Any], types: TpdoTypes, todos: list[str]) -> None:
+    """The types the device took, except those CiA reserves: a reserved type taken is a finding, never a capability
+    (the profile keeps CiA's list, so the value-domain test fails the device on it)."""
+    reserved = [t for t in types.accepted if t in RESERVED_TRANSMISSION_TYPES]
+    caps["tpdo_transmission_types"] = [t for t in types.accepted if t not in RESERVED_TRANSMISSION_TYPES]
+    refused = "; ".join(f"{_span(values)} ({'no answer' if code == 0 else f'{code:08X}h'}: "
+                        f"{types.frames.get(values[0])})" for code, values in types.refused.items())
+    todos.append(f"probe: {types.communication_index:04X}h sub 2 accepted {len(types.accepted)} transmission types "
+                 f"(e.g. {types.frames.get(types.accepted[0]) if types.accepted else 'none'}); refused: "
+                 f"{refused or 'none'}; the manual decides whether refusing is documented "
+                 "(tpdo_transmission_types_refusal)")
+    if reserved:
+        shown = "; ".join(types.frames[t] for t in reserved[:3]) + ("; ..." if len(reserved) > 3 else "")
+        todos.append(f"probe: DEVIATION: {types.communication_index:04X}h sub 2 accepted the transmission types "
+                     f"CiA reserves: {_span(reserved)} ({shown}; {RESERVED_TYPES_CLAUSE}); not taken as a "
+                     "capability: capabilities.tpdo_transmission_types keeps CiA's list, and a run fails the device "
+                     "on them (test_value_domain)")
 
 
 def apply_findings(draft: dict[str, Any], todos: list[str], findings: Findings, node_id: int) -> list[str]:

@@ -24,7 +24,7 @@ def draft_entries(objects: dict[int, dict[str, Any]]) -> Iterator[tuple[Key, dic
 
 
 def readable(entry: dict[str, Any]) -> bool:
-    return entry.get("access") != "wo"
+    return entry.get("access") != "wo" and not entry.get("no_data")
 
 
 def read_all(link: ProbeLink, objects: dict[int, dict[str, Any]], findings: Findings) -> None:

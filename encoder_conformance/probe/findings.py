@@ -16,6 +16,7 @@ class TpdoTypes:
     communication_index: int
     accepted: list[int]
     refused: dict[int, list[int]]  # abort code (0: no answer) -> the types refused with it
+    frames: dict[int, str] = field(default_factory=dict)  # type -> 'download 1800h.02 F1 -> accepted'
 
 
 @dataclass
@@ -25,7 +26,8 @@ class Findings:
     boot_up_ms: float | None = None
     nmt_state_found: int | None = None  # from a heartbeat before the probe changed anything
     tpdo_types: TpdoTypes | None = None
-    aborts: dict[str, tuple[int, Answer]] = field(default_factory=dict)  # situation -> (CiA code, answer)
+    #: situation -> (CiA code, answer, the frames: request -> answer)
+    aborts: dict[str, tuple[int, Answer, str]] = field(default_factory=dict)
     lss: list[str] | None = None  # the services answered (None: LSS not probed)
     block_sdo: bool | None = None
     segmented_sdo: bool | None = None

@@ -41,6 +41,16 @@ class Answer:
         return "no answer" if self.data is None else self.data.hex(" ").upper() or "accepted"
 
 
+def upload(index: int, sub: int, answer: Answer) -> str:
+    """The frames a finding rests on, e.g. 'upload 6501h.03 -> abort 08000024h'."""
+    return f"upload {index:04X}h.{sub:02X} -> {answer.describe()}"
+
+
+def download(index: int, sub: int, data: bytes, answer: Answer) -> str:
+    """'download 1800h.02 F1 -> accepted': the request's data and the answer."""
+    return f"download {index:04X}h.{sub:02X} {data.hex(' ').upper()} -> {answer.describe()}"
+
+
 class ProbeLink:
     """A canopen network with one node (no object dictionary: the probe reads raw bytes) and its frame log."""
 

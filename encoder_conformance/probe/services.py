@@ -6,9 +6,9 @@ from __future__ import annotations
 import struct
 from typing import Any
 
-from encoder_conformance.cia.cia301 import COB_ID_INVALID, COB_ID_SYNC_GENERATE, SdoAbortCode
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, COB_ID_SYNC_GENERATE, HEARTBEAT_BASE, SdoAbortCode
 from encoder_conformance.probe.findings import Findings, TpdoTypes
-from encoder_conformance.probe.link import Answer, ProbeLink
+from encoder_conformance.probe.link import Answer, ProbeLink, download
 from encoder_conformance.probe.put_back import PutBack
 
 GUARD_WINDOW_S = 0.2
@@ -36,17 +36,20 @@ def tpdo_transmission_types(link: ProbeLink, put_back: PutBack, objects: dict[in
     if cob_id is not None and not cob_id & COB_ID_INVALID:
         invalid = put_back.write(comm, 1, struct.pack("<I", cob_id | COB_ID_INVALID))
         if not invalid.ok:
-            findings.notes.append(f"probe: {comm:04X}h sub 1 (valid bit) could not be cleared ({invalid.describe()}); "
+            frame = download(comm, 1, struct.pack("<I", cob_id | COB_ID_INVALID), invalid)
+            findings.notes.append(f"probe: {comm:04X}h sub 1 (valid bit) could not be cleared ({frame}); "
                                   "transmission types were tried on the valid PDO")
     accepted: list[int] = []
     refused: dict[int, list[int]] = {}
+    frames: dict[int, str] = {}
     for value in range(256):
         answer = put_back.write(comm, 2, bytes([value]))
+        frames[value] = download(comm, 2, bytes([value]), answer)
         if answer.ok:
             accepted.append(value)
         else:
             refused.setdefault(answer.abort or 0, []).append(value)
-    findings.tpdo_types = TpdoTypes(comm, accepted, refused)
+    findings.tpdo_types = TpdoTypes(comm, accepted, refused, frames)
 
 
 def block_and_segmented(link: ProbeLink, put_back: PutBack, objects: dict[int, dict[str, Any]],
@@ -58,6 +61,7 @@ def block_and_segmented(link: ProbeLink, put_back: PutBack, objects: dict[int, d
         findings.block_sdo = answer.ok
         if not answer.ok and answer.abort not in (SdoAbortCode.COMMAND_SPECIFIER, None):
             findings.notes.append(f"probe: a block upload of 1018h sub 1 was answered with {answer.describe()} "
+                                  f"(block upload 1018h.01 -> {answer.describe()}) "
                                   "(CiA 301: 05040001h where block transfer is not supported); block_sdo set false")
     longest = max(((key, len(reads[0].data)) for key, reads in findings.readings.items()
                    if reads and reads[0].data is not None), key=lambda item: item[1], default=None)
@@ -75,8 +79,8 @@ def block_and_segmented(link: ProbeLink, put_back: PutBack, objects: dict[int, d
         findings.segmented_sdo = answer.ok
     else:
         findings.notes.append(f"probe: a segmented download of {key[0]:04X}h sub {key[1]} with its own value got "
-                              f"{answer.describe()} (CiA 301: 05040001h where segmented transfer is not supported); "
-                              "segmented_sdo not settled")
+                              f"{answer.describe()} (segmented {download(*key, value, answer)}; CiA 301: 05040001h "
+                              "where segmented transfer is not supported); segmented_sdo not settled")
 
 
 def _stable_writable(objects: dict[int, dict[str, Any]], key: tuple[int, int], reads: list[Answer]) -> bool:
@@ -106,7 +110,8 @@ def sync_producer(link: ProbeLink, put_back: PutBack, findings: Findings) -> Non
     findings.sync_producer = answer.ok
     if answer.silent:
         findings.sync_producer = None
-        findings.notes.append("capabilities.sync_producer: 1005h with bit 30 got no answer; not settled")
+        frame = download(0x1005, 0, struct.pack("<I", cob_id | COB_ID_SYNC_GENERATE), answer)
+        findings.notes.append(f"capabilities.sync_producer: 1005h with bit 30 got no answer ({frame}); not settled")
 
 
 def node_guarding(link: ProbeLink, objects: dict[int, dict[str, Any]], findings: Findings) -> None:
@@ -119,7 +124,8 @@ def node_guarding(link: ProbeLink, objects: dict[int, dict[str, Any]], findings:
     if link.guard(GUARD_WINDOW_S) is not None:
         findings.node_guarding = True
     elif 0x100C in objects or 0x100D in objects:  # a device may answer only once guarding is configured
-        findings.notes.append("capabilities.node_guarding: a guarding request (RTR) got no answer; the EDS has "
+        frame = f"remote frame {HEARTBEAT_BASE + link.node_id:03X}h -> none within {GUARD_WINDOW_S * 1000:.0f} ms"
+        findings.notes.append(f"capabilities.node_guarding: a guarding request got no answer ({frame}); the EDS has "
                               "100Ch/100Dh, so the draft keeps node_guarding; check the manual")
     else:
         findings.node_guarding = False
@@ -131,10 +137,17 @@ def store_restore_subindices(findings: Findings) -> None:
     for index, attribute in ((0x1010, "store_subindices"), (0x1011, "restore_subindices")):
         values = {sub: reads[0].data for (i, sub), reads in findings.readings.items()
                   if i == index and sub > 0 and reads and reads[0].data}
+        empty = [sub for (i, sub), reads in findings.readings.items()
+                 if i == index and sub > 0 and reads and reads[0].abort == SdoAbortCode.NO_DATA]
+        if not values and empty:  # sub 0 counts no command (an EDS without its default): none to give
+            setattr(findings, attribute, [])
+            continue
         if not values:
             continue
         if not any(any(data) for data in values.values()):
-            findings.notes.append(f"capabilities.{attribute}: every {index:04X}h sub-index reads 0 (CiA 301: bit 0 "
-                                  "says the device does it on command); the draft keeps the EDS's sub-indices")
+            frames = "; ".join(f"upload {index:04X}h.{sub:02X} -> {data.hex(' ').upper()}"
+                               for sub, data in sorted(values.items()))
+            findings.notes.append(f"capabilities.{attribute}: every {index:04X}h sub-index reads 0 ({frames}; CiA 301: "
+                                  "bit 0 says the device does it on command); the draft keeps the EDS's sub-indices")
             continue
         setattr(findings, attribute, sorted(sub for sub, data in values.items() if data[0] & 1))

@@ -112,6 +112,11 @@ class EntrySpec(StrictModel):
     )
     dynamic: bool = Field(default=False, description="value changes at run time (default not checked)")
     per_unit: bool = Field(default=False, description="value differs per unit, e.g. a serial number")
+    no_data: bool = Field(
+        default=False,
+        description="present without data: the device answers an upload with 08000024h (CiA 301 §7.2.4.3.17, "
+        "no data available), e.g. an ARRAY element above sub 0's count; no test reads or writes it",
+    )
     min: int | None = None
     max: int | None = None
     allowed: str | None = Field(
@@ -141,6 +146,8 @@ class EntrySpec(StrictModel):
     def _consistent(self) -> EntrySpec:
         if self.default is not None and (self.dynamic or self.per_unit):
             raise ValueError("give either a default or dynamic/per_unit: true, not both")
+        if self.default is not None and self.no_data:
+            raise ValueError("an entry with no_data: true holds no value; give no default")
         limits = datatypes.value_range(self.type)
         if (isinstance(self.default, str) and self.type not in datatypes.STRING_TYPES
                 and not is_node_id_expression(self.default)):
@@ -165,15 +172,17 @@ class EntrySpec(StrictModel):
     @property
     def checks_default(self) -> bool:
         """True when the device's value right after restore-defaults must equal ``default``."""
-        return self.default is not None and self.access != "wo"
+        return self.default is not None and self.readable
 
     @property
     def readable(self) -> bool:
-        return self.access != "wo"
+        """An upload gives a value (not a write-only entry, nor one present without data)."""
+        return self.access != "wo" and not self.no_data
 
     @property
     def writable(self) -> bool:
-        return self.access in ("wo", "rw", "rwr", "rww")
+        """A download may be tried (an entry present without data is left alone)."""
+        return self.access in ("wo", "rw", "rwr", "rww") and not self.no_data
 
 
 class ObjectSpec(StrictModel):
@@ -189,6 +198,7 @@ class ObjectSpec(StrictModel):
     default: int | str | None = None
     dynamic: bool = False
     per_unit: bool = False
+    no_data: bool = False
     min: int | None = None
     max: int | None = None
     allowed: str | None = None
@@ -232,6 +242,7 @@ class ObjectSpec(StrictModel):
             "default": self.default,
             "dynamic": self.dynamic,
             "per_unit": self.per_unit,
+            "no_data": self.no_data,
             "min": self.min,
             "max": self.max,
             "allowed": self.allowed,

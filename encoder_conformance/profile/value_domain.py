@@ -8,12 +8,15 @@ value outside it; ``probe_values`` are the values just outside each boundary tha
 from __future__ import annotations
 
 from encoder_conformance.basis import Basis
+from encoder_conformance.cia.cia301 import RESERVED_TRANSMISSION_TYPES
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.value_set import ValueSet
 
 TPDO_COMMUNICATION = range(0x1800, 0x1A00)
 TRANSMISSION_TYPE_SUB = 2
+#: what says a reserved transmission type is refused, whatever the profile lists
+RESERVED_TYPES_CLAUSE = "CiA 301 §7.5.2.37 table 72 (18xxh sub 2: transmission types 241..251 are reserved)"
 
 
 def declared_domain(profile: DeviceProfile, index: int, sub: int) -> ValueSet | None:
@@ -51,7 +54,8 @@ def refusal_basis(profile: DeviceProfile, index: int, sub: int, value: int) -> t
 
     The entry's own min/max/allowed rest on its ``domain_basis``; a transmission type refused only
     because capabilities.tpdo_transmission_types leaves it out rests on
-    ``tpdo_transmission_types_refusal``. Where both exclude the value, the stronger basis counts.
+    ``tpdo_transmission_types_refusal``, a reserved one (241..251) on CiA 301. Where both exclude the value,
+    the stronger basis counts.
     """
     entry = profile.entry(index, sub)
     assert entry is not None, f"{index:04X}h.{sub:02X} is not declared"
@@ -64,6 +68,8 @@ def refusal_basis(profile: DeviceProfile, index: int, sub: int, value: int) -> t
         own &= entry.value_set
     if value not in own and entry.domain_basis != "inferred":
         return entry.domain_basis, where
+    if index in TPDO_COMMUNICATION and sub == TRANSMISSION_TYPE_SUB and value in RESERVED_TRANSMISSION_TYPES:
+        return "cia", RESERVED_TYPES_CLAUSE
     if index in TPDO_COMMUNICATION and sub == TRANSMISSION_TYPE_SUB:
         basis = profile.capabilities.tpdo_transmission_types_refusal
         if basis != "inferred" or value in own:

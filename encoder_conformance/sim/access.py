@@ -10,7 +10,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from encoder_conformance.cia.cia301 import ABORT_FOR_SITUATION, ERROR_HISTORY, RPDO_MAPPING, TPDO_MAPPING
+from encoder_conformance.cia.cia301 import (
+    ABORT_FOR_SITUATION,
+    ERROR_HISTORY,
+    RESERVED_TRANSMISSION_TYPES,
+    RPDO_MAPPING,
+    TPDO_COMMUNICATION,
+    TPDO_MAPPING,
+)
 from encoder_conformance.cia.cia301 import SdoAbortCode as Abort
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
@@ -72,6 +79,8 @@ class ObjectAccess:
     def sdo_read(self, index: int, sub: int) -> bytes:
         key = self._locate(index, sub)
         entry = self._store.entries[key]
+        if entry.no_data:  # present without data (the profile says so): CiA 301 table 22
+            raise SdoAbort(Abort.NO_DATA)
         if entry.access == "wo":
             return self.read_write_only(entry.type)
         return self.encoded(key)
@@ -83,6 +92,8 @@ class ObjectAccess:
     def sdo_write(self, index: int, sub: int, data: bytes) -> None:
         key = self._locate(index, sub)
         entry = self._store.entries[key]
+        if entry.no_data:
+            raise SdoAbort(Abort.NO_DATA)
         if entry.access in ("ro", "const"):
             self.write_read_only()
             return
@@ -225,6 +236,40 @@ class EmptyHistoryNoData(ObjectAccess):
         if recorded and sub > int(self._store.get((ERROR_HISTORY, 0))):
             raise SdoAbort(Abort.NO_DATA)
         return super().sdo_read(index, sub)
+
+
+@breaks(ObjectAccess, "reserved_transmission_types_accepted")
+class ReservedTransmissionTypesAccepted(ObjectAccess):
+    """18xxh sub 2 takes the transmission types CiA 301 reserves (241..251); the TPDO then never sends."""
+
+    def check_domain(self, key: Key, value: int) -> None:
+        if key[0] in TPDO_COMMUNICATION and key[1] == 2 and value in RESERVED_TRANSMISSION_TYPES:
+            return
+        super().check_domain(key, value)
+
+
+@breaks(ObjectAccess, "empty_arrays")
+class EmptyArrays(ObjectAccess):
+    """A variant, not a fault: an ARRAY from 2000h on with a read-only sub 0 holds as many elements as sub 0 counts;
+    an upload or download of an element above the count answers 08000024h (no data available), as a stack does
+    that loaded an EDS without a sub 0 DefaultValue (CiA 306): sub 0 is then 0 and no element holds data."""
+
+    def _empty(self, index: int, sub: int) -> bool:
+        obj = self._profile.objects.get(index)
+        if index < 0x2000 or sub == 0 or obj is None or obj.object_kind != "array" or not self._store.has((index, sub)):
+            return False
+        count = obj.entry_table.get(0)
+        return count is not None and count.access in ("ro", "const") and sub > int(self._store.get((index, 0)))
+
+    def sdo_read(self, index: int, sub: int) -> bytes:
+        if self._empty(index, sub):
+            raise SdoAbort(Abort.NO_DATA)
+        return super().sdo_read(index, sub)
+
+    def sdo_write(self, index: int, sub: int, data: bytes) -> None:
+        if self._empty(index, sub):
+            raise SdoAbort(Abort.NO_DATA)
+        super().sdo_write(index, sub, data)
 
 
 @breaks(ObjectAccess, "write_rw_ignored")

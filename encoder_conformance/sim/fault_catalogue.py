@@ -49,6 +49,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "ignore_unknown_command": "SDO requests with a reserved or block command specifier get no answer",
             "abort_without_multiplexer": "SDO abort frames carry index 0000h sub 00 instead of the request's",
             "value_domain_ignored": "writes outside an entry's declared min/max/allowed values are accepted",
+            "reserved_transmission_types_accepted": "18xxh sub 2 accepts the transmission types CiA 301 reserves "
+                                                    "(241..251)",
         },
     ),
     (  # SDO protocol, byte-exact: expedited sizes, segmented and block transfer (CiA 301 §7.2.4.3)
@@ -340,8 +342,14 @@ ABORT_FAMILY_VARIANTS: dict[str, str] = {
     "write_ro_unsupported_access": "writes to ro/const objects abort with 06010000h (unsupported access), the "
                                    "family of CiA 301's 06010002h: fails with --abort-codes exact, passes with family",
 }
-#: conformant variants: each open reading's (encoder_conformance.readings) and the abort-family ones
-VARIANTS: dict[str, str] = {**variants(), **ABORT_FAMILY_VARIANTS}
+#: conformant variants a shipped profile cannot judge: the device of a vendor EDS the profile must be probed from
+#: (``profile from-eds --probe``); tests/test_probe_no_data.py runs each with its probed profile
+PROBED_VARIANTS: dict[str, str] = {
+    "empty_arrays": "an ARRAY from 2000h on with a read-only sub 0 holds as many elements as sub 0 counts: an element "
+                    "above it aborts 08000024h (all of them where the EDS gave sub 0 no DefaultValue, CiA 306)",
+}
+#: conformant variants: each open reading's (encoder_conformance.readings), the abort-family and the probed ones
+VARIANTS: dict[str, str] = {**variants(), **ABORT_FAMILY_VARIANTS, **PROBED_VARIANTS}
 #: every name the simulator's --fault takes
 SIMULATOR_DEVIATIONS: dict[str, str] = {**FAULTS, **VARIANTS, **{n: h.text for n, h in HOLD_FAULTS.items()}}
 #: fault -> the suite modules (file stems under suites/) it is made for

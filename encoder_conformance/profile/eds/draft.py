@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from encoder_conformance.cia.cia301 import PDO_MAPPING_OFFSET
+from encoder_conformance.profile.eds.consistency import eds_warnings
 from encoder_conformance.profile.eds.importer import EdsImport, read_eds
 from encoder_conformance.profile.eds.numbers import _DYNAMIC_OBJECTS, _LSS_ASSUMED, _TIMING_PLACEHOLDERS, parse_number
 from encoder_conformance.profile.eds.storage import apply_storage_locations
@@ -321,7 +322,7 @@ def _draft_persistence(objects: dict[int, dict[str, Any]], locations: dict[str, 
 def profile_draft_from_eds(path: Path, profile_id: str | None = None) -> tuple[dict[str, Any], list[str]]:
     """A complete profile draft from an EDS plus TODO notes for what the EDS does not say."""
     result = read_eds(Path(path))
-    todos: list[str] = []
+    todos: list[str] = eds_warnings(result.cleaned)
     objects = result.objects
     _mark_run_time_values(objects, todos)
     _draft_persistence(objects, result.cleaned.storage_locations, todos)

@@ -32,6 +32,10 @@ class CleanedEds:
     fixes: list[str] = field(default_factory=list)
     #: section -> the ``;StorageLocation=`` comment of EDS generators (CANopenEditor: RAM, PERSIST_COMM, ...)
     storage_locations: dict[str, str] = field(default_factory=dict)
+    #: section -> the line of the vendor file its header is on (for warnings that name the line)
+    lines: dict[str, int] = field(default_factory=dict)
+    #: (section, key) -> the line of the vendor file the key is on
+    key_lines: dict[tuple[str, str], int] = field(default_factory=dict)
 
 
 def _decode(data: bytes, fixes: list[str]) -> str:
@@ -94,6 +98,8 @@ class _IniReader:
         self.inline_comments = 0
         self.current: str | None = None
         self.storage_locations: dict[str, str] = {}
+        self.lines: dict[str, int] = {}
+        self.key_lines: dict[tuple[str, str], int] = {}
 
     def read(self, text: str) -> Sections:
         for number, raw in enumerate(text.splitlines(), start=1):
@@ -104,8 +110,11 @@ class _IniReader:
             header = _SECTION_HEADER.match(line)
             if header:
                 self._section(header.group(1).strip())
+                assert self.current is not None
+                self.lines.setdefault(self.current, number)
             elif "=" in line and self.current is not None and line.partition("=")[0].strip():
                 key, _, value = line.partition("=")
+                self.key_lines[self.current, _canonical_key(key.strip())] = number
                 self._option(key.strip(), value)
             else:
                 self.fixes.append(f"line {number}: ignored {line[:40]!r} (not a section or key=value)")

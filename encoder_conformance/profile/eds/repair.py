@@ -266,6 +266,7 @@ def clean_eds(data: bytes) -> CleanedEds:
     _fix_numbers(sections, "DeviceComissioning", _COMMISSIONING_NUMBERS, fixes)
     _fix_objects(sections, origins, fixes)
     _check_object_lists(sections, fixes)
-    return CleanedEds(_render(sections), sections, origins, fixes, reader.storage_locations)
+    return CleanedEds(_render(sections), sections, origins, fixes, reader.storage_locations, reader.lines,
+                      reader.key_lines)
 
 
