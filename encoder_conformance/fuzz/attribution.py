@@ -85,10 +85,12 @@ def attribute(requests: Sequence[Request], events: Sequence[Event],
 def _give_back_to_unanswered(exchanges: list[Exchange]) -> None:
     """Two replies that fit one request, and an earlier short frame or abort request without one: the first
     reply was the answer to that frame (the device answers in order, and a frame cut short can look like the
-    next request)."""
+    next request). A short frame (which may draw an answer) takes it before a client's abort (which may not): the
+    abort to a short frame that came after the closing abort went out is the short frame's, not the abort's."""
     for i, exchange in enumerate(exchanges):
         if len(exchange.replies) < 2:
             continue
-        earlier = next((e for e in reversed(exchanges[:i]) if not e.replies and _loose(e.request.frame)), None)
+        waiting = [e for e in reversed(exchanges[:i]) if not e.replies and _loose(e.request.frame)]
+        earlier = next((e for e in waiting if len(e.request.frame) < 8), waiting[0] if waiting else None)
         if earlier is not None:
             earlier.replies.append(exchange.replies.pop(0))

@@ -76,20 +76,18 @@ def _hex(data: bytes) -> str:
 
 
 def carries_request(frame: bytes) -> bool:
-    """A frame under 8 bytes whose bytes still hold every field its request needs (CiA 301 §7.2.4.3.3-§7.2.4.3.7):
-    an upload initiate or a download initiate without size its multiplexer, an expedited download with size its n
-    data bytes, a segmented download initiate with size the size, a download segment its data, an upload segment
-    its command byte, a reserved command specifier its command byte. A client's abort needs its code."""
+    """A frame under 8 bytes whose bytes still hold what its request needs (CiA 301 §7.2.4.3.3-§7.2.4.3.7): an
+    initiate its multiplexer (a download's missing data or size bytes read as 0, or bounded by the frame's length:
+    a stack seen took a 6-byte initiate download as one), a download segment the data its n announces, an upload
+    segment or a reserved command specifier its command byte, a client's abort its code."""
     if not frame:
         return False
-    ccs, command = frame[0] >> 5, frame[0]
+    ccs = frame[0] >> 5
     needed: dict[int, int] = {
         SdoClientCommand.INITIATE_UPLOAD: 4,
-        SdoClientCommand.UPLOAD_SEGMENT: 1,
-        SdoClientCommand.DOWNLOAD_SEGMENT: 8 - (command >> 1 & 0x07),
+        SdoClientCommand.INITIATE_DOWNLOAD: 4,
+        SdoClientCommand.DOWNLOAD_SEGMENT: 8 - (frame[0] >> 1 & 0x07),
         SdoClientCommand.ABORT: 8,
-        SdoClientCommand.INITIATE_DOWNLOAD: ((8 - (command >> 2 & 0x03) if command & 0x01 else 8) if command & 0x02
-                                             else (8 if command & 0x01 else 4)),
     }
     return len(frame) >= needed.get(ccs, 1)
 
