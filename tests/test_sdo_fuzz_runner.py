@@ -137,3 +137,15 @@ def test_a_reply_stamped_before_the_next_request_answers_the_one_before():
               (False, answer)]
     exchanges, _ = attribute([fz.Request(segment), fz.Request(fence)], events, stamped=True)
     assert [e.replies for e in exchanges] == [[confirm, abort], [answer]]
+
+
+def test_stamps_of_another_clock_leave_the_pairing_to_the_log_order(rig):
+    """A reply stamped by another clock (a remote bus's adapter, seconds since its start) orders nothing: from then
+    on the log's order pairs the frames, and a short frame's answer is waited for with the tester's margin."""
+    import can
+
+    runner, _ = _runner(rig)
+    assert runner.stamped
+    sent = can.Message(timestamp=1_800_000_000.0, arbitration_id=0x600, data=UPLOAD_1000.frame, is_rx=False)
+    runner._check_clock([sent, can.Message(timestamp=12.5, arbitration_id=0x580, data=bytes(8))])
+    assert not runner.stamped

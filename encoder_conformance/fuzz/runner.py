@@ -34,6 +34,8 @@ from encoder_conformance.fuzz.strategies import Example, Request, client_abort
 from encoder_conformance.fuzz.watch import DeviceWatch
 
 FENCE = Request(sdo_frames.upload_request(0x1000, 0))
+#: how far a reply's stamp may lie outside the example (before its first request, after now) on one clock
+CLOCK_SLACK_S = 1.0
 #: the code of the closing abort: "SDO protocol timed out" (CiA 301 §7.2.4.3.17), the client gives up
 CLOSING_ABORT_CODE = SdoAbortCode.TIMEOUT
 
@@ -63,6 +65,7 @@ class FuzzRunner:
     first_emcy: Failure | None = None  # the example after which the first EMCY came (a warning, not a failure)
     last_exchanges: list[Exchange] = field(default_factory=list)  # the last example's, for checks of a test
     _before: list[can.Message] = field(default_factory=list)
+    _clocks_differ: bool = False  # a reply's stamp lay off the tester's clock (see ``stamped``)
 
     @property
     def spent(self) -> bool:
@@ -113,8 +116,18 @@ class FuzzRunner:
 
     @property
     def stamped(self) -> bool:
-        """The frames' timestamps are of the tester's clock (host or kernel), so they order requests and replies."""
-        return not self.dut.frames.clock.hardware
+        """The frames' timestamps are of the tester's clock (host or kernel), so they order requests and replies:
+        not where the adapter stamps with its own, nor once a reply's stamp lay off the tester's clock."""
+        return not self.dut.frames.clock.hardware and not self._clocks_differ
+
+    def _check_clock(self, window: list[can.Message]) -> None:
+        """A reply stamped over ``CLOCK_SLACK_S`` before the example's first request or after now: another clock
+        (a remote bus stamping with its adapter's); from then on the log's order alone pairs the frames."""
+        sent = [m.timestamp for m in window if not m.is_rx]
+        now = time.time()
+        if sent and any(not sent[0] - CLOCK_SLACK_S <= m.timestamp <= now + CLOCK_SLACK_S
+                        for m in window if m.is_rx):
+            self._clocks_differ = True
 
     def _short_frame_window(self, sent: Mark) -> None:
         """Watch for the answer a frame under 8 bytes may draw, for as long as the device has for it (see the
@@ -157,6 +170,7 @@ class FuzzRunner:
                                                                    self.watch.emcy_cob_id)
 
     def _judge(self, requests: tuple[Request, ...], window: list[can.Message]) -> list[str]:
+        self._check_clock(window)
         events = [(not m.is_rx, Stamped(bytes(m.data), m.timestamp)) for m in window if self._is_sdo(m)]
         exchanges, stray = attribute(requests, events, self.stamped)
         self.last_exchanges = exchanges
