@@ -3,9 +3,12 @@
 CiA 301 §7.2.4.3 (SDO protocol). Each example is a few request frames: initiates with any index,
 sub-index and size bits, reserved command specifiers, frames shorter than 8 bytes, segments without
 or out of order, interleaved transfers. After every example (``encoder_conformance.fuzz``): one reply
-to each request that owes one and none to a client's abort, DLC 8, the server command that answers the
-request or an abort, the multiplexer echoed (an initiate with reserved bits set may instead be refused with
-05040001h naming any: open reading sdo-initiate-reserved-bits), 1000h still readable, the heartbeat's NMT state
+to each request that owes one and none to a client's abort (each reply paired with its request by the bus order
+and the frames' stamps, a short frame's answer waited for: ``fuzz.runner``; a failure names the request and every
+reply it drew), none, one abort or the served answer to a frame under 8 bytes (open readings sdo-short-frame,
+sdo-short-frame-served), DLC 8, the server command that answers the request or an abort, the multiplexer echoed
+(an initiate with reserved bits set may instead be refused with 05040001h naming any: open reading
+sdo-initiate-reserved-bits), 1000h still readable, the heartbeat's NMT state
 unchanged (an EMCY is a warning: ``watch.EMCY_RULE``); over the whole test the heartbeat keeps coming. Downloads
 never reach the exclusion list (store, restore, node-ID, bit rate, preset, self-storing entries:
 ``fuzz.exclusions``) and write nothing: they go to entries that must refuse them, or open a segmented
@@ -177,8 +180,10 @@ def test_reserved_command_specifiers_abort(fuzz, targets, evidence, request):
 
 
 def test_short_frames_ignored_or_aborted(fuzz, targets, evidence, request):
-    """A frame shorter than 8 bytes is not answered, or answered with one abort; the device goes on serving."""
-    evidence.rests_on("cia", "CiA 301 §7.2.4.3.1 (SDO frames carry 8 data bytes)")
+    """A frame shorter than 8 bytes is not answered, answered with one abort (naming any multiplexer), or served as
+    the request its bytes carry (open readings sdo-short-frame, sdo-short-frame-served); never answered twice or
+    with another multiplexer, and the device goes on serving. Its answer is waited for before the next request."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.1 (SDO frames carry 8 data bytes; no rule for a shorter one)")
     harmless = st.one_of(fz.initiates(targets), fz.reserved_commands(targets))
     _fuzz(fuzz, st.tuples(fz.truncated(harmless)), evidence, request)
 

@@ -19,7 +19,7 @@ from encoder_conformance.dut.sdo_client import SdoProtocolClient, echoes
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name, upload_request
 from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import datatypes
-from encoder_conformance.suite_support.checks import expected_aborts, judge_refusal
+from encoder_conformance.suite_support.checks import assert_one_answer, expected_aborts, judge_refusal
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocols)")
 
@@ -259,17 +259,22 @@ def test_segmented_download_wrong_toggle_aborts(dut, sdo, settings_journal, evid
 
 @pytest.mark.requires("segmented_sdo")
 def test_segmented_download_size_mismatch_refused(dut, sdo, settings_journal, evidence):
-    """A segmented download of 3 bytes (size indicated 3) to a 16-bit entry is refused; the entry keeps its value."""
-    evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 table 22 (06070010h, 06070012h)")
+    """A segmented download of 3 bytes (size indicated 3) to a 16-bit entry is refused, by one answer (an abort, not a
+    confirmation and then an abort); the entry keeps its value."""
+    evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 table 22 (06070010h, 06070012h); §7.2.4.3.4-7 (each download "
+                             "segment confirmed once)")
     key = _target(dut)
     current = dut.read(*key)
     settings_journal.remember(*key, current)
     started = sdo.initiate_download(*key, 3)
     assert started is not None, "no response to initiate download"
-    # refused at once from the size indicated, or after the segment
+    what = f"3 bytes by segmented download to 16-bit {key[0]:04X}h.{key[1]:02X}"
+    # refused at once from the size indicated, or after the segment: by one answer (§7.2.4.3.17)
+    mark = dut.frames.mark()
     response = started if started.is_abort else sdo.download_segment(current + current[:1], toggle=0, last=True)
-    judge_refusal(dut, response, expected_aborts(dut, "length_high", evidence), CTT_TOO_LONG,
-                  f"3 bytes by segmented download to 16-bit {key[0]:04X}h.{key[1]:02X}", evidence)
+    if not started.is_abort:
+        assert_one_answer(*sdo.exchange_since(mark), what)
+    judge_refusal(dut, response, expected_aborts(dut, "length_high", evidence), CTT_TOO_LONG, what, evidence)
     _unchanged(dut, key, current, "segmented download of 3 bytes")
 
 

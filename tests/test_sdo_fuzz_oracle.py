@@ -57,11 +57,49 @@ def test_client_abort_must_not_be_answered():
     assert "abort transfer request" in _judge((CLIENT_ABORT, [CLIENT_ABORT]))[0]
 
 
-def test_short_frame_ignored_or_aborted_once():
+def test_short_frame_ignored_aborted_or_served_once():
+    """Open reading sdo-short-frame: ignored, one abort naming any multiplexer, or served where its bytes carry the
+    request (a 5-byte upload of 1000h answered as one); never answered twice, nor served without the request's
+    bytes, nor with another multiplexer."""
     assert _judge((UPLOAD_1000[:5], [])) == []
     assert _judge((UPLOAD_1000[:5], [ABORT_NO_OBJECT])) == []
-    assert "shorter than 8 bytes is answered" in _judge((UPLOAD_1000[:5], [ANSWER_1000]))[0]
+    assert _judge((UPLOAD_1000[:5], [ANSWER_1000])) == []
+    assert _judge((UPLOAD_1000[:4], [ANSWER_1000])) == []
+    assert "do not carry the request" in _judge((UPLOAD_1000[:3], [ANSWER_1000]))[0]
+    wrong_mux = _judge((UPLOAD_1000[:5], [bytes.fromhex("43 08 10 00 01 00 00 00")]))
+    assert "served as upload 1000h.00" in wrong_mux[0]
+    assert "does not echo" in wrong_mux[0]
     assert "2 replies" in _judge((b"", [ABORT_NO_OBJECT, ABORT_NO_OBJECT]))[0]
+    assert "2 replies" in _judge((UPLOAD_1000[:5], [ANSWER_1000, ANSWER_1000]))[0]
+
+
+def test_a_short_download_initiate_is_served_only_with_its_multiplexer():
+    """6 bytes of an expedited download of 2 bytes carry it (served as a refused write: the abort, never a
+    confirmation); 3 bytes lack its sub-index."""
+    write = bytes.fromhex("2B 00 10 00 01 02 00 00")
+    confirmed, refused = bytes.fromhex("60 00 10 00 00 00 00 00"), bytes.fromhex("80 00 10 00 02 00 01 06")
+    assert _judge((write[:6], [refused]), refused=True) == []
+    assert "must be refused" in _judge((write[:6], [confirmed]), refused=True)[0]
+    assert "do not carry the request" in _judge((write[:3], [confirmed]), refused=True)[0]
+
+
+def test_a_failure_names_the_request_and_both_answers():
+    """A last segment confirmed and then aborted: two answers to one request, both named, with the time between."""
+    from encoder_conformance.dut.sdo_words import Stamped
+
+    initiate = bytes.fromhex("21 00 20 00 0C 00 00 00")
+    last = bytes.fromhex("15 01 02 03 04 05 00 00")
+    confirm, abort = Stamped(bytes.fromhex("30 00 00 00 00 00 00 00"), 1.0), Stamped(
+        bytes.fromhex("80 00 20 00 10 00 07 06"), 1.000013)
+    problems = _judge((initiate, [bytes.fromhex("60 00 20 00 00 00 00 00")]),
+                      (bytes.fromhex("00 01 02 03 04 05 06 07"), [bytes.fromhex("20 00 00 00 00 00 00 00")]),
+                      (last, [confirm, abort]))
+    assert len(problems) == 1, problems
+    text = problems[0]
+    assert text.startswith("download segment, toggle 1, 5 bytes, the last (15 01"), text
+    assert "2 replies to one request: confirmed (30 00" in text
+    assert "then 0.013 ms later abort 06070010h" in text
+    assert "naming 2000h.00" in text
 
 
 def test_refused_write_confirmed():
@@ -213,3 +251,16 @@ def test_a_short_frames_answer_that_looks_like_the_next_requests_is_given_back()
     exchanges, _ = attribute(_requests(short, UPLOAD_1000),
                              [(True, short), (True, UPLOAD_1000), (False, echo), (False, ANSWER_1000)])
     assert [e.replies for e in exchanges] == [[echo], [ANSWER_1000]]
+
+
+def test_a_late_abort_to_a_short_frame_is_its_own_not_the_closing_aborts():
+    """Seen in a bench run against the twin that aborts short frames: its abort, naming 1000h.00, came 1.8 ms after
+    a 6-byte frame, after the closing abort and the read of 1000h went out; it is the short frame's (a client's abort
+    draws none), and the read keeps its own answer."""
+    short, closing = bytes.fromhex("2C 61 DF FB 60 AF"), bytes.fromhex("80 61 DF FB 00 00 04 05")
+    abort = bytes.fromhex("80 00 10 00 01 00 04 05")
+    events = [(True, short), (True, closing), (True, UPLOAD_1000), (False, abort), (False, ANSWER_1000)]
+    exchanges, stray = attribute(_requests(short, closing, UPLOAD_1000), events)
+    assert [e.replies for e in exchanges] == [[abort], [], [ANSWER_1000]]
+    assert stray == []
+    assert Judge().judge(exchanges) == []

@@ -15,10 +15,11 @@ from dataclasses import dataclass, field
 
 import can
 
-from encoder_conformance.cia.cia301 import SDO_ABORT, SDO_RESPONSE_BASE, SdoAbortCode, block_crc
+from encoder_conformance.cia.cia301 import SDO_ABORT, SDO_REQUEST_BASE, SDO_RESPONSE_BASE, SdoAbortCode, block_crc
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark
 from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name, expedited_download_request, upload_request
+from encoder_conformance.dut.sdo_words import Stamped
 
 SEGMENT_BYTES = 7
 MAX_BLKSIZE = 127
@@ -92,6 +93,14 @@ class SdoProtocolClient:
     def silent_after(self, mark: Mark) -> list[bytes]:
         """The SDO responses within the SDO silence window after ``mark`` (none are due)."""
         return [bytes(m.data) for m in self.dut.frames.quiet_period(self.is_response, self.dut.sdo_silence_s, mark)]
+
+    def exchange_since(self, mark: Mark) -> tuple[bytes, list[Stamped]]:
+        """The first request sent after ``mark`` and every response to come within what the device owes plus the
+        tester's margin (``sdo_silence_s``, watched from now): a second answer to one request shows here."""
+        answers = self.dut.frames.quiet_period(self.is_response, self.dut.sdo_silence_s, mark)
+        sent = self.dut.frames.since(mark, lambda m: not m.is_rx and m.arbitration_id == SDO_REQUEST_BASE
+                                     + self.dut.node_id)
+        return (bytes(sent[0].data) if sent else b""), [Stamped(bytes(m.data), m.timestamp) for m in answers]
 
     def is_response(self, msg: can.Message) -> bool:
         return msg.is_rx and msg.arbitration_id == SDO_RESPONSE_BASE + self.dut.node_id and not msg.is_remote_frame

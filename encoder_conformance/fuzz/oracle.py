@@ -1,11 +1,12 @@
 """What a device's SDO answers to a fuzz example must look like (CiA 301 §7.2.4.3): a pure judge, no I/O.
 
 Per request: a DLC-8 request other than an abort (ccs 4) gets exactly one reply; a client's abort gets
-none; a frame shorter than 8 bytes gets none or one abort. Every reply has DLC 8 and the server command
-specifier that answers the request, or is an abort (command byte 80h). Initiate requests (ccs 1, 2) are
-answered, also when aborted, with their multiplexer; one with bits set that CiA 301 says are always 0 may
-instead be refused as an invalid command, abort 05040001h with any multiplexer (open reading
-sdo-initiate-reserved-bits: ``sdo_frames.refused_as_invalid``). An abort during a segmented transfer carries the
+none; a frame shorter than 8 bytes gets none, one abort (any multiplexer), or the answer to the request its bytes
+carry (open readings sdo-short-frame, sdo-short-frame-served: ``carries_request``, judged as that request). Every
+reply has DLC 8 and the server command specifier that answers the request, or is an abort (command byte 80h).
+Initiate requests (ccs 1, 2) are answered, also when aborted, with their multiplexer; one with bits set that
+CiA 301 says are always 0 may instead be refused as an invalid command, abort 05040001h with any multiplexer (open
+reading sdo-initiate-reserved-bits: ``sdo_frames.refused_as_invalid``). An abort during a segmented transfer carries the
 transfer's multiplexer. Segments outside a transfer, of the other direction or with the toggle bit not
 alternated are aborted; a segment response echoes the toggle bit.
 
@@ -23,6 +24,7 @@ from dataclasses import dataclass, field
 from itertools import pairwise
 
 from encoder_conformance.cia.cia301 import SDO_ABORT, SdoClientCommand
+from encoder_conformance.dut import sdo_words
 from encoder_conformance.dut.sdo_frames import ABORT_SCS, ANSWER_SCS, answers, refused_as_invalid, reserved_bits_set
 from encoder_conformance.fuzz.strategies import Request
 
@@ -73,6 +75,23 @@ def _hex(data: bytes) -> str:
     return data.hex(" ").upper() or "(no data)"
 
 
+def carries_request(frame: bytes) -> bool:
+    """A frame under 8 bytes whose bytes still hold what its request needs (CiA 301 §7.2.4.3.3-§7.2.4.3.7): an
+    initiate its multiplexer (a download's missing data or size bytes read as 0, or bounded by the frame's length:
+    a stack seen took a 6-byte initiate download as one), a download segment the data its n announces, an upload
+    segment or a reserved command specifier its command byte, a client's abort its code."""
+    if not frame:
+        return False
+    ccs = frame[0] >> 5
+    needed: dict[int, int] = {
+        SdoClientCommand.INITIATE_UPLOAD: 4,
+        SdoClientCommand.INITIATE_DOWNLOAD: 4,
+        SdoClientCommand.DOWNLOAD_SEGMENT: 8 - (frame[0] >> 1 & 0x07),
+        SdoClientCommand.ABORT: 8,
+    }
+    return len(frame) >= needed.get(ccs, 1)
+
+
 def _spare_reply_at(exchanges: list[Exchange]) -> int | None:
     """The first exchange holding a reply too many (two, or one its request does not owe), where every one before
     it holds exactly the one it owes; else None."""
@@ -108,7 +127,7 @@ class Judge:
             rest = exchanges[n + 1 :]
             if len(exchange.replies) == 1 and rest:
                 self._pull_back_late_answer(exchange, rest)
-            problems += [f"request {_hex(exchange.request.frame)}: {p}" for p in self._one(exchange, rest)]
+            problems += [f"{sdo_words.request(exchange.request.frame)}: {p}" for p in self._one(exchange, rest)]
         return problems
 
     def _pull_back_late_answer(self, exchange: Exchange, rest: list[Exchange]) -> None:
@@ -146,12 +165,12 @@ class Judge:
             replies = replies[1:]
             if not replies:
                 return []  # taken as a wrong frame of the open transfer: the request itself is not answered
+        if len(frame) < 8:
+            return self._short(exchange.request, replies)
         if _ccs(frame) == 4:
             self.transfer = None
             return [f"{len(replies)} repl{'y' if len(replies) == 1 else 'ies'} to an abort transfer request, which "
-                    f"CiA 301 leaves unconfirmed: {', '.join(map(_hex, replies))}"] if replies else []
-        if len(frame) < 8:
-            return self._short(replies)
+                    f"CiA 301 leaves unconfirmed: {sdo_words.replies(replies)}"] if replies else []
         if not replies:
             return ["no reply (CiA 301: every SDO request but an abort is confirmed)"]
         judged = self._reply(exchange.request, replies[0])
@@ -170,20 +189,28 @@ class Judge:
                     later.replies.insert(0, carry)
                     if len(later.replies) > 1:
                         carry = later.replies.pop()
-        problems = [f"{len(replies)} replies to one request: {', '.join(map(_hex, replies))}"][: len(replies) - 1]
+        problems = [f"{len(replies)} replies to one request: {sdo_words.replies(replies)} (CiA 301: one confirmation "
+                    "or one abort per request)"][: len(replies) - 1]
         return problems + judged
 
-    def _short(self, replies: list[bytes]) -> list[str]:
+    def _short(self, request: Request, replies: list[bytes]) -> list[str]:
+        """Ignored, one abort (any multiplexer), or served as the request its bytes carry (see the docstring)."""
+        frame = request.frame
         if not replies:
             return []
         if len(replies) > 1:
-            return [f"{len(replies)} replies to a frame shorter than 8 bytes: {', '.join(map(_hex, replies))}"]
+            return [f"{len(replies)} replies to a frame shorter than 8 bytes: {sdo_words.replies(replies)} (ignored, "
+                    "one abort or one answer: open readings sdo-short-frame, sdo-short-frame-served)"]
         reply = replies[0]
-        if len(reply) != 8 or reply[0] != ABORT:
-            return [f"a frame shorter than 8 bytes is answered with {_hex(reply)}: CiA 301 SDO frames have 8 data "
-                    "bytes; a shorter one is ignored or aborted"]
-        self.transfer = None
-        return []
+        if len(reply) == 8 and reply[0] == ABORT:
+            self.transfer = None
+            return []
+        if not carries_request(frame):
+            return [f"a frame shorter than 8 bytes is answered with {_hex(reply)}, though its bytes do not carry "
+                    "the request (CiA 301 §7.2.4.3.1: SDO frames have 8 data bytes; a shorter one is ignored, aborted "
+                    "or served as the request it carries: open readings sdo-short-frame, sdo-short-frame-served)"]
+        served = Request(frame.ljust(8, b"\x00"), request.refused)
+        return [f"served as {sdo_words.request(served.frame)}: {p}" for p in self._reply(served, reply)]
 
     def _reply(self, request: Request, reply: bytes) -> list[str]:
         frame = request.frame

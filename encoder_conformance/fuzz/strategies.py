@@ -145,8 +145,8 @@ def reserved_commands(targets: Targets) -> st.SearchStrategy[Request]:
 
 
 def truncated(requests: st.SearchStrategy[Request]) -> st.SearchStrategy[Request]:
-    """A harmless request cut to 0..7 bytes."""
-    return st.builds(lambda r, length: Request(r.frame[:length]), requests, st.integers(0, 7))
+    """A harmless request cut to 0..7 bytes (a write that must be refused stays one where its bytes are served)."""
+    return st.builds(lambda r, length: Request(r.frame[:length], r.refused), requests, st.integers(0, 7))
 
 
 def client_abort(mux: Mux, code: int) -> Request:

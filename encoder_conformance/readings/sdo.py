@@ -17,6 +17,14 @@ ABORT_ANY_TIME = ('CiA 301 v4.2.0 §7.2.4.2 (SDO services), abort SDO transfer: 
                   'multiplexer of the transfer it ends. The protocols of §7.2.4.3 give no rule for an initiate '
                   'request that arrives while a segmented transfer of the same SDO is open')
 
+SHORT_FRAMES = ('CiA 301 v4.2.0 §7.2.4.3.1 (SDO protocols, general): every SDO request and response is drawn with '
+                'a data field of 8 bytes (byte 0 the command specifier, bytes 1-3 the multiplexer, bytes 4-7 data or '
+                'reserved), and the protocols of §7.2.4.3 give no rule for a frame with a shorter data field: no abort '
+                'code of table 22 names it (05040001h "Client/server command specifier not valid or unknown" is the '
+                'nearest), and ISO 11898-1 lets a data frame carry 0-8 bytes. What no reading allows: two answers to '
+                'one frame, an answer naming another multiplexer than the request it serves, a server that stops '
+                'serving')
+
 READINGS: list[OpenReading] = [
     OpenReading(
         point="error-history-empty-entry",
@@ -84,6 +92,34 @@ READINGS: list[OpenReading] = [
         variant="initiate_reserved_bits_refused",
         variant_text="an initiate request with a reserved bit set (upload 41h-5Fh, download bit 4) is refused: abort "
                      "05040001h naming the previous initiate's multiplexer, as CANopenNode does",
+        modules=("test_sdo_fuzz",),
+    ),
+    OpenReading(
+        point="sdo-short-frame",
+        question="An SDO request frame has fewer than 8 data bytes: may the server refuse it with an abort rather than "
+                 "ignore it, and which multiplexer does that abort name?",
+        source=SHORT_FRAMES,
+        readings=("the frame is ignored: no answer, the next request served",
+                  "the frame is refused: one abort (any code, naming any multiplexer, e.g. the last request's), the "
+                  "next request served"),
+        variant="short_frame_aborted",
+        variant_text="an SDO frame under 8 bytes is refused: abort 05040001h naming the multiplexer of the last "
+                     "initiate served (0000h.00 before the first)",
+        modules=("test_sdo_fuzz",),
+    ),
+    OpenReading(
+        point="sdo-short-frame-served",
+        question="An SDO request frame has fewer than 8 data bytes but every field its request needs (index and "
+                 "sub-index of an upload, the data an expedited download's n announces): may the server serve it?",
+        source=SHORT_FRAMES,
+        readings=("the frame is ignored or aborted (open point sdo-short-frame)",
+                  "the frame is served as the request its bytes carry, missing bytes read as 0 (python-canopen 2.4's "
+                  "LocalNode answers a 4-byte upload request and ignores shorter ones; a widely used C++ CANopen "
+                  "library takes a 6-byte initiate download and answers a 5-byte upload request)"),
+        variant="short_frame_served",
+        variant_text="an SDO frame under 8 bytes that carries its request (an upload's index and sub-index, an "
+                     "expedited download's announced data) is served as that request padded with zeros; others are "
+                     "ignored",
         modules=("test_sdo_fuzz",),
     ),
     OpenReading(

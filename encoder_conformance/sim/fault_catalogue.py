@@ -75,6 +75,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "block_upload_truncated": "the end of a block upload says one more unused byte: the data comes one short",
             "block_end_size_ignored": "the n of end block download is ignored: the padding is taken as data",
             "block_size_unchecked": "a block upload with block size 0 or over 127 is served",
+            "last_segment_confirmed_then_aborted": "a segmented download's last segment is confirmed before the write "
+                                                   "is checked: a refused one draws the confirmation, then the abort",
         },
     ),
     (  # SDO fuzzing: what only odd request sequences show

@@ -24,7 +24,7 @@ from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.datatypes import as_signed
 from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.od_builder import initial_value
-from encoder_conformance.sim import sdo_fuzz_faults, tpdo_sync_cycle  # noqa: F401  (register the SDO fuzzing faults, a TPDO variant)
+from encoder_conformance.sim import sdo_fuzz_faults, sdo_short_frames, tpdo_sync_cycle  # noqa: F401  (register the SDO fuzzing faults, the short-frame variants, a TPDO variant)
 from encoder_conformance.sim.access import ObjectAccess, situation_codes
 from encoder_conformance.sim.autostart import Autostart
 from encoder_conformance.sim.cam_gate import CamLowLimitGate

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from encoder_conformance.cia.cia301 import ABORT_FOR_SITUATION
 from encoder_conformance.coverage import Hold
+from encoder_conformance.dut import sdo_words
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import HostLatency
@@ -79,6 +80,15 @@ def judge_refusal(dut: DeviceUnderTest, response: SdoResponse | None, expected: 
     evidence.inferred_problem(f"{what}: abort {abort_name(code)}, expected {wanted}",
                               "the abort code: CiA 301 table 22 names the code; the conformance test tool accepts "
                               + (", ".join(abort_name(c) for c in sorted(tolerated)) or "no other"))
+
+
+def assert_one_answer(request: bytes, answers: list[bytes], what: str) -> None:
+    """CiA 301 §7.2.4.3: a request draws one confirmation or one abort; more fail, naming the request and each
+    answer in order with the time between them (a confirmation and then an abort are two answers)."""
+    if len(answers) > 1:
+        raise AssertionError(f"{what}: {sdo_words.request(request)}: {len(answers)} answers to one request: "
+                             f"{sdo_words.replies(answers)} (CiA 301 §7.2.4.3: one confirmation or one abort per "
+                             "request)")
 
 
 def check_periodic(timestamps: list[float], period_ms: float, tolerance: HeartbeatTolerance, what: str,
