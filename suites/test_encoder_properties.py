@@ -171,7 +171,7 @@ def test_position_and_cams_follow_the_reference_model(encoder, evidence, pytestc
     strategy = _steps(rotation, description.scaling and writable_operating, description.cams_per_channel)
     if not writable_operating:
         strategy = strategy.map(lambda steps: [s for s in steps if s.kind != "ccw"] or [Step("preset", 500)])
-    budget = pytestconfig.getoption("--budget")
+    budget = pytestconfig.getoption("--ec-budget")
     deadline = time.monotonic() + budget
     examples = 0
 

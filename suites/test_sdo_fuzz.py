@@ -80,7 +80,7 @@ def fuzz(dut, settings_journal, evidence, request) -> FuzzRunner:
     assert problem is None, problem
     if not watch.period_s:
         evidence.note("no heartbeat producer: the NMT state is watched through boot-up messages only")
-    runner = FuzzRunner(dut, watch, request.config.getoption("--fuzz-budget"))
+    runner = FuzzRunner(dut, watch, request.config.getoption("--ec-fuzz-budget"))
     return runner
 
 

@@ -20,7 +20,7 @@ PARALLEL_RUNS = 4
 
 def run_suite(tmp_path: Path, *args: str) -> tuple[SessionResult, float]:
     """One pytest session of suites/ in its own process (forked from the pre-loaded server, suite_runner)."""
-    command = [str(REPO / "suites"), "-q", "-p", "no:cacheprovider", "--tb=line", "--report-dir",
+    command = [str(REPO / "suites"), "-q", "-p", "no:cacheprovider", "--tb=line", "--ec-report-dir",
                str(tmp_path / "report"), *args]
     start = time.monotonic()
     completed = run_pytest(command, REPO, tmp_path / "pytest-output.txt", timeout=600)

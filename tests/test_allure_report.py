@@ -173,8 +173,8 @@ def rendered(tmp_path_factory):
                     "it runs on Java)")
     folder = tmp_path_factory.mktemp("allure")
     start = time.monotonic()
-    completed, _ = run_suite(folder, "--device-profile", "waycon-sx", "-k", SELECTION, "--sim-fault", FAULT,
-                             "--allure", "--history", "off")
+    completed, _ = run_suite(folder, "--ec-profile", "waycon-sx", "-k", SELECTION, "--ec-sim-fault", FAULT,
+                             "--ec-allure", "--ec-history", "off")
     ran = time.monotonic()
     results = folder / "report" / "allure-results"
     assert results.is_dir(), completed.output[-3000:]

@@ -87,8 +87,8 @@ def twin_runs(tmp_path_factory):
         folder = tmp_path_factory.mktemp(eds.stem)
         plain = _draft_file(eds, folder)
         probed = _probed_draft_file(eds, plain, folder)
-        variants = [arg for name in TWIN_VARIANTS.get(eds.stem, ()) for arg in ("--sim-fault", name)]
-        return eds.stem, run_suite(folder, "--device-profile", str(probed), "--sim-profile", str(plain), *variants)[0]
+        variants = [arg for name in TWIN_VARIANTS.get(eds.stem, ()) for arg in ("--ec-sim-fault", name)]
+        return eds.stem, run_suite(folder, "--ec-profile", str(probed), "--ec-sim-profile", str(plain), *variants)[0]
 
     with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
         return dict(pool.map(one, CORPUS))

@@ -23,7 +23,7 @@ def test_only_strictly_judged_faults_run_with_strict_inferred(monkeypatch, tmp_p
 
     def fake_pytest(command: list[str], *_: object, **__: object) -> SessionResult:
         commands.append(command)
-        folder = Path(command[command.index("--report-dir") + 1])
+        folder = Path(command[command.index("--ec-report-dir") + 1])
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "junit.xml").write_text(JUNIT, encoding="utf-8")
         return SessionResult(0, "")

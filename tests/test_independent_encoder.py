@@ -149,10 +149,10 @@ class Bench:
         try:
             shaft = json.loads(ready)["shaft"]
             command = [sys.executable, "-m", "pytest", *SUITES, "-q", "-p", "no:cacheprovider",
-                       "--device-profile", PROFILE, "--can-interface", "remote", "--can-channel", self.channel,
-                       "--node-id", str(NODE_ID), "--allow-destructive",
-                       "--shaft-drive", f"tests.independent.shaft_link:drive={shaft}",
-                       "--report-dir", str(folder / "report")]
+                       "--ec-profile", PROFILE, "--ec-can-interface", "remote", "--ec-can-channel", self.channel,
+                       "--ec-node-id", str(NODE_ID), "--ec-allow-destructive",
+                       "--ec-shaft-drive", f"tests.independent.shaft_link:drive={shaft}",
+                       "--ec-report-dir", str(folder / "report")]
             started = time.monotonic()
             result = subprocess.run(command, cwd=REPO, env=_environment(), text=True, capture_output=True,
                                     timeout=RUN_TIMEOUT_S)

@@ -52,8 +52,8 @@ def _run(fault: str, strict: bool, workdir: Path) -> dict[str, str]:
     folder = workdir / f"{fault}-{'strict' if strict else 'default'}"
     profile = PROFILE_OF.get(fault, PROFILE)
     command = [*(str(SUITES_DIR / f"{m}.py") for m in TARGET_MODULES[fault]), "-q", "-p", "no:cacheprovider",
-               "--device-profile", str(CONTENT_ROOT / profile) if "/" in profile else profile,
-               "--report-dir", str(folder), "--tb=no", "--history", "off", "--sim-fault", fault,
+               "--ec-profile", str(CONTENT_ROOT / profile) if "/" in profile else profile,
+               "--ec-report-dir", str(folder), "--tb=no", "--ec-history", "off", "--ec-sim-fault", fault,
                *([STRICT_OPTION] if strict else [])]
     env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
     result = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=env)

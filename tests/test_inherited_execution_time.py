@@ -18,7 +18,7 @@ ORDER = ("test_preset_sets_position_and_offset[zero-ccw]", "test_preset_is_kept_
 
 def test_preset_right_after_a_put_back_of_the_code_sequence(tmp_path):
     command = [*(f"{MODULE}::{name}" for name in ORDER), "-q", "-p", "no:cacheprovider", "--tb=line",
-               "--device-profile", PROFILE, "--report-dir", str(tmp_path), "--history", "off"]
+               "--ec-profile", PROFILE, "--ec-report-dir", str(tmp_path), "--ec-history", "off"]
     completed = run_pytest(command, CONTENT_ROOT, tmp_path / "pytest-output.txt", timeout=300)
     assert completed.returncode == 0, completed.output[-3000:]
     assert "2 passed" in completed.output, completed.output[-3000:]

@@ -30,11 +30,11 @@ timing: {bootup_max_ms: 500, sdo_response_max_ms: 50}
 """
 
 CASES: dict[str, list[str]] = {
-    "unknown-profile": ["--device-profile", "does-not-exist"],
-    "node-id-200": ["--node-id", "200"],
-    "unknown-fault": ["--sim-fault", "nonsense"],
-    "abstract-profile": ["--device-profile", "wachendorff-wdga-base"],
-    "malformed-profile-file": ["--device-profile", "{tmp}/bad-profile.yaml"],
+    "unknown-profile": ["--ec-profile", "does-not-exist"],
+    "node-id-200": ["--ec-node-id", "200"],
+    "unknown-fault": ["--ec-sim-fault", "nonsense"],
+    "abstract-profile": ["--ec-profile", "wachendorff-wdga-base"],
+    "malformed-profile-file": ["--ec-profile", "{tmp}/bad-profile.yaml"],
 }
 
 
@@ -65,7 +65,7 @@ def runs(tmp_path_factory) -> dict[str, Run]:
     for name, args in CASES.items():
         report_dir = tmp / f"reports-{name}"
         command = [sys.executable, "-m", "pytest", "suites", "-p", "no:cacheprovider", "-q",
-                   "--report-dir", str(report_dir), *(a.format(tmp=tmp) for a in args)]
+                   "--ec-report-dir", str(report_dir), *(a.format(tmp=tmp) for a in args)]
         process = subprocess.Popen(command, cwd=REPO, env=clean_env(), text=True,
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         started[name] = (process, report_dir)

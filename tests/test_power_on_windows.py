@@ -111,9 +111,9 @@ def test_lss_power_cycling_tests_pass_with_power_commands_and_a_1_s_off_time(tmp
     twin = start_twin(tmp_path / "twin", variants=[VARIANT])
     try:
         result, _ = run_suite(
-            tmp_path, "--device-profile", WDGA, "--can-interface", "remote", "--can-channel", twin.channel,
-            "--allow-destructive", "--power-off-cmd", twin.power_command("power-off"),
-            "--power-on-cmd", twin.power_command("power-on"), "--power-off-time", str(OFF_TIME_S),
+            tmp_path, "--ec-profile", WDGA, "--ec-can-interface", "remote", "--ec-can-channel", twin.channel,
+            "--ec-allow-destructive", "--ec-power-off-cmd", twin.power_command("power-off"),
+            "--ec-power-on-cmd", twin.power_command("power-on"), "--ec-power-off-time", str(OFF_TIME_S),
             "-k", " or ".join(POWER_CYCLING))
     finally:
         twin.close()

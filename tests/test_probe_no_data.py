@@ -149,10 +149,10 @@ def test_probed_profile_passes_against_the_twin_variant_where_the_eds_draft_fail
     """The suites that picked such entries as readable (issue 40: 100 failures) pass with the probed profile."""
     plain, probed = drafts
     chosen = "test_object_dictionary or test_sdo_protocol or test_sdo_block"
-    passed, _ = run_suite(tmp_path / "probed", "--device-profile", str(probed), "--sim-profile", str(plain),
-                          "--sim-fault", "empty_arrays", "-k", chosen)
+    passed, _ = run_suite(tmp_path / "probed", "--ec-profile", str(probed), "--ec-sim-profile", str(plain),
+                          "--ec-sim-fault", "empty_arrays", "-k", chosen)
     assert passed.returncode == 0, passed.output[-3000:]
-    unprobed, _ = run_suite(tmp_path / "plain", "--device-profile", str(plain), "--sim-fault", "empty_arrays",
+    unprobed, _ = run_suite(tmp_path / "plain", "--ec-profile", str(plain), "--ec-sim-fault", "empty_arrays",
                             "-k", "test_readable_entry_exists_with_declared_size")
     assert unprobed.returncode == 1
     assert "2100h.01 declared readable but the read aborted" in unprobed.output
@@ -171,8 +171,8 @@ def test_a_twin_accepting_reserved_types_probed_then_run_fails_naming_1800h_sub_
     assert "DEVIATION: 1800h sub 2 accepted the transmission types CiA reserves: 241..251" in capsys.readouterr().out
     probed = load_profile(tmp_path / "probed.yaml").profile
     assert not set(probed.capabilities.tpdo_transmission_types) & set(range(241, 252))
-    run, _ = run_suite(tmp_path, "--device-profile", str(tmp_path / "probed.yaml"), "--sim-profile", str(plain),
-                       "--sim-fault", "reserved_transmission_types_accepted", "-k", "test_value_domain and 0x1800")
+    run, _ = run_suite(tmp_path, "--ec-profile", str(tmp_path / "probed.yaml"), "--ec-sim-profile", str(plain),
+                       "--ec-sim-fault", "reserved_transmission_types_accepted", "-k", "test_value_domain and 0x1800")
     assert run.returncode == 1, run.output[-3000:]
     assert "1800h.02 Transmission type" in run.output
     assert "write of 241 (0xF1)" in run.output

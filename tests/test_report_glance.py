@@ -249,7 +249,7 @@ def test_trace_written_only_when_kept_or_never_settled(tmp_path):
 def fault_run(tmp_path_factory):
     """The heartbeat tests against the WDGA twin with a heartbeat 20 % slow: one failure, passes and skips."""
     folder = tmp_path_factory.mktemp("glance")
-    completed = run_suite(folder, "--device-profile", "wachendorff-wdga-mt", "--sim-fault", "heartbeat_slow_20pct",
+    completed = run_suite(folder, "--ec-profile", "wachendorff-wdga-mt", "--ec-sim-fault", "heartbeat_slow_20pct",
                           "-k", "heartbeat")[0]
     return folder / "report", completed
 
@@ -291,8 +291,8 @@ def test_end_to_end_report_folder_is_small(fault_run):
 
 
 def test_trace_all_keeps_passed_traces(tmp_path):
-    completed = run_suite(tmp_path, "--device-profile", "wachendorff-wdga-mt", "-k", "test_heartbeat_frame_format",
-                          "--bus-trace", "all")[0]
+    completed = run_suite(tmp_path, "--ec-profile", "wachendorff-wdga-mt", "-k", "test_heartbeat_frame_format",
+                          "--ec-trace", "all")[0]
     assert completed.returncode == 0, completed.output[-3000:]
     traces = sorted(p.name for p in (tmp_path / "report" / "traces").iterdir())
     assert traces == ["test_heartbeat_frame_format.asc", "test_heartbeat_frame_format.log"]

@@ -42,8 +42,8 @@ def pytest_runtest_call(item):
 
 def _suite(module: str, folder: Path, *extra: str) -> tuple[int, RunSummary, str]:
     """A run of one suite module against the twin: exit code, run summary, output."""
-    command = [str(SUITES_DIR / f"{module}.py"), "-q", "-p", "no:cacheprovider", "--device-profile", PROFILE,
-               "--report-dir", str(folder), "--history", "off", *extra]
+    command = [str(SUITES_DIR / f"{module}.py"), "-q", "-p", "no:cacheprovider", "--ec-profile", PROFILE,
+               "--ec-report-dir", str(folder), "--ec-history", "off", *extra]
     env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
     result = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=300, env=env)
     return result.returncode, RunSummary.read(folder), result.output
@@ -55,8 +55,8 @@ def _with_plugin(module: str, folder: Path, plugin_dir: Path, *extra: str) -> tu
     env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(plugin_dir), env.get("PYTHONPATH")]))
     command = [sys.executable, "-m", "pytest", str(SUITES_DIR / f"{module}.py"), "-q", "-p", "no:cacheprovider",
-               "-p", "inject_internal_error", "--device-profile", PROFILE, "--report-dir", str(folder),
-               "--history", "off", *extra]
+               "-p", "inject_internal_error", "--ec-profile", PROFILE, "--ec-report-dir", str(folder),
+               "--ec-history", "off", *extra]
     done = subprocess.run(command, cwd=CONTENT_ROOT, env=env, capture_output=True, text=True, timeout=300)
     return done.returncode, RunSummary.read(folder), done.stdout + done.stderr
 
@@ -66,7 +66,7 @@ def _result(summary: RunSummary, name: str) -> TestResult:
 
 
 def test_device_silent_after_a_fuzz_frame_fails_that_test(tmp_path):
-    code, summary, output = _suite("test_sdo_fuzz", tmp_path, "--sim-fault", "silent_after_reserved_command")
+    code, summary, output = _suite("test_sdo_fuzz", tmp_path, "--ec-sim-fault", "silent_after_reserved_command")
     assert code == RunExit.NON_CONFORMANT, output[-3000:]
     failed = _result(summary, "test_reserved_command_specifiers_abort")
     assert failed.outcome == "failed"
@@ -85,7 +85,7 @@ def test_device_silent_after_a_fuzz_frame_fails_that_test(tmp_path):
 
 
 def test_wrong_multiplexer_fails_at_the_start_up_check(tmp_path):
-    code, summary, output = _suite("test_sdo_fuzz", tmp_path, "--sim-fault", "sdo_reply_wrong_mux")
+    code, summary, output = _suite("test_sdo_fuzz", tmp_path, "--ec-sim-fault", "sdo_reply_wrong_mux")
     assert code == RunExit.NON_CONFORMANT, output[-3000:]
     check = _result(summary, "start-up check")
     assert check.outcome == "failed"
@@ -118,7 +118,8 @@ def test_internal_error_exits_3_outside_every_area_verdict(tmp_path):
 
 
 def test_internal_error_beside_a_device_failure_exits_1(tmp_path):
-    code, summary, output = _with_plugin("test_identity", tmp_path / "run", tmp_path, "--sim-fault", "serial_mismatch")
+    code, summary, output = _with_plugin("test_identity", tmp_path / "run", tmp_path,
+                                         "--ec-sim-fault", "serial_mismatch")
     assert code == RunExit.NON_CONFORMANT, output[-3000:]
     assert _result(summary, INJECTED).outcome == "error"
     assert summary.overall == "FAIL"

@@ -49,10 +49,10 @@ def _outcomes(junit: Path) -> dict[str, str]:
 
 def _run(folder: Path, variant: str | None, shuffled: bool) -> dict[str, str]:
     paths = [str(SUITES_DIR / f"{m}.py") for m in TARGET_MODULES[variant]] if variant else [str(SUITES_DIR)]
-    command = [*paths, "-q", "-p", "no:cacheprovider", "--tb=line", "--device-profile", PROFILE,
-               "--report-dir", str(folder), "--history", "off"]
-    command += ["--sim-fault", variant] if variant else []
-    command += ["--shuffle", SEED] if shuffled else []
+    command = [*paths, "-q", "-p", "no:cacheprovider", "--tb=line", "--ec-profile", PROFILE,
+               "--ec-report-dir", str(folder), "--ec-history", "off"]
+    command += ["--ec-sim-fault", variant] if variant else []
+    command += ["--ec-shuffle", SEED] if shuffled else []
     completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600)
     junit = folder / "junit.xml"
     assert junit.exists(), completed.output[-4000:]

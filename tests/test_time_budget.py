@@ -68,7 +68,7 @@ def test_a_frame_handed_to_the_bus_is_traffic_and_an_sdo_transfer_books_its_own_
 
 
 def test_a_run_reports_its_budget(tmp_path: Path):
-    completed, _ = run_suite(tmp_path, "--device-profile", "waycon-sx", "-k", "heartbeat_period or identity")
+    completed, _ = run_suite(tmp_path, "--ec-profile", "waycon-sx", "-k", "heartbeat_period or identity")
     assert completed.returncode == 0, completed.output[-2000:]
     budget = json.loads((tmp_path / "report" / "run-summary.json").read_text(encoding="utf-8"))["time_budget"]
     assert 0 < budget["owed_s"] < budget["wall_s"]

@@ -32,7 +32,7 @@ def twin_runs(tmp_path_factory):
     """One full suite run per profile against its own twin (a few in parallel)."""
     def one(profile: str):
         folder = tmp_path_factory.mktemp(Path(profile).stem)
-        return profile, folder, *run_suite(folder, "--device-profile", profile)
+        return profile, folder, *run_suite(folder, "--ec-profile", profile)
 
     with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
         ordered = sorted(PROFILES, key=_expected_cost, reverse=True)
@@ -62,8 +62,8 @@ def test_twin_passes_its_profile(profile, twin_runs):
 
 def test_wrong_profile_fails_on_identity_without_timeouts(tmp_path):
     """The WV58M twin checked with the WDGA profile: one clear identity reason, fast, non-zero exit."""
-    completed, seconds = run_suite(tmp_path, "--device-profile", "wachendorff-wdga-mt",
-                                   "--sim-profile", "siko-wx58m-1212-mt")
+    completed, seconds = run_suite(tmp_path, "--ec-profile", "wachendorff-wdga-mt",
+                                   "--ec-sim-profile", "siko-wx58m-1212-mt")
     assert completed.returncode != 0
     assert "wrong device for profile wachendorff-wdga-mt" in completed.output
     assert "0x00000195" in completed.output  # the vendor-id the device really reports
@@ -73,7 +73,7 @@ def test_wrong_profile_fails_on_identity_without_timeouts(tmp_path):
 
 def test_allure_results_on_request(tmp_path):
     """--allure writes allure-pytest results (one result file per test) into the report folder."""
-    completed, _ = run_suite(tmp_path, "--device-profile", "waycon-sx", "-k", "test_identity", "--allure")
+    completed, _ = run_suite(tmp_path, "--ec-profile", "waycon-sx", "-k", "test_identity", "--ec-allure")
     assert completed.returncode == 0, completed.output[-3000:]
     results = list((tmp_path / "report" / "allure-results").glob("*-result.json"))
     assert results, "no allure result files"

@@ -17,7 +17,7 @@ from encoder_conformance.profile.value_domain import refusal_basis
 from tests.suite_session import run_suite
 
 WDGA = "wachendorff-wdga-mt"
-VARIANT = ["--device-profile", WDGA, "--sim-fault", "cia301_transmission_types"]
+VARIANT = ["--ec-profile", WDGA, "--ec-sim-fault", "cia301_transmission_types"]
 SELECTION = [*VARIANT, "-k", "value_domain"]
 
 
@@ -41,7 +41,7 @@ def runs(tmp_path_factory):
     """The value-domain suite against a CiA-conformant WDGA twin: as by default, and strict."""
     default = run_suite(tmp_path_factory.mktemp("default"), *SELECTION)[0]
     strict_folder = tmp_path_factory.mktemp("strict")
-    strict = run_suite(strict_folder, *SELECTION, "--strict-inferred")[0]
+    strict = run_suite(strict_folder, *SELECTION, "--ec-strict")[0]
     return default, strict
 
 
@@ -72,19 +72,19 @@ def test_junit_carries_basis_and_warning(tmp_path):
 def test_abort_code_family_mode(tmp_path):
     """A device answering a write to a read-only entry with 06010000h (the family of 06010002h) fails
     with exact abort codes and passes with --abort-codes family, which notes the family match."""
-    selection = ["--device-profile", WDGA, "--sim-fault", "write_ro_unsupported_access", "-k",
+    selection = ["--ec-profile", WDGA, "--ec-sim-fault", "write_ro_unsupported_access", "-k",
                  "test_read_only_entry_refuses_write and 0x1000"]
     exact = run_suite(tmp_path / "exact", *selection)[0]
     assert exact.returncode == 1, exact.output[-3000:]
-    family = run_suite(tmp_path / "family", *selection, "--abort-codes", "family")[0]
+    family = run_suite(tmp_path / "family", *selection, "--ec-abort-codes", "family")[0]
     assert family.returncode == 0, family.output[-3000:]
     report = (tmp_path / "family" / "report" / "report.html").read_text(encoding="utf-8")
     assert "family (--abort-codes)" in report  # the mode is in the report's environment table
     assert "accepted by family" in report  # and the test's evidence says what was accepted
 
 
-def test_run_strict_maps_to_strict_inferred(monkeypatch):
-    """`encoder-conformance run --strict` asks pytest for --strict-inferred (pytest's own --strict is another thing)."""
+def test_run_strict_maps_to_the_prefixed_strict(monkeypatch):
+    """`encoder-conformance run --strict` asks pytest for --ec-strict (pytest's own --strict is another thing)."""
     from encoder_conformance.cli import main as cli
     from encoder_conformance.plugin import interrupt
 
@@ -92,5 +92,5 @@ def test_run_strict_maps_to_strict_inferred(monkeypatch):
     monkeypatch.setattr(interrupt, "catch_early", lambda: None)  # this process keeps its own signal handling
     monkeypatch.setattr(pytest, "main", lambda argv: seen.append(argv) or 0)
     assert cli.main(["run", "--profile", WDGA, "--strict"]) == 0
-    assert "--strict-inferred" in seen[0]
+    assert "--ec-strict" in seen[0]
     assert "--strict" not in seen[0]

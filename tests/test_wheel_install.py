@@ -93,7 +93,7 @@ def test_pytest_finds_the_plugin_through_its_entry_point(installed, tmp_path):
     """Outside the checkout no conftest.py declares the options: the pytest11 entry point does."""
     done = _run([str(installed / "python"), "-m", "pytest", "--help"], cwd=tmp_path)
     assert done.returncode == 0, done.stderr
-    assert "--device-profile" in done.stdout
+    assert "--ec-profile" in done.stdout
 
 
 def test_the_wheel_carries_the_example_pipelines(installed, tmp_path):

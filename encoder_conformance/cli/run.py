@@ -20,8 +20,9 @@ from encoder_conformance.plugin import option_table
 
 def pytest_arguments(extra: list[str]) -> list[str]:
     """What goes to pytest: the arguments ``run`` does not know, with the ``--`` that may separate them dropped
-    (to pytest a ``--`` would turn every option after it into a file name)."""
-    return [arg for arg in extra if arg != "--"]
+    (to pytest a ``--`` would turn every option after it into a file name), and the suite's own options spelled as
+    pytest knows them (``--budget 5`` is ``--ec-budget 5``: ``run`` keeps the names it always took)."""
+    return option_table.pytest_spellings([arg for arg in extra if arg != "--"])
 
 
 def check_run(args: argparse.Namespace) -> None:
@@ -69,7 +70,7 @@ def _pytest_option_lines(option: option_table.Option) -> list[str]:
     else:
         value = f" {option.metavar or option.dest.upper()}"
     head = f"  {option.name}{value}"
-    text = textwrap.wrap(option.help_text, EPILOG_WIDTH - HELP_COLUMN)
+    text = textwrap.wrap(option.help, EPILOG_WIDTH - HELP_COLUMN)
     if len(head) < HELP_COLUMN - 1:
         return [head.ljust(HELP_COLUMN) + text[0], *(" " * HELP_COLUMN + line for line in text[1:])]
     return [head, *(" " * HELP_COLUMN + line for line in text)]
@@ -84,7 +85,8 @@ def run_epilog() -> str:
         "Arguments 'run' does not know go to pytest, with or without a '--' before them, e.g.",
         "  encoder-conformance run --profile waycon-sx -k heartbeat -x",
         "  encoder-conformance run -- --durations=10",
-        "The suite's own pytest options that 'run' passes on (also in 'pytest suites --help', group",
+        "The suite's own pytest options that 'run' passes on, under these names (plain pytest spells them",
+        f"with {option_table.PREFIX}, e.g. {option_table.pytest_name('--budget')}: 'pytest suites --help', group "
         f'"{option_table.GROUP_TITLE}"):',
         *suite_options,
         "and pytest's own, e.g.:",

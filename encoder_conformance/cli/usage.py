@@ -73,7 +73,7 @@ def table_argument(parser: argparse.ArgumentParser, option: option_table.Option,
                    command: option_table.Command | None = None) -> None:
     """One option of the table (plugin/option_table.py) as an argument of ``command``'s parser: its command-line
     name, the help pytest shows too; given nowhere, it is not passed on (None, or an empty list)."""
-    kwargs: dict[str, Any] = {"help": option.help_text}
+    kwargs: dict[str, Any] = {"help": option.help}
     if option.action == "store_true":
         kwargs["action"] = "store_true"
     else:
@@ -84,7 +84,7 @@ def table_argument(parser: argparse.ArgumentParser, option: option_table.Option,
         kwargs["required"] = True
     elif option.command_default is not None:
         kwargs["default"] = option.command_default
-    parser.add_argument(option.cli_name, **{key: value for key, value in kwargs.items() if value is not None})
+    parser.add_argument(option.name, **{key: value for key, value in kwargs.items() if value is not None})
 
 
 def command_arguments(parser: argparse.ArgumentParser, command: option_table.Command,

@@ -37,9 +37,10 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.paths import SUITES_DIR
+from encoder_conformance.plugin.option_table import pytest_name
 
 KIND = "accept"
-KIND_OPTION = "--run-kind"  # a row of plugin/option_table.py
+KIND_OPTION = pytest_name("--run-kind")  # a row of plugin/option_table.py
 
 #: heartbeat intervals an acceptance captures (a full run: the profile's timing.heartbeat_intervals)
 ACCEPT_HEARTBEAT_INTERVALS = 10

@@ -1,6 +1,6 @@
 """A test's bus trace, held in memory until its verdict says whether it is kept.
 
-With ``--bus-trace failed`` (the default) only failed, errored and warned tests keep their trace, about one
+With ``--trace failed`` (the default) only failed, errored and warned tests keep their trace, about one
 test in ten on a failing device and none on a conformant one. Writing every test's ASC and candump files as
 the frames arrived, then deleting most of them, cost each test two files opened, written, closed and deleted,
 and each frame two formatted lines under the frame log's lock (on the way to the test waiting for it): about

@@ -60,7 +60,7 @@ class Evidence:
     notes: list[str] = field(default_factory=list)
     trace_path: Path | None = None  # where the test's trace goes if kept (traces/<test>.asc, and .log)
     trace: BusTrace | None = None  # its frames, until the verdict decides (reporting.settle_trace)
-    keep_trace: bool = False  # kept under --bus-trace failed: the test failed or warned, or other verdicts rest on it
+    keep_trace: bool = False  # kept under --trace failed: the test failed or warned, or other verdicts rest on it
     basis: Basis | None = None  # set where a test knows better than its spec marker (see verdict_basis)
     basis_source: str | None = None  # the clause or manual section the verdict rests on
     inferred: list[InferredProblem] = field(default_factory=list)
@@ -94,7 +94,7 @@ class Evidence:
         self.basis, self.basis_source = basis, source
 
     def inferred_problem(self, observation: str, rests_on: str) -> None:
-        """A deviation from a rule we inferred: a warning by default, a failure with --strict-inferred."""
+        """A deviation from a rule we inferred: a warning by default, a failure with --strict."""
         self.inferred.append(InferredProblem(observation, rests_on))
 
     def verdict_basis(self, hard_failure: bool = False) -> Basis:

@@ -20,10 +20,11 @@ from encoder_conformance.history import spool
 from encoder_conformance.history.db import OFF, HistoryError, Target, history_path, record_new
 from encoder_conformance.history.sync import send_waiting
 from encoder_conformance.history.target import target_key
+from encoder_conformance.plugin.option_table import pytest_name
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.plugin.run_record import summary_of
 
-OPTION = "--history"  # declared in option_table.py
+OPTION = pytest_name("--history")  # declared in option_table.py
 
 
 def _target(config: pytest.Config) -> Target | None:

@@ -1,9 +1,10 @@
 """The hook hub of the conformance plugin: every pytest hook the suite implements, each delegating to the
 module of its concern. Registered by the ``pytest11`` entry point (and named in conftest.py, for a checkout
-used without installing): ``pytest --device-profile ...`` works wherever the package is installed.
+used without installing): ``pytest --ec-profile ...`` works wherever the package is installed.
 
 Inert in a pytest session that is not about the suites (another project's tests in the same environment):
-its options exist, nothing else happens. Registered among the other plugins' entry points, not after them as
+its options exist (prefixed ``--ec-``), nothing else happens, and the modules behind the hooks are not even
+imported (plugin/activation.py). Registered among the other plugins' entry points, not after them as
 a conftest.py is: the hooks whose order against other plugins shows (the report wrapper, the header, the
 terminal summary) say ``tryfirst``. Kept out of the package's ``__init__`` so that importing one plugin module
 (``plugin.evidence`` from a suite helper) does not import them all.
@@ -14,7 +15,7 @@ from __future__ import annotations
 import gc
 from collections.abc import Generator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
@@ -25,32 +26,43 @@ from encoder_conformance.errors import (
     NotJudged,
     ProfileError,
 )
-from encoder_conformance.paths import CONTENT_ROOT
-from encoder_conformance.plugin import (
-    allure_labels,
-    allure_run,
-    bus_trace,
-    hypothesis_profiles,
-    junit_coverage,
-    lifecycle,
-    outcomes,
-    reporting,
-    run_record,
-    selection,
-    shuffle,
-    skips,
-    time_budget,
-    twin_launch,
-    verdicts,
-)
-from encoder_conformance.plugin import history_hook as history
-from encoder_conformance.plugin import options as opts
+from encoder_conformance.plugin import option_table
+from encoder_conformance.plugin.activation import LazyModule, is_ours
+
+if TYPE_CHECKING:
+    from encoder_conformance.plugin import (
+        allure_labels,
+        allure_run,
+        bus_trace,
+        hypothesis_profiles,
+        junit_coverage,
+        lifecycle,
+        outcomes,
+        reporting,
+        run_record,
+        selection,
+        shuffle,
+        skips,
+        time_budget,
+        twin_launch,
+        verdicts,
+    )
+    from encoder_conformance.plugin import history_hook as history
+    from encoder_conformance.plugin import options as opts
+else:  # imported at their first use: only in a session of ours (plugin/activation.py)
+    (allure_labels, allure_run, bus_trace, hypothesis_profiles, junit_coverage, lifecycle, outcomes, reporting,
+     run_record, selection, shuffle, skips, time_budget, twin_launch, verdicts, history, opts) = (
+        LazyModule(f"encoder_conformance.plugin.{name}") for name in (
+            "allure_labels", "allure_run", "bus_trace", "hypothesis_profiles", "junit_coverage", "lifecycle",
+            "outcomes", "reporting", "run_record", "selection", "shuffle", "skips", "time_budget", "twin_launch",
+            "verdicts", "history_hook", "options"))
 
 pytest_plugins = ["encoder_conformance.plugin.progress"]
 
 _ACTIVE = pytest.StashKey[bool]()
-#: the session configured last is a conformance session (pytest-html's title hook gets no config)
-_HTML_REPORT_OURS = [False]
+#: the session configured last is a conformance session (pytest-html's title hook and the interrupt hook get no
+#: config)
+_OURS = [False]
 
 #: markers of the suites (registered here, so that --strict-markers holds wherever the suites run)
 MARKERS = (
@@ -63,14 +75,13 @@ def _active(config: pytest.Config) -> bool:
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    opts.add_options(parser)  # every row of plugin/option_table.py
+    option_table.add_pytest_options(parser)  # every row of plugin/option_table.py, prefixed
 
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_configure(config: pytest.Config) -> None:
-    # the suites' own session, or the self-tests of the checkout they live in
-    config.stash[_ACTIVE] = reporting.runs_suites(config) or config.rootpath.resolve() == CONTENT_ROOT
-    _HTML_REPORT_OURS[0] = _active(config)
+    config.stash[_ACTIVE] = is_ours(config)  # the suites' own session, or the self-tests of their checkout
+    _OURS[0] = _active(config)
     if not _active(config):
         return
     hypothesis_profiles.load()  # ci, bench, soak, dev (HYPOTHESIS_PROFILE)
@@ -163,7 +174,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
         skips.book(report, exc)  # why it did not judge: out of scope, not testable, inconclusive
     outcomes.classify(item, call, report)  # no finding about the device: an internal error of the tool
     lifecycle.note_loss(item, report)  # the device stopped answering in this test: it fails, naming the frames
-    verdicts.judge(item, report, exc)  # a broken inferred rule: a warning, or a failure with --strict-inferred
+    verdicts.judge(item, report, exc)  # a broken inferred rule: a warning, or a failure with --strict
     reporting.attach_evidence(item, call, report)
     run_record.note_report(item, report)
     if reporting.allure_active(item.config):  # allure says what the run says (status, area, clause, basis)
@@ -180,7 +191,7 @@ def pytest_report_header(config: pytest.Config) -> list[str]:
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_html_report_title(report: Any) -> None:
-    if _HTML_REPORT_OURS[0]:  # pytest-html gives no config here
+    if _OURS[0]:  # pytest-html gives no config here
         report.title = "CANopen encoder conformance report"
 
 
@@ -199,7 +210,8 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_keyboard_interrupt(excinfo: Any) -> None:
-    lifecycle.give_back_now(excinfo)  # Ctrl-C or a stop: before pytest formats the traceback (slow)
+    if _OURS[0]:
+        lifecycle.give_back_now(excinfo)  # Ctrl-C or a stop: before pytest formats the traceback (slow)
 
 
 @pytest.hookimpl(wrapper=True, tryfirst=True)

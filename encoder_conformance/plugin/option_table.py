@@ -1,13 +1,16 @@
 """The suite's options, declared once: each is a pytest option (``pytest suites --help``, group "CANopen encoder
 conformance"), and many are also options of ``encoder-conformance run`` and ``accept``, with the same help text.
 
-From this table come the pytest options (``add_pytest_options``: the plugin's ``pytest_addoption`` calls it
-through ``options.add_options``), the ``run``/``accept`` arguments and the shared bus arguments of every command
+From this table come the pytest options (``add_pytest_options``: the plugin's ``pytest_addoption`` in
+plugin/hooks.py calls it), the ``run``/``accept`` arguments and the shared bus arguments of every command
 that opens a bus (cli/usage.py reads it), and the pytest arguments a ``run`` or ``accept`` hands over
 (``pytest_argv``). A new option is one row here; ``tests/test_option_table.py`` keeps both sides equal to it.
 
-The names are the same on both sides except three, which pytest already uses itself or which a pytest plugin
-needs to qualify; ``Option.renamed`` says why, and the help on both sides names both. The command line checks
+A row's name is the commands' (``--station``); pytest knows it with the plugin's prefix (``--ec-station``, dest
+``ec_station``), as hypothesis prefixes its options ``--hypothesis-`` and labgrid ``--lg-``: the entry point
+adds them to every pytest session where the package is installed, so none of them may take a name another
+plugin or pytest itself has (DESIGN.md "Options"). The pytest spellings before the prefix (``Option.former``)
+still work in the suites' own sessions for one release (plugin/former_spellings.py). The command line checks
 some values more strictly than pytest does (``kind``): a bit rate may be given as 250k there, a node-ID outside
 1..127 is refused while parsing; pytest takes plain numbers and the plugin's ``configure`` checks them.
 
@@ -34,7 +37,8 @@ Action = Literal["store", "store_true", "append"]
 GROUP = "encoder-conformance"
 GROUP_TITLE = "CANopen encoder conformance"
 PROFILE_ENV = "ENCODER_CONFORMANCE_PROFILE"
-TRACE_OPTION = "--bus-trace"
+#: what every pytest option of the plugin begins with (DESIGN.md "Options" says why this one)
+PREFIX = "--ec-"
 TRACE_POLICIES = ("failed", "all", "none")
 RUN_AND_ACCEPT: frozenset[Command] = frozenset({"run", "accept"})
 RUN: frozenset[Command] = frozenset({"run"})
@@ -43,13 +47,14 @@ ACCEPT: frozenset[Command] = frozenset({"accept"})
 
 @dataclass(frozen=True)
 class Option:
-    """One option: its pytest name, its help (the same on both sides), and how the commands take it."""
+    """One option: its name, its help (the same on both sides), and how the commands take it."""
 
-    name: str  #: the pytest option, e.g. "--device-profile"
+    name: str  #: the commands' name, e.g. "--station"; pytest's is the prefixed ``pytest_name``, "--ec-station"
     help: str
     commands: frozenset[Command] = frozenset()  #: the encoder-conformance commands that take it too (none: pytest only)
-    command_name: str | None = None  #: the commands' name, where it cannot be pytest's (``renamed`` says why)
-    renamed: str = ""  #: why the commands' name differs
+    #: the pytest spelling before the prefix where it was not ``name`` (pytest's own --strict and --trace, and
+    #: pytest-profiling's --profile, took the plain names)
+    former: str | None = None
     action: Action = "store"
     kind: Kind = "text"
     default: object = None  #: pytest's default (an append option's: an empty list); the commands pass on what is given
@@ -60,27 +65,24 @@ class Option:
     several: bool = False  #: the commands take it several times (one run per value, in parallel); pytest once
 
     @property
-    def cli_name(self) -> str:
-        """The name the encoder-conformance commands know it by."""
-        return self.command_name or self.name
+    def pytest_name(self) -> str:
+        """The name pytest knows it by: the commands' name with the plugin's prefix."""
+        return PREFIX + self.name.removeprefix("--")
+
+    @property
+    def former_name(self) -> str:
+        """The pytest spelling before the prefix (deprecated, plugin/former_spellings.py)."""
+        return self.former or self.name
 
     @property
     def dest(self) -> str:
-        """pytest's attribute name (``config.option.DEST``)."""
-        return _dest(self.name)
+        """pytest's attribute name (``config.option.DEST``), prefixed as the name is."""
+        return _dest(self.pytest_name)
 
     @property
     def cli_dest(self) -> str:
         """The attribute of the commands' parsed arguments."""
-        return _dest(self.cli_name)
-
-    @property
-    def help_text(self) -> str:
-        """The help shown by pytest and by the commands: the same text, naming both names where they differ."""
-        if self.command_name is None:
-            return self.help
-        commands = " and ".join(sorted(self.commands, reverse=True))
-        return f"{self.help} [pytest: {self.name} ({self.renamed}); {commands}: {self.command_name}]"
+        return _dest(self.name)
 
 
 def _dest(name: str) -> str:
@@ -89,9 +91,8 @@ def _dest(name: str) -> str:
 
 #: every option, in the order both sides list them
 OPTIONS: tuple[Option, ...] = (
-    Option("--device-profile", command_name="--profile", commands=RUN_AND_ACCEPT, required_by=ACCEPT,
+    Option("--profile", former="--device-profile", commands=RUN_AND_ACCEPT, required_by=ACCEPT,
            command_default=DEFAULT_PROFILE, metavar="PROFILE",
-           renamed="pytest plugins share one namespace: pytest-profiling has --profile",
            help=f"the device profile: an id (`encoder-conformance profile list`) or a YAML file; for accept the "
                 f"profile bought, which it requires. Default {DEFAULT_PROFILE}; plain pytest takes ${PROFILE_ENV} "
                 "first"),
@@ -150,12 +151,10 @@ OPTIONS: tuple[Option, ...] = (
     Option("--sim-inprocess", action="store_true", default=False,
            help="built-in simulator only: run it in the test process on the virtual interface (faster start, less "
                 "accurate timing)"),
-    Option("--strict-inferred", command_name="--strict", commands=RUN_AND_ACCEPT, action="store_true", default=False,
-           renamed="pytest's own --strict is about markers and configuration",
+    Option("--strict", former="--strict-inferred", commands=RUN_AND_ACCEPT, action="store_true", default=False,
            help="fail a device also on rules we only inferred (a manual's silence, an example); by default a device "
                 "that breaks only such rules passes with a warning"),
-    Option(TRACE_OPTION, command_name="--trace", commands=RUN_AND_ACCEPT, choices=TRACE_POLICIES, default="failed",
-           renamed="pytest's own --trace is its debugger",
+    Option("--trace", former="--bus-trace", commands=RUN_AND_ACCEPT, choices=TRACE_POLICIES, default="failed",
            help="which tests keep their bus trace (traces/<test>.asc and .log, candump format): 'failed' (default: "
                 "failed, error and warning tests), 'all', or 'none'"),
     Option("--abort-codes", choices=("exact", "family"), default="exact",
@@ -187,8 +186,17 @@ _PYTEST_TYPES: dict[Kind, type[int] | type[float] | None] = {
 
 
 def option(name: str) -> Option:
-    """The option of this pytest name."""
+    """The option of this name (the commands' name, e.g. "--station")."""
     return next(entry for entry in OPTIONS if entry.name == name)
+
+
+def pytest_name(name: str) -> str:
+    """The pytest spelling of the option the commands call ``name``: ``pytest_name("--station")`` is "--ec-station"."""
+    return option(name).pytest_name
+
+
+#: pytest's spelling of the bus-trace policy (plugin/options.py trace_policy reads it)
+TRACE_OPTION = pytest_name("--trace")
 
 
 def options_of(command: Command) -> tuple[Option, ...]:
@@ -196,16 +204,22 @@ def options_of(command: Command) -> tuple[Option, ...]:
     return tuple(entry for entry in OPTIONS if command in entry.commands)
 
 
+def pytest_attributes(entry: Option) -> dict[str, object]:
+    """What pytest's ``addoption`` is given for ``entry`` beside its name: action, default, help, type, choices."""
+    attributes: dict[str, object] = {"action": entry.action, "default": entry.default, "help": entry.help,
+                                     "dest": entry.dest}
+    if entry.action != "store_true":
+        attributes.update(type=_PYTEST_TYPES[entry.kind], metavar=entry.metavar, choices=entry.choices)
+    if entry.action == "append":
+        attributes["default"] = []  # a fresh list: pytest keeps the default object
+    return {key: value for key, value in attributes.items() if value is not None}
+
+
 def add_pytest_options(parser: pytest.Parser) -> None:
     """Every option of the table, as a pytest option of the suite's group."""
     group = parser.getgroup(GROUP, GROUP_TITLE)
     for entry in OPTIONS:
-        kwargs: dict[str, object] = {"action": entry.action, "default": entry.default, "help": entry.help_text}
-        if entry.action != "store_true":
-            kwargs.update(type=_PYTEST_TYPES[entry.kind], metavar=entry.metavar, choices=entry.choices)
-        if entry.action == "append":
-            kwargs["default"] = []  # a fresh list: pytest keeps the default object
-        group.addoption(entry.name, **{key: value for key, value in kwargs.items() if value is not None})
+        group.addoption(entry.pytest_name, **pytest_attributes(entry))
 
 
 def pytest_argv(command: Command, given: Mapping[str, object]) -> list[str]:
@@ -215,13 +229,25 @@ def pytest_argv(command: Command, given: Mapping[str, object]) -> list[str]:
     for entry in options_of(command):
         value = given.get(entry.cli_dest)
         if isinstance(value, bool):
-            argv += [entry.name] if value else []
+            argv += [entry.pytest_name] if value else []
         elif isinstance(value, list | tuple):
             for item in value:
-                argv += [entry.name, str(item)]
+                argv += [entry.pytest_name, str(item)]
         elif value is not None:
-            argv += [entry.name, str(value)]
+            argv += [entry.pytest_name, str(value)]
     return argv
+
+
+def pytest_spellings(words: list[str]) -> list[str]:
+    """The arguments a ``run`` passes on to pytest with the suite's pytest-only options in the commands' spelling
+    (``--budget 5``, ``--shuffle=3``, as ``run`` took them before the prefix) turned into pytest's
+    (``--ec-budget 5``); every other word as given."""
+    renamed = {entry.name: entry.pytest_name for entry in OPTIONS}
+    spelled = []
+    for word in words:
+        name, equals, value = word.partition("=")
+        spelled.append(renamed[name] + equals + value if name in renamed else word)
+    return spelled
 
 
 #: entry-point plugins a conformance run never uses: anyio's (no async tests), allure-pytest's unless asked for
@@ -232,8 +258,11 @@ _ALLURE_PLUGIN = "allure_pytest"
 def unused_plugins(extra: list[str]) -> list[str]:
     """``-p no:...`` for the installed pytest plugins this run does not use: importing allure-pytest (and the attrs
     it brings) cost ~60 ms of every run's start-up, anyio's ~10 ms (measured with ``-X importtime``). allure-pytest
-    stays where ``--allure`` or its own ``--alluredir`` (among the arguments passed on to pytest) asks for results."""
-    wants_allure = any(arg == "--allure" or arg.startswith("--alluredir") for arg in extra)
+    stays where ``--ec-allure`` (or its former spelling) or its own ``--alluredir`` (among the arguments passed on to
+    pytest) asks for results."""
+    allure = option("--allure")
+    asking = (allure.pytest_name, allure.former_name)
+    wants_allure = any(arg in asking or arg.startswith("--alluredir") for arg in extra)
     names = [*_UNUSED_PLUGINS, *(() if wants_allure else (_ALLURE_PLUGIN,))]
     return [arg for name in names for arg in ("-p", f"no:{name}")]
 

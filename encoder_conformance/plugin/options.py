@@ -14,7 +14,6 @@ from encoder_conformance.config.station import Station, StationError, StationPow
 from encoder_conformance.dut.actuator import ShaftDrivePlugin
 from encoder_conformance.history.target import shown
 from encoder_conformance.paths import DEFAULT_PROFILE
-from encoder_conformance.plugin import option_table
 from encoder_conformance.plugin.option_table import PROFILE_ENV, TRACE_OPTION
 from encoder_conformance.profile.loader import LoadedProfile, load_profile
 from encoder_conformance.sim.fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS  # faults and conformant variants
@@ -52,27 +51,22 @@ class RunSettings:
 SETTINGS = pytest.StashKey[RunSettings]()
 
 
-def add_options(parser: pytest.Parser) -> None:
-    """The suite's pytest options: every row of the option table (plugin/option_table.py)."""
-    option_table.add_pytest_options(parser)
-
-
 def configure(config: pytest.Config) -> None:
     """Load the profile, resolve the bus and check option combinations; raises UsageError."""
-    name = config.getoption("--device-profile") or os.environ.get(PROFILE_ENV) or DEFAULT_PROFILE
+    name = config.getoption("--ec-profile") or os.environ.get(PROFILE_ENV) or DEFAULT_PROFILE
     loaded = load_profile(name)
     if loaded.profile.abstract:
         raise pytest.UsageError(
-            f"--device-profile {name}: this profile is abstract (a base for variants); "
+            f"--profile {name}: this profile is abstract (a base for variants); "
             f"choose one of the profiles that extend it (encoder-conformance profile list)"
         )
-    station_path = config.getoption("--station")
+    station_path = config.getoption("--ec-station")
     try:
         station = load_station(Path(station_path)) if station_path else None
     except StationError as exc:
         raise pytest.UsageError(str(exc)) from None
     bus = _bus_settings(config, station, station_path)
-    node_id = config.getoption("--node-id")
+    node_id = config.getoption("--ec-node-id")
     source = "command line"
     if node_id is None and station is not None and station.node_id is not None:
         node_id, source = station.node_id, f"station {station_path}"
@@ -80,7 +74,7 @@ def configure(config: pytest.Config) -> None:
         node_id, source = loaded.profile.bus.node_id, f"profile {loaded.profile.id} (delivery state)"
     if not 1 <= node_id <= 127:
         raise pytest.UsageError(f"--node-id {node_id}: a CANopen node-id is 1..127")
-    faults = tuple(config.getoption("--sim-fault"))
+    faults = tuple(config.getoption("--ec-sim-fault"))
     unknown = [f for f in faults if f not in FAULTS]
     if unknown:
         raise pytest.UsageError(
@@ -88,8 +82,8 @@ def configure(config: pytest.Config) -> None:
         )
     if faults and not bus.simulated:
         raise pytest.UsageError("--sim-fault only works with the built-in simulator; remove --can-interface")
-    accepting = config.getoption("--run-kind", default="run") == "accept"
-    if accepting and config.getoption("--allow-destructive"):
+    accepting = config.getoption("--ec-run-kind", default="run") == "accept"
+    if accepting and config.getoption("--ec-allow-destructive"):
         raise pytest.UsageError("--allow-destructive: an acceptance changes nothing the device remembers; use 'run'")
     config.stash[SETTINGS] = RunSettings(
         loaded=loaded,
@@ -97,13 +91,13 @@ def configure(config: pytest.Config) -> None:
         node_id=node_id,
         node_id_source=source,
         # an acceptance does on the twin what it does on a bench: nothing destructive, defaults as found
-        allow_destructive=bool(config.getoption("--allow-destructive")) or (bus.simulated and not accepting),
+        allow_destructive=bool(config.getoption("--ec-allow-destructive")) or (bus.simulated and not accepting),
         sim_faults=faults,
-        sim_inprocess=bool(config.getoption("--sim-inprocess")),
-        sim_profile=load_profile(config.getoption("--sim-profile")) if config.getoption("--sim-profile") else loaded,
+        sim_inprocess=bool(config.getoption("--ec-sim-inprocess")),
+        sim_profile=load_profile(sim_profile) if (sim_profile := config.getoption("--ec-sim-profile")) else loaded,
         power=_power_settings(config, station, station_path, bus.simulated),
         station=station,
-        delivery_state=bool(config.getoption("--delivery-state")) or accepting,  # goods-in: fresh from the factory
+        delivery_state=bool(config.getoption("--ec-delivery-state")) or accepting,  # goods-in: fresh from the factory
         shaft_drive=_shaft_drive(config, station, bus.simulated),
     )
 
@@ -111,7 +105,7 @@ def configure(config: pytest.Config) -> None:
 def _shaft_drive(config: pytest.Config, station: Station | None, simulated: bool) -> ShaftDrivePlugin | None:
     """The --shaft-drive plug-in (or the station's), imported now so that a wrong name is a usage error before any
     test."""
-    spec = config.getoption("--shaft-drive")
+    spec = config.getoption("--ec-shaft-drive")
     if spec is None and station is not None and station.shaft_drive is not None and not simulated:
         spec = station.shaft_drive
     if spec is None:
@@ -126,7 +120,7 @@ def _shaft_drive(config: pytest.Config, station: Station | None, simulated: bool
 
 def _bus_settings(config: pytest.Config, station: Station | None, station_path: str | None) -> BusConfig:
     """Command line over the station file over python-can's own configuration."""
-    given = {key: config.getoption(f"--can-{key}") for key in ("interface", "channel", "bitrate")}
+    given = {key: config.getoption(f"--ec-can-{key}") for key in ("interface", "channel", "bitrate")}
     from_station = set()
     if station is not None and station.can is not None:
         for key, value in station.can.model_dump().items():
@@ -142,9 +136,9 @@ def _bus_settings(config: pytest.Config, station: Station | None, station_path: 
 def _power_settings(config: pytest.Config, station: Station | None, station_path: str | None,
                     simulated: bool) -> PowerSettings | None:
     """The bench's power switch from the options (or the station file); None if there is none."""
-    off_cmd, on_cmd = config.getoption("--power-off-cmd"), config.getoption("--power-on-cmd")
-    manual = bool(config.getoption("--power-manual"))
-    off_time = config.getoption("--power-off-time")
+    off_cmd, on_cmd = config.getoption("--ec-power-off-cmd"), config.getoption("--ec-power-on-cmd")
+    manual = bool(config.getoption("--ec-power-manual"))
+    off_time = config.getoption("--ec-power-off-time")
     if (off_cmd is None) != (on_cmd is None):
         raise pytest.UsageError("--power-off-cmd and --power-on-cmd go together: give both commands")
     if manual and off_cmd:

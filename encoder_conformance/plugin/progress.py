@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import pytest
 
-from encoder_conformance.plugin.reporting import runs_suites
+from encoder_conformance.plugin.activation import runs_suites
 from encoder_conformance.run_summary import area_of
 
 ENV_SWITCH = "ENCODER_CONFORMANCE_PROGRESS"

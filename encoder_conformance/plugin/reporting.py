@@ -11,14 +11,15 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.coverage import Kind
-from encoder_conformance.paths import SUITES_DIR, default_reports_dir
+from encoder_conformance.paths import default_reports_dir
 from encoder_conformance.plugin import bus_trace, time_budget
+from encoder_conformance.plugin.activation import runs_suites as runs_suites  # where the plugin's modules look
 from encoder_conformance.plugin.allure_writer import BackgroundWriter, write_in_background
 from encoder_conformance.plugin.evidence import EVIDENCE
 from encoder_conformance.plugin.glance import Deviation, PageContext, render, skip_reason_key
 from encoder_conformance.plugin.options import bench_settings, settings_of, trace_policy
 from encoder_conformance.plugin.skips import booked, skip_reason
-from encoder_conformance.plugin.verdicts import STRICT_OPTION, add_property, terminal_lines
+from encoder_conformance.plugin.verdicts import add_property, terminal_lines
 from encoder_conformance.plugin.verdicts import strict as verdicts_strict
 from encoder_conformance.run_summary import RunSummary
 
@@ -33,19 +34,12 @@ TRACE_LINKS = ("bus trace (ASC)", "bus trace (candump log)")
 HIDE_PYTEST_HTML = "<style>#environment-header,#environment,.summary__data>h2{display:none}</style>"
 
 
-def runs_suites(config: pytest.Config) -> bool:
-    """True when this pytest run includes the conformance suites (not only the self-tests)."""
-    suites = SUITES_DIR
-    paths = [Path(a.split("::")[0]).resolve() for a in config.args] or [suites]
-    return any(p == suites or suites in p.parents for p in paths)
-
-
 def configure_outputs(config: pytest.Config) -> None:
     """Conformance runs write report.html, junit.xml and allure-results into one folder."""
     if not runs_suites(config) or hasattr(config, "workerinput"):
         return
     settings = settings_of(config)
-    given = config.getoption("--report-dir")
+    given = config.getoption("--ec-report-dir")
     stamp = time.strftime("%Y%m%d-%H%M%S")
     station_reports = settings.station.reports if settings.station is not None else None
     parent = station_reports or default_reports_dir()
@@ -64,7 +58,7 @@ def configure_outputs(config: pytest.Config) -> None:
         option.self_contained_html = True
     if not getattr(option, "xmlpath", None):
         option.xmlpath = str(folder / "junit.xml")
-    if config.getoption("--allure") and not getattr(option, "allure_report_dir", None):
+    if config.getoption("--ec-allure") and not getattr(option, "allure_report_dir", None):
         option.allure_report_dir = str(folder / "allure-results")
         option.clean_alluredir = True
 
@@ -120,10 +114,10 @@ def set_metadata(config: pytest.Config) -> None:
     for key, value in settings.bus.kwargs.items():
         data[f"Bus {key}"] = f"{value} (from {settings.bus.sources.get(key, 'default')})"
     data["Node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
-    data["SDO abort codes"] = f"{config.getoption('--abort-codes')} (--abort-codes)"
-    data["Inferred rules"] = "failures (--strict-inferred)" if verdicts_strict(config) else "warnings"
-    data["Run kind"] = config.getoption("--run-kind", default="run")
-    bench = bench_settings(settings, config.getoption("--station"), config.getoption("--shaft-drive"))
+    data["SDO abort codes"] = f"{config.getoption('--ec-abort-codes')} (--abort-codes)"
+    data["Inferred rules"] = "failures (--strict)" if verdicts_strict(config) else "warnings"
+    data["Run kind"] = config.getoption("--ec-run-kind", default="run")
+    bench = bench_settings(settings, config.getoption("--ec-station"), config.getoption("--ec-shaft-drive"))
     data.update({key.capitalize(): value for key, value in bench.items()})
 
 
@@ -150,8 +144,8 @@ def header_lines(config: pytest.Config) -> list[str]:
         f"device profile: {loaded.profile.id} ({loaded.path}) sha256 {loaded.sha256[:16]}",
         f"bus: {settings.bus.describe()}",
         f"node-id: {settings.node_id} ({settings.node_id_source})",
-        f"verdicts: SDO abort codes {config.getoption('--abort-codes')} (--abort-codes); rules we inferred judged as "
-        f"{'failures (--strict-inferred)' if verdicts_strict(config) else 'warnings (--strict-inferred fails them)'}",
+        f"verdicts: SDO abort codes {config.getoption('--ec-abort-codes')} (--abort-codes); rules we inferred "
+        f"judged as {'failures (--strict)' if verdicts_strict(config) else 'warnings (--strict fails them)'}",
     ]
     if settings.shaft_drive is not None:
         lines.append(f"shaft drive: {settings.shaft_drive.spec} (--shaft-drive)")
@@ -163,7 +157,7 @@ def header_lines(config: pytest.Config) -> list[str]:
 
 def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pytest.TestReport) -> None:
     """Add measurements, deviations and the trace link to the HTML report and the allure result; after the
-    test's last phase, keep or drop its trace (--bus-trace)."""
+    test's last phase, keep or drop its trace (--trace)."""
     evidence = item.stash.get(EVIDENCE, None)
     if evidence is None:
         return
@@ -216,7 +210,7 @@ def attach_evidence(item: pytest.Item, call: pytest.CallInfo[None], report: pyte
 
 
 def settle_trace(item: pytest.Item) -> None:
-    """After the teardown (the test's frames are all in): with --bus-trace failed, a test that passed or
+    """After the teardown (the test's frames are all in): with --trace failed, a test that passed or
     skipped loses its trace and the report its links; a failure, an error in any phase (teardown too) or a
     warning keeps them, written to their files now (plugin/bus_trace.py)."""
     evidence = item.stash.get(EVIDENCE, None)
@@ -270,7 +264,7 @@ def html_summary(prefix: list[str], session: pytest.Session, summary: RunSummary
     deviations = [Deviation(qid, q.title, q.manual, q.deviates_from or "", relied.get(qid, 0))
                   for qid, q in profile.quirks.items()]
     environment = {str(k): str(v) for k, v in (_metadata(config) or {}).items()}
-    mode = "failures (--strict-inferred)" if verdicts_strict(config) else f"warnings ({STRICT_OPTION} fails them)"
+    mode = "failures (--strict)" if verdicts_strict(config) else "warnings (--strict fails them)"
     context = PageContext(custody=run_lines, deviations=deviations,
                           draft=draft_banner(profile) if profile.todo else None, todo=list(profile.todo),
                           environment=environment, inferred_mode=mode)
@@ -291,7 +285,7 @@ def terminal_summary(terminalreporter, config: pytest.Config,  # noqa: ANN001 - 
             terminalreporter.write_line(f"  {line}")
     if warnings:
         terminalreporter.write_sep("-", "warnings: rules we only inferred were broken (fail them with "
-                                        "--strict-inferred)", yellow=True)
+                                        "--strict)", yellow=True)
         for line in warnings:
             terminalreporter.write_line(line, yellow=True)
     if run_lines:

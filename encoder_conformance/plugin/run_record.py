@@ -43,7 +43,7 @@ def start(config: pytest.Config) -> None:
     values = {key: f"{value} (from {settings.bus.sources.get(key, 'default')})"
               for key, value in settings.bus.kwargs.items()}
     values["node-id"] = f"{settings.node_id} (from {settings.node_id_source})"
-    values.update(bench_settings(settings, config.getoption("--station"), config.getoption("--shaft-drive")))
+    values.update(bench_settings(settings, config.getoption("--ec-station"), config.getoption("--ec-shaft-drive")))
     config.stash[_STARTED] = time.monotonic()
     config.stash[SUMMARY] = RunSummary(
         kind=config.getoption(KIND_OPTION, default="run"),
@@ -58,7 +58,7 @@ def scope_of(config: pytest.Config, settings: dict[str, str]) -> dict[str, str]:
     leave out are listed as scope, never counted against the device."""
     scope = {
         "power switch": settings.get("power switch", "none: the power-cycle checks are out of scope"),
-        "shaft drive": settings.get("shaft drive", "the twin's shaft" if config.getoption("--can-interface", None)
+        "shaft drive": settings.get("shaft drive", "the twin's shaft" if config.getoption("--ec-can-interface", None)
                                     is None else "none: the checks that need rotation are out of scope"),
         "destructive checks": ("allowed" if settings_of(config).allow_destructive
                                else "left out: run with --allow-destructive"),
@@ -158,7 +158,7 @@ def completed(session: pytest.Session) -> RunSummary | None:
         return None
     identity = config.stash.get(IDENTITY, {})
     summary.identity = dict(identity)
-    label = config.getoption("--label-serial", default=None)
+    label = config.getoption("--ec-label-serial", default=None)
     if label is not None:
         summary.identity["serial number (label)"] = str(label)
     summary.duration_s = round(time.monotonic() - config.stash[_STARTED], 2)
@@ -181,7 +181,7 @@ def completed(session: pytest.Session) -> RunSummary | None:
             summary.results.insert(0, _identity_rejected(config, state.rejected))
         summary.device_restored = None if state.record is None else state.record.ok
         summary.device_memory = None if state.record is None else state.record.memory
-    for result in summary.results:  # traces of passed tests may have been dropped (--bus-trace failed)
+    for result in summary.results:  # traces of passed tests may have been dropped (--trace failed)
         if result.trace and not (Path(folder) / result.trace).exists():
             result.trace = None
     return summary

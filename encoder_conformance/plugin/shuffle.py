@@ -14,7 +14,9 @@ from itertools import groupby
 
 import pytest
 
-OPTION = "--shuffle"  # declared in option_table.py
+from encoder_conformance.plugin.option_table import pytest_name
+
+OPTION = pytest_name("--shuffle")  # declared in option_table.py
 
 
 def shuffle(config: pytest.Config, items: list[pytest.Item]) -> None:

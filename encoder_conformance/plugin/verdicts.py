@@ -3,7 +3,7 @@
 A verdict rests on a CiA clause (``cia``), the device's manual (``manual``) or our own reading of
 what neither says (``inferred``). Only the first two fail a device by default: a test whose only
 problems break inferred rules passes with a warning (JUnit property ``verdict=warning``, listed in
-the summaries) unless the run asks for ``--strict-inferred``. That holds for a test that records its
+the summaries) unless the run asks for ``--strict`` (pytest: ``--ec-strict``). That holds for a test that records its
 problems (``evidence.inferred_problem``) and for one whose verdict rests on ``inferred``
 (``evidence.rests_on("inferred", ...)``) and fails an assertion: a finding about the device, judged by
 a rule we inferred. An internal error of the tool (``outcomes``) is no verdict: it is counted in no
@@ -19,9 +19,10 @@ import pytest
 
 from encoder_conformance.errors import DutLostError
 from encoder_conformance.plugin.evidence import BASES, EVIDENCE
+from encoder_conformance.plugin.option_table import pytest_name
 from encoder_conformance.plugin.outcomes import is_internal_error
 
-STRICT_OPTION = "--strict-inferred"
+STRICT_OPTION = pytest_name("--strict")  # pytest's spelling of run/accept --strict
 
 
 @dataclass
@@ -82,7 +83,7 @@ def judge(item: pytest.Item, report: pytest.TestReport, exc: BaseException | Non
             add_property(item, report, "inferred_problem", problem)
         if strict(item.config):
             report.outcome = "failed"
-            report.longrepr = f"broke rule(s) we inferred ({STRICT_OPTION}):\n" + "\n".join(problems)
+            report.longrepr = "broke rule(s) we inferred (--strict):\n" + "\n".join(problems)
             outcome = "failed"
         else:
             add_property(item, report, "verdict", "warning")

@@ -94,7 +94,7 @@ def run_path(path: FalsePassPath, workdir: Path, extra: tuple[str, ...] = ()) ->
     """One run of the path's tests against the twin with its fault, judged as a user's run is."""
     folder = workdir / f"{path.hold.name.lower()}-{path.fault}"
     command = [str(SUITES_DIR / f"{path.module}.py"), "-q", "-p", "no:cacheprovider", "--tb=no",
-               "--device-profile", path.profile, "--report-dir", str(folder), "--history", "off",
+               "--ec-profile", path.profile, "--ec-report-dir", str(folder), "--ec-history", "off",
                "-k", path.select, *extra]
     env = matrix_env()
     with ExitStack() as stack:
@@ -102,9 +102,9 @@ def run_path(path: FalsePassPath, workdir: Path, extra: tuple[str, ...] = ()) ->
             folder.mkdir(parents=True, exist_ok=True)
             twin = start_simulator(path.profile, faults=[path.fault], log_path=folder / "twin.log")
             stack.callback(twin.stop)
-            command += ["--can-interface", "remote", "--can-channel", twin.can_url]
+            command += ["--ec-can-interface", "remote", "--ec-can-channel", twin.can_url]
         else:
-            command += ["--sim-fault", path.fault]
+            command += ["--ec-sim-fault", path.fault]
         completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
     summary_path = folder / SUMMARY_FILE
     if not summary_path.exists():

@@ -4,7 +4,7 @@ A conformance test that no fault can make fail proves nothing; the matrix shows 
 is a separate pytest session in its own process (the same session a user's command runs; forked from a
 pre-loaded server, ``suite_runner``), parsed from its JUnit XML. A fault
 the suites can only see through a rule they infer (``fault_catalogue.JUDGED_STRICTLY``) runs with
-``--strict-inferred``, so that its broken rule fails instead of warning; every other run (and the
+``--ec-strict``, so that its broken rule fails instead of warning; every other run (and the
 baseline) is judged as a user's run is.
 """
 
@@ -100,10 +100,10 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     faults = (fault, *together) if fault else together
     folder = workdir / (f"{faults[0]}+{len(together)}" if together else fault or "no-fault")
     command = [*_suite_paths(faults, targeted), "-q", "-p", "no:cacheprovider",
-               "--device-profile", profile, "--report-dir", str(folder), "--tb=no",
-               "--history", "off"]  # a fault's run says nothing about a device: not in the history
+               "--ec-profile", profile, "--ec-report-dir", str(folder), "--tb=no",
+               "--ec-history", "off"]  # a fault's run says nothing about a device: not in the history
     for name in faults:
-        command += ["--sim-fault", name]
+        command += ["--ec-sim-fault", name]
     if set(faults) & JUDGED_STRICTLY:
         command.append(STRICT_OPTION)
     if select:
