@@ -101,3 +101,24 @@ def test_the_wheel_carries_the_example_pipelines(installed, tmp_path):
         done = _run([str(installed / "encoder-conformance"), "firmware-ci", "--example", name], cwd=tmp_path)
         assert done.returncode == 0, done.stderr
         assert "encoder-conformance firmware-ci --simulator" in done.stdout
+
+
+def test_the_pypi_fixtures_package_does_not_hide_the_suites_fixtures(installed, tmp_path):
+    """PyPI's ``fixtures`` installed beside the wheel and imported first (``-p fixtures``, as another plugin
+    might): the bundled suites still find their fixtures (registered as encoder_conformance.plugin.fixtures.*)."""
+    added = _run([str(installed / "python"), "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
+                  "fixtures"], cwd=tmp_path, timeout=300)
+    if added.returncode != 0 and "Could not find a version" in added.stderr + added.stdout:
+        pytest.skip(f"the package index cannot be reached from here: {added.stderr.strip()[-200:]}")
+    assert added.returncode == 0, added.stderr
+    where = _run([str(installed / "python"), "-c",
+                  "import fixtures; from encoder_conformance import paths; print(fixtures.__file__, paths.SUITES_DIR)"],
+                 cwd=tmp_path)
+    pypi_fixtures, suites = where.stdout.split()
+    assert "site-packages" in pypi_fixtures
+    assert "bundled" not in pypi_fixtures
+    done = _run([str(installed / "python"), "-m", "pytest", str(Path(suites) / "test_identity.py"), "-p", "fixtures",
+                 "-q", "--ec-profile", "waycon-sx", "--ec-history", "off", "--ec-report-dir", str(tmp_path / "r")],
+                cwd=tmp_path)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    assert " passed" in done.stdout
