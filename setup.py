@@ -3,6 +3,8 @@
 They stay at the repository's top level (suites/, fixtures/, device_profiles/, conftest.py, pyproject.toml)
 and are copied into ``encoder_conformance/bundled/`` of the wheel, where encoder_conformance/paths.py finds
 them when the package is installed outside a checkout. An editable install uses the checkout's own folders.
+The fixture modules are imported under the package's name either way (``encoder_conformance.plugin.fixtures``,
+whose ``__path__`` is the fixtures/ folder paths.py finds), never as a top-level ``fixtures`` package.
 """
 
 from __future__ import annotations
