@@ -23,13 +23,13 @@ from dataclasses import replace
 
 import pytest
 
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.encoder_bench import EncoderBench
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
-from encoder_conformance.dut.pdo_mapping import MappingCustody, apply_mapping, describe
-from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.bench.encoder_bench import EncoderBench
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.nmt.nmt_states import return_to_preoperational, start_operational
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.tpdo.pdo_mapping import MappingCustody, apply_mapping, describe
+from encoder_conformance.dut.tpdo.tpdo_choice import NoUsableTpdo, choose_tpdo
+from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.cam import Cam
 from encoder_conformance.models.encoder.position import units_per_rev

@@ -29,11 +29,11 @@ from encoder_conformance.cia.cia301 import (
     EmcyCode,
 )
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.emcy_trigger import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.latency_probe import LatencyProbe
-from encoder_conformance.dut.nmt_states import reach, return_to_preoperational, start_operational
-from encoder_conformance.dut.persistent_error import raise_if_held_by_error
+from encoder_conformance.dut.emcy.emcy_trigger import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.link.latency_probe import LatencyProbe
+from encoder_conformance.dut.nmt.nmt_states import reach, return_to_preoperational, start_operational
+from encoder_conformance.dut.nmt.persistent_error import raise_if_held_by_error
 from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import inconclusive_if_host_late

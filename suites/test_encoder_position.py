@@ -14,11 +14,11 @@ import time
 import pytest
 
 from encoder_conformance.cia.cia301 import PDO_MAPPING_OFFSET
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.reference_custody import ReferenceCustody
-from encoder_conformance.dut.store_watch import AUTO_STORED
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.custody.reference_custody import ReferenceCustody
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.nmt.nmt_states import start_operational
+from encoder_conformance.dut.store.store_watch import AUTO_STORED
+from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.position import position_limits, units_per_rev, unsigned_in_span
 from encoder_conformance.plugin.options import settings_of

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import assert_abort, documented_quirk
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import reach
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.nmt.nmt_states import reach
 from encoder_conformance.suite_support.periodic import judge_stream
 
 pytestmark = [

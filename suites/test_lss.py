@@ -26,17 +26,17 @@ from encoder_conformance.cia.cia305 import (
     LssCommand,
     LssState,
 )
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.lss_device import LssDevice, expect_success
-from encoder_conformance.dut.lss_master import LssAddress
-from encoder_conformance.dut.lss_steps import (
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.lss.lss_device import LssDevice, expect_success
+from encoder_conformance.dut.lss.lss_master import LssAddress
+from encoder_conformance.dut.lss.lss_steps import (
     SWITCH_DELAY_MS,
     activate,
     cob_ids_not_reset,
     manual_excludes,
     stored_node_id_survives_power_cycle,
 )
-from encoder_conformance.dut.nmt_states import confirm
+from encoder_conformance.dut.nmt.nmt_states import confirm
 from encoder_conformance.plugin.skips import not_applicable, not_equipped
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk

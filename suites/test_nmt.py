@@ -5,15 +5,15 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, HEARTBEAT_BASE, PDO_MAPPING_OFFSET, STATE_NAMES, cob_id_valid
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.boot_state import expected_after_reset, settled_state
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.heartbeat_state import describe
-from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
-from encoder_conformance.dut.persist import CannotPersist, persist_entry
-from encoder_conformance.dut.persistent_error import raise_if_held_out_of
-from encoder_conformance.dut.stimulus import pdo_stimulus
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.nmt.boot_state import expected_after_reset, settled_state
+from encoder_conformance.dut.nmt.heartbeat_state import describe
+from encoder_conformance.dut.nmt.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
+from encoder_conformance.dut.nmt.persistent_error import raise_if_held_out_of
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.store.persist import CannotPersist, persist_entry
+from encoder_conformance.dut.tpdo.stimulus import pdo_stimulus
+from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk

@@ -38,14 +38,14 @@ from hypothesis.control import currently_in_test_context
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule, run_state_machine_as_test
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, STATE_NAMES, NmtCommand, NmtState
-from encoder_conformance.dut.boot_state import settled_state
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.heartbeat_state import describe, newest_state
-from encoder_conformance.dut.nmt_observer import HeartbeatObserver
-from encoder_conformance.dut.persistent_error import raise_if_held_by_error
-from encoder_conformance.dut.sdo_frames import upload_request
-from encoder_conformance.dut.settings_journal import SettingsJournal
+from encoder_conformance.dut.custody.settings_journal import SettingsJournal
+from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.frames import Mark, format_frames
+from encoder_conformance.dut.nmt.boot_state import settled_state
+from encoder_conformance.dut.nmt.heartbeat_state import describe, newest_state
+from encoder_conformance.dut.nmt.nmt_observer import HeartbeatObserver
+from encoder_conformance.dut.nmt.persistent_error import raise_if_held_by_error
+from encoder_conformance.dut.sdo.sdo_frames import upload_request
 from encoder_conformance.models.nmt import NmtModel, Tracked
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx

@@ -9,7 +9,7 @@ import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import ERROR_HISTORY, SdoAbortCode
-from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.stimulus import pdo_stimulus
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.nmt.nmt_states import start_operational
+from encoder_conformance.dut.tpdo.stimulus import pdo_stimulus
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk
 from encoder_conformance.suite_support.tpdo import tpdo_under_test

@@ -30,13 +30,13 @@ from encoder_conformance.cia.cia301 import (
     is_restricted_can_id,
 )
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.device import answer_window
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
-from encoder_conformance.dut.sdo_frames import abort_name
-from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.link.device import answer_window
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.nmt.nmt_states import return_to_preoperational, start_operational
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.sdo.sdo_frames import abort_name
+from encoder_conformance.dut.tpdo.tpdo_choice import fixed_behaviour_tpdos
+from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain

@@ -3,7 +3,7 @@ dummy entries and fixed mappings.
 
 A variable mapping changes only in the CiA 301 procedure: COB-ID bit 31 set, sub 0 = 0, the entries,
 sub 0 = n, bit 31 cleared. Every test that changes a mapping holds it in a ``MappingCustody``
-(``dut/pdo_mapping.py``), which puts the COB-ID and the mapping back in that order, also when the test
+(``dut/tpdo/pdo_mapping.py``), which puts the COB-ID and the mapping back in that order, also when the test
 fails (after Ctrl-C the run's restore does it from its snapshot). After each refused write the mapping
 is read back: it must be unchanged. The equality of each 1A0xh entry with the profile's default is
 test_object_dictionary's (factory defaults); here the default mapping is checked against the objects
@@ -27,11 +27,11 @@ from encoder_conformance.cia.cia301 import (
     mapping_word,
 )
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
-from encoder_conformance.dut.pdo_mapping import (
+from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.nmt.nmt_states import return_to_preoperational, start_operational
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.tpdo.pdo_mapping import (
     Entry,
     MappingCustody,
     apply_mapping,
@@ -39,8 +39,8 @@ from encoder_conformance.dut.pdo_mapping import (
     invalidate,
     read_mapping,
 )
-from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.tpdo.tpdo_choice import NoUsableTpdo, choose_tpdo
+from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable, not_judged, skip_text
 from encoder_conformance.profile import datatypes

@@ -10,9 +10,9 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid
-from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.link.frames import Mark, format_frames
+from encoder_conformance.dut.nmt.nmt_states import start_operational
+from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable, not_equipped
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import documented_quirk

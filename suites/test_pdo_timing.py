@@ -18,10 +18,10 @@ import pytest
 
 from encoder_conformance.cia.cia301 import SYNC_COB_ID
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.latency_probe import LatencyProbe
-from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.link.latency_probe import LatencyProbe
+from encoder_conformance.dut.tpdo.tpdo_choice import NoUsableTpdo
+from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
 from encoder_conformance.suite_support.checks import inconclusive_if_host_late
 from encoder_conformance.suite_support.periodic import judge_stream

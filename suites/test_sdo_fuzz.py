@@ -24,7 +24,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, EMCY_BASE, SDO_REQUEST_BASE, SdoAbortCode
-from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.fuzz import exclusions, replay, rounds
 from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.runner import Failure, FuzzRunner

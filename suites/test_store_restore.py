@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import LOAD, SAVE
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.persist import CannotPersist, persist_entry
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.store.persist import CannotPersist, persist_entry
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import assert_abort, documented_quirk, expected_aborts

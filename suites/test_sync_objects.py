@@ -24,10 +24,10 @@ from encoder_conformance.cia.cia301 import (
     SdoAbortCode,
     is_restricted_can_id,
 )
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
+from encoder_conformance.dut.link.frames import format_frames
+from encoder_conformance.dut.nmt.nmt_states import start_operational
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.sdo.sdo_frames import SdoResponse, abort_name
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain

@@ -17,10 +17,10 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_HISTORY, NmtState, emcy_meaning
-from encoder_conformance.dut.emcy_trigger import emcy_code
-from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.persistent_error import error_register
+from encoder_conformance.dut.emcy.emcy_trigger import emcy_code
+from encoder_conformance.dut.link.frames import Mark, format_frames
+from encoder_conformance.dut.nmt.nmt_states import start_operational
+from encoder_conformance.dut.nmt.persistent_error import error_register
 from encoder_conformance.errors import NotJudged
 from encoder_conformance.plugin import acceptance
 from encoder_conformance.plugin.skips import not_selected

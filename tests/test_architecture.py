@@ -291,7 +291,7 @@ def _resolve(module: ModuleType, expression: ast.expr) -> object:
 def test_every_exception_class_is_in_the_one_tree():
     """Every exception class of the library derives from errors.EncoderConformanceError (RunInterrupted, by design
     a KeyboardInterrupt, and TypedSkip, by design pytest's skip, aside: ``except Exception`` must not catch them)
-    and is defined in errors.py, unless it also needs a base of another library (dut/device.py's SdoAborted, also
+    and is defined in errors.py, unless it also needs a base of another library (dut/link/device.py's SdoAborted, also
     canopen's SdoAbortedError)."""
     from encoder_conformance.errors import EncoderConformanceError, RunInterrupted
     from encoder_conformance.plugin.skips import TypedSkip
@@ -356,15 +356,15 @@ def test_suites_skip_only_with_a_typed_reason():
     assert bare == []
 
 
-#: where an NMT state command (start, stop, enter pre-operational) may be sent other than through dut/nmt_states.py:
+#: where an NMT state command (start, stop, enter pre-operational) may be sent other than through dut/nmt/nmt_states.py:
 #: places that judge the command itself or time from it, and custody, which may always talk (issue 39: one way into a
 #: state, seen by what the state answers)
 NMT_STATE_COMMANDS_ALSO_IN = {
-    "encoder_conformance/dut/heartbeat_state.py": "leaves stopped before an SDO request, seeing 7Fh",
-    "encoder_conformance/dut/lss_device.py": "the LSS states of a device whose manual allows LSS only in some",
-    "encoder_conformance/dut/lss_custody.py": "the LSS put-back",
-    "encoder_conformance/dut/custody.py": "the snapshot and the give-back",
-    "encoder_conformance/dut/periodic_capture.py": "times the event-timer stream from the start",
+    "encoder_conformance/dut/nmt/heartbeat_state.py": "leaves stopped before an SDO request, seeing 7Fh",
+    "encoder_conformance/dut/lss/lss_device.py": "the LSS states of a device whose manual allows LSS only in some",
+    "encoder_conformance/dut/lss/lss_custody.py": "the LSS put-back",
+    "encoder_conformance/dut/custody/custody.py": "the snapshot and the give-back",
+    "encoder_conformance/dut/tpdo/periodic_capture.py": "times the event-timer stream from the start",
     "suites/test_pdo_timing.py": "times the TPDOs from the start",
     "suites/test_nmt_state_machine.py": "the model's own steps, each confirmed against the model",
 }
@@ -372,12 +372,12 @@ _STATE_COMMAND = re.compile(r"""\bnmt\(\s*["'](start|stop|pre-operational)["']""
 
 
 def test_nmt_states_are_entered_in_one_place():
-    """Suites, fixtures and the DUT layer enter an NMT state through dut/nmt_states.py, which sees it there."""
+    """Suites, fixtures and the DUT layer enter an NMT state through dut/nmt/nmt_states.py, which sees it there."""
     found = []
     for folder in (REPO / "suites", REPO / "fixtures", LIBRARY / "dut", LIBRARY / "suite_support"):
         for path in folder.rglob("*.py"):
             where = path.relative_to(REPO).as_posix()
-            if where != "encoder_conformance/dut/nmt_states.py" and where not in NMT_STATE_COMMANDS_ALSO_IN:
+            if where != "encoder_conformance/dut/nmt/nmt_states.py" and where not in NMT_STATE_COMMANDS_ALSO_IN:
                 found += [f"{where}:{n}" for n, line in enumerate(path.read_text().splitlines(), 1)
                           if _STATE_COMMAND.search(line)]
-    assert found == [], "NMT state commands outside dut/nmt_states.py (use reach, start_operational, ...)"
+    assert found == [], "NMT state commands outside dut/nmt/nmt_states.py (use reach, start_operational, ...)"

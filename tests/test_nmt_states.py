@@ -15,10 +15,10 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE, NmtCommand
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.nmt_states import reach
-from encoder_conformance.dut.persistent_error import persisting_error
-from encoder_conformance.dut.settings_journal import SettingsJournal
+from encoder_conformance.dut.custody.settings_journal import SettingsJournal
+from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.nmt.nmt_states import reach
+from encoder_conformance.dut.nmt.persistent_error import persisting_error
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.runs.fault_matrix import run_suite
 from encoder_conformance.sim.nmt import NmtState

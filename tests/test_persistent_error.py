@@ -7,11 +7,11 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_REGISTER, EmcyCode, NmtCommand
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.periodic_capture import PeriodicCapture
-from encoder_conformance.dut.persistent_error import kept_error, persisting_error
-from encoder_conformance.dut.settings_journal import SettingsJournal
+from encoder_conformance.dut.custody.settings_journal import SettingsJournal
+from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.nmt.nmt_states import start_operational
+from encoder_conformance.dut.nmt.persistent_error import kept_error, persisting_error
+from encoder_conformance.dut.tpdo.periodic_capture import PeriodicCapture
 from encoder_conformance.errors import HeldByPersistentError
 from encoder_conformance.plugin.outcomes import is_device_finding
 from encoder_conformance.profile.loader import load_profile

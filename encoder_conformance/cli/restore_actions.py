@@ -5,7 +5,7 @@ writes back and stores what differs from the stored snapshot, then the values th
 An encoder's preset objects are never written back as values (a snapshot of an older run may hold
 them): its reference point is given back by presetting, where the snapshot recorded it. A device with LSS that an
 LSS test had moved (the snapshot lists the node-IDs it gave it) or that does not answer at its node-ID is looked
-for and put back first (``dut/lss_custody.py``): at those node-IDs, by its LSS address, unconfigured, after reset
+for and put back first (``dut/lss/lss_custody.py``): at those node-IDs, by its LSS address, unconfigured, after reset
 communication, after a power cycle where power commands are given.
 """
 
@@ -17,18 +17,18 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from encoder_conformance.config.bus import BusConfig
-from encoder_conformance.dut import connection
-from encoder_conformance.dut.custody import Custody, RestoreRecord
-from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
-from encoder_conformance.dut.frames import FrameLog, Mark
-from encoder_conformance.dut.identity import read_identity
-from encoder_conformance.dut.lss_custody import Changes, LssCustody
-from encoder_conformance.dut.lss_master import LssAddress, LssMaster
-from encoder_conformance.dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
-from encoder_conformance.dut.power_on import power_cycler
-from encoder_conformance.dut.reference_point import preset_keys
-from encoder_conformance.dut.snapshot import Snapshot
-from encoder_conformance.dut.store_watch import StoreWatch
+from encoder_conformance.dut.bench.power import BenchPower, PowerSwitchError, ShellPowerSwitch
+from encoder_conformance.dut.bench.power_on import power_cycler
+from encoder_conformance.dut.bench.reference_point import preset_keys
+from encoder_conformance.dut.custody.custody import Custody, RestoreRecord
+from encoder_conformance.dut.custody.snapshot import Snapshot
+from encoder_conformance.dut.link import connection
+from encoder_conformance.dut.link.device import DeviceUnderTest, wake_if_silent
+from encoder_conformance.dut.link.frames import FrameLog, Mark
+from encoder_conformance.dut.lss.lss_custody import Changes, LssCustody
+from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster
+from encoder_conformance.dut.sdo.identity import read_identity
+from encoder_conformance.dut.store.store_watch import StoreWatch
 from encoder_conformance.errors import BusSetupError, DutLostError
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile

@@ -16,8 +16,8 @@ from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from encoder_conformance.cia.cia301 import HEARTBEAT_BASE, NMT_COB_ID, NmtCommand
 from encoder_conformance.config.bus import BusConfig
-from encoder_conformance.dut import connection
-from encoder_conformance.dut.frames import FrameLog, Mark
+from encoder_conformance.dut.link import connection
+from encoder_conformance.dut.link.frames import FrameLog, Mark
 
 
 @dataclass(frozen=True)

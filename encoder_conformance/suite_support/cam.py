@@ -8,8 +8,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from encoder_conformance.basis import Basis
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.encoder_bench import EncoderBench
+from encoder_conformance.dut.bench.encoder_bench import EncoderBench
+from encoder_conformance.dut.link.device import DeviceUnderTest
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.cam import Cam
 from encoder_conformance.models.encoder.reference import EncoderReference

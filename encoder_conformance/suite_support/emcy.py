@@ -7,11 +7,11 @@ from __future__ import annotations
 import can
 
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.actuator import BenchActuator
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.emcy_trigger import EmcyCobId, EmcyTrigger, choose_trigger, emcy_code
-from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.settings_journal import SettingsJournal
+from encoder_conformance.dut.bench.actuator import BenchActuator
+from encoder_conformance.dut.custody.settings_journal import SettingsJournal
+from encoder_conformance.dut.emcy.emcy_trigger import EmcyCobId, EmcyTrigger, choose_trigger, emcy_code
+from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.frames import Mark, format_frames
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_equipped, not_judged
 

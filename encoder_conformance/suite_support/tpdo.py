@@ -3,10 +3,10 @@ the test is skipped where the profile has none that qualifies."""
 
 from __future__ import annotations
 
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.settings_journal import SettingsJournal
-from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.custody.settings_journal import SettingsJournal
+from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.tpdo.tpdo_choice import NoUsableTpdo, choose_tpdo
+from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import skip_text
 
