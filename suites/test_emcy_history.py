@@ -14,9 +14,8 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import ERROR_HISTORY, SdoAbortCode
-from encoder_conformance.dut.emcy.emcy_trigger import BENCH_OTHER_CODE, BenchError
-from encoder_conformance.dut.sdo import sdo_frames
-from encoder_conformance.dut.sdo.sdo_frames import abort_name
+from encoder_conformance.dut.emcy import BENCH_OTHER_CODE, BenchError
+from encoder_conformance.dut.sdo import abort_name, sdo_frames
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.suite_support.checks import abort_accepted

@@ -85,7 +85,7 @@ def test_manufacturer_store_object_keeps_value(dut, extra_store, evidence):
     dut.write(index, sub, changed.to_bytes(len(original), "little"))
     try:
         dut.write(*command, signature)
-        dut.reset_node_and_wait()
+        dut.nmt.reset_node()
         observed = dut.read_uint(index, sub)
         evidence.note(f"{index:04X}h.{sub:02X} = {changed}, {command[0]:04X}h 'save', reset node -> {observed}")
         assert observed == changed, (
@@ -95,4 +95,4 @@ def test_manufacturer_store_object_keeps_value(dut, extra_store, evidence):
         if dut.usable:  # put the device back as it was, store that, and make it effective
             dut.write(index, sub, original)
             dut.write(*command, signature)
-            dut.reset_node_and_wait()
+            dut.nmt.reset_node()

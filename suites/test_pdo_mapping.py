@@ -27,20 +27,19 @@ from encoder_conformance.cia.cia301 import (
     mapping_word,
 )
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.link.device import DeviceUnderTest
-from encoder_conformance.dut.link.frames import format_frames
-from encoder_conformance.dut.nmt.nmt_states import return_to_preoperational, start_operational
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link import format_frames
 from encoder_conformance.dut.sdo import sdo_frames
-from encoder_conformance.dut.tpdo.pdo_mapping import (
+from encoder_conformance.dut.tpdo import (
     Entry,
     MappingCustody,
+    NoUsableTpdo,
+    TpdoUnderTest,
     apply_mapping,
     describe,
     invalidate,
     read_mapping,
 )
-from encoder_conformance.dut.tpdo.tpdo_choice import NoUsableTpdo, choose_tpdo
-from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable, not_judged, skip_text
 from encoder_conformance.profile import datatypes
@@ -127,7 +126,7 @@ def variable_tpdo(dut: DeviceUnderTest) -> Iterator[tuple[VariableMapping, Mappi
     with MappingCustody(dut, found.comm) as custody:
         yield found, custody
         if dut.usable:
-            return_to_preoperational(dut)
+            dut.nmt.back_to_preoperational()
 
 
 def _write(dut: DeviceUnderTest, index: int, sub: int, value: int, size: int) -> sdo_frames.SdoResponse:
@@ -188,7 +187,7 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
     that order, each equal to its SDO value read before and after (shaft at rest) (CiA 301 §7.5.2.38, §7.2.2;
     CTT PDO 22)."""
     try:
-        choice = choose_tpdo(dut, 1, [1])
+        choice = dut.tpdo.choose(1, [1])
     except NoUsableTpdo as exc:
         skip_text(str(exc), exc.hold)
     tpdo = _variable(dut, choice.comm)
@@ -210,16 +209,16 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
         cob_id = sent.can_id()
         try:
             before = [dut.read(i, s)[: b // 8] for i, s, b in plan]
-            start_operational(dut, settings_journal, evidence)
+            dut.nmt.transition("operational", settings_journal, evidence)
             mark = dut.frames.mark()
             for _ in range(choice.transmission_type):
                 dut.send_sync()
             window = 2 * dut.sdo_timeout + dut.pdo_silence_s
-            frame = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id, window, mark)
+            frame = dut.frames.wait_for(sent.frames(cob_id), window, mark)
             after = [dut.read(i, s)[: b // 8] for i, s, b in plan]
         finally:
             if dut.usable:
-                return_to_preoperational(dut)
+                dut.nmt.back_to_preoperational()
     assert frame is not None, f"no TPDO {cob_id:03X}h after SYNC\n{format_frames(dut.frames.since(mark)[:10])}"
     data, offset, problems, judged = bytes(frame.data), 0, [], 0
     evidence.note(f"TPDO {format_frames([frame])}")
@@ -391,7 +390,7 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
     if not dummies:
         not_applicable("the profile declares no dummy mapping (capabilities.pdo_dummy_mapping)")
     try:
-        choice = choose_tpdo(dut, 1, [1])
+        choice = dut.tpdo.choose(1, [1])
     except NoUsableTpdo as exc:
         skip_text(str(exc), exc.hold)
     tpdo = _variable(dut, choice.comm)
@@ -411,15 +410,15 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
         cob_id = sent.can_id()
         try:
             expected = dut.read(target[0], target[1])[: target[2] // 8]
-            start_operational(dut, settings_journal, evidence)
+            dut.nmt.transition("operational", settings_journal, evidence)
             mark = dut.frames.mark()
             for _ in range(choice.transmission_type):
                 dut.send_sync()
-            frame = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id, 2 * dut.sdo_timeout, mark)
+            frame = dut.frames.wait_for(sent.frames(cob_id), 2 * dut.sdo_timeout, mark)
             again = dut.read(target[0], target[1])[: target[2] // 8]
         finally:
             if dut.usable:
-                return_to_preoperational(dut)
+                dut.nmt.back_to_preoperational()
     assert frame is not None, f"no TPDO {cob_id:03X}h after SYNC with {describe(plan)}"
     start = DUMMY_BITS[dummy] // 8
     carried = bytes(frame.data)[start:start + target[2] // 8]

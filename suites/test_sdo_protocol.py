@@ -14,9 +14,8 @@ import pytest
 
 from encoder_conformance.cia.cia301 import SDO_ABORT, SdoAbortCode
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.link.device import SdoAborted
-from encoder_conformance.dut.sdo.sdo_client import SdoProtocolClient, echoes
-from encoder_conformance.dut.sdo.sdo_frames import SdoResponse, abort_name, upload_request
+from encoder_conformance.dut.link import SdoAborted
+from encoder_conformance.dut.sdo import SdoProtocolClient, SdoResponse, abort_name, echoes, upload_request
 from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import datatypes
 from encoder_conformance.suite_support.checks import assert_one_answer, expected_aborts, judge_refusal
@@ -35,7 +34,7 @@ SEGMENTED = "CiA 301 §7.2.4.3.4-7 (SDO segment download / upload: toggle bit, n
 
 @pytest.fixture
 def sdo(dut) -> SdoProtocolClient:
-    return SdoProtocolClient(dut)
+    return dut.sdo.protocol()
 
 
 def _harmless(profile, size: int) -> tuple[int, int] | None:

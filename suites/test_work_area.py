@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut.bench.encoder_bench import EncoderBench
+from encoder_conformance.dut.bench import EncoderBench
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.suite_support.work_area import WorkArea

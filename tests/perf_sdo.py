@@ -13,8 +13,8 @@ from collections.abc import Callable
 
 import can
 
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.link.connection import connect, disconnect
-from encoder_conformance.dut.link.device import DeviceUnderTest
 from encoder_conformance.dut.link.frames import FrameLog
 from encoder_conformance.dut.sdo.sdo_frames import upload_request
 from encoder_conformance.profile.loader import load_profile

@@ -15,11 +15,11 @@ from pathlib import Path
 from encoder_conformance.cia.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand, LssState
 from encoder_conformance.cli.restore_actions import RestoreRequest, restore_from_snapshot
 from encoder_conformance.config.bus import BusConfig
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.bench.power import BenchPower, SimulatorPowerSwitch
 from encoder_conformance.dut.bench.power_on import power_cycler
 from encoder_conformance.dut.custody.custody import Custody
 from encoder_conformance.dut.custody.snapshot import Snapshot
-from encoder_conformance.dut.link.device import DeviceUnderTest
 from encoder_conformance.dut.lss.lss_device import LssDevice, expect_success, table_index
 from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster
 from encoder_conformance.dut.store.store_watch import StoreWatch

@@ -13,9 +13,9 @@ import json
 import time
 
 from encoder_conformance.cia.cia305 import UNCONFIGURED_NODE_ID
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.bench.power import BenchPower
 from encoder_conformance.dut.bench.power_on import power_cycler, powered_on
-from encoder_conformance.dut.link.device import DeviceUnderTest
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.lss.lss_device import LssDevice, expect_success
 from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster

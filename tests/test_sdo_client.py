@@ -11,7 +11,7 @@ import struct
 import pytest
 
 from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.sdo.sdo_client import SdoProtocolClient
 from encoder_conformance.profile.loader import load_profile
 from tests import sim_rig

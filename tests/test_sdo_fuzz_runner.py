@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.runner import FuzzRunner
 from encoder_conformance.fuzz.watch import DeviceWatch

@@ -8,7 +8,7 @@ import struct
 import can
 import pytest
 
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.link.frames import FrameLog
 from encoder_conformance.dut.link.tracing_bus import TracingBus
 from encoder_conformance.dut.sdo import sdo_frames

@@ -17,13 +17,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from encoder_conformance.config.bus import BusConfig
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.bench.power import BenchPower, PowerSwitchError, ShellPowerSwitch
 from encoder_conformance.dut.bench.power_on import power_cycler
 from encoder_conformance.dut.bench.reference_point import preset_keys
 from encoder_conformance.dut.custody.custody import Custody, RestoreRecord
 from encoder_conformance.dut.custody.snapshot import Snapshot
 from encoder_conformance.dut.link import connection
-from encoder_conformance.dut.link.device import DeviceUnderTest, wake_if_silent
+from encoder_conformance.dut.link.device import wake_if_silent
 from encoder_conformance.dut.link.frames import FrameLog, Mark
 from encoder_conformance.dut.lss.lss_custody import Changes, LssCustody
 from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster
@@ -104,9 +105,9 @@ def _leave_out_presets(snapshot: Snapshot, profile: DeviceProfile) -> None:
 def _wrong_device(dut: DeviceUnderTest, snapshot: Snapshot, force: bool) -> str | None:
     """None if the node answers and is the snapshot's unit (same serial number); else why not."""
     try:
-        with dut.custody():
+        with dut.in_custody():
             wake_if_silent(dut)  # a device just switched on may wait for bus traffic
-            if not (dut.responds() or dut.responds() or dut.reset_and_reach()):
+            if not (dut.responds() or dut.responds() or dut.nmt.reset_and_reach()):
                 return f"no answer from node {dut.node_id}: check --node-id, the bit rate, termination and power"
             identity = read_identity(dut).as_report()
     except DutLostError as exc:
@@ -145,7 +146,7 @@ def _lss_recover(dut: DeviceUnderTest, snapshot: Snapshot, request: RestoreReque
             + ("" if power else " (or give --power-off-cmd CMD --power-on-cmd CMD)"))
     custody = LssCustody(dut, master, address, snapshot.node_id, None, power, candidates, hint)
     # what a test may have stored is unknown here: store the node-ID as found again where the device can
-    with dut.custody():
+    with dut.in_custody():
         problem = custody.put_back(Changes(node_id=True, bit_timing=False, stored=True))
     if problem is None:
         snapshot.lss_node_ids.clear()

@@ -14,8 +14,9 @@ from dataclasses import dataclass
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.config.bus import BusConfig
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.link import connection
-from encoder_conformance.dut.link.device import DeviceUnderTest, wake_if_silent
+from encoder_conformance.dut.link.device import wake_if_silent
 from encoder_conformance.dut.sdo.identity import identity_mismatch, read_identity
 from encoder_conformance.dut.sdo.sdo_frames import abort_name
 from encoder_conformance.dut.store.persist import CannotPersist, StoreCommand, store_commands_for

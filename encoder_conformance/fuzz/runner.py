@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import can
 
 from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE, SDO_RESPONSE_BASE, SdoAbortCode
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.sdo import sdo_frames, sdo_words
 from encoder_conformance.dut.sdo.sdo_words import Stamped

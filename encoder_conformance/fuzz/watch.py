@@ -13,7 +13,8 @@ import itertools
 import can
 
 from encoder_conformance.cia.cia301 import NmtState
-from encoder_conformance.dut.link.device import TESTER_MARGIN_S, DeviceUnderTest
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link.device import TESTER_MARGIN_S
 from encoder_conformance.dut.link.frames import Mark, format_frames
 
 #: heartbeat periods without a heartbeat that count as a stalled producer, and at least GAP_FLOOR_S (not a

@@ -34,7 +34,7 @@ ENTRY_POINT_LIBRARIES = ("hypothesis", "pytest_html", "pytest_metadata")
 PRELOADED_DISTRIBUTION_MODULES = ("encoder_conformance", *ENTRY_POINT_LIBRARIES, "_hypothesis_globals")
 #: imported once in the fork server (the heavy imports of a session)
 PRELOAD = ["pytest", "_pytest.assertion.rewrite", "_pytest.python", "jinja2", "allure_commons", "attr", "can",
-           "canopen", "pydantic", "yaml", "encoder_conformance.profile.loader", "encoder_conformance.dut.link.device",
+           "canopen", "pydantic", "yaml", "encoder_conformance.profile.loader", "encoder_conformance.dut.device",
            "encoder_conformance.sim.process", "encoder_conformance.plugin.hooks",
            "encoder_conformance.sim.serve", *ENTRY_POINT_LIBRARIES]
 #: how long a child may take to stop after SIGTERM before it is killed

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut.tpdo.periodic_capture import PeriodicCapture, PeriodicStream
+from encoder_conformance.dut.tpdo import PeriodicCapture, PeriodicStream
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import skip_text
 from encoder_conformance.profile.model import HeartbeatTolerance

@@ -3,10 +3,9 @@ the test is skipped where the profile has none that qualifies."""
 
 from __future__ import annotations
 
-from encoder_conformance.dut.custody.settings_journal import SettingsJournal
-from encoder_conformance.dut.link.device import DeviceUnderTest
-from encoder_conformance.dut.tpdo.tpdo_choice import NoUsableTpdo, choose_tpdo
-from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.custody import SettingsJournal
+from encoder_conformance.dut.tpdo import NoUsableTpdo, TpdoUnderTest
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import skip_text
 
@@ -16,14 +15,14 @@ def tpdo_under_test(dut: DeviceUnderTest, sub: int, evidence: Evidence, journal:
     """The TPDO to use (``choose_tpdo``: sub-index ``sub`` writable, a type of ``usable_types``), enabled for the
     test where it is disabled; the choice's deviations and notes in the evidence. Skips where no TPDO qualifies."""
     try:
-        choice = choose_tpdo(dut, sub, usable_types)
+        choice = dut.tpdo.choose(sub, usable_types)
     except NoUsableTpdo as exc:
         for quirk_id, text in exc.deviations:
             evidence.deviation(quirk_id, text)
         skip_text(str(exc), exc.hold)
     for quirk_id, text in choice.deviations:
         evidence.deviation(quirk_id, text)
-    tpdo = TpdoUnderTest.chosen(dut, journal, choice)
+    tpdo = dut.tpdo.chosen(journal, choice)
     for note in choice.notes:
         evidence.note(note)
     return tpdo

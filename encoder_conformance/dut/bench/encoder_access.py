@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.freeze import FreezeRule
 from encoder_conformance.models.encoder.reference import EncoderReference
@@ -21,7 +21,7 @@ from encoder_conformance.profile import quirk_effects as fx
 class EncoderAccess:
     """Typed reads and writes of the encoder objects of one device."""
 
-    def __init__(self, dut: DeviceUnderTest) -> None:
+    def __init__(self, dut: DeviceLink) -> None:
         self.dut = dut
         self.description = EncoderDescription.of(dut.profile)
         self.objects = self.description.objects

@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from encoder_conformance.dut.bench.power import BenchPower
-from encoder_conformance.dut.link.device import DeviceUnderTest, wake_if_silent
+from encoder_conformance.dut.link.device import DeviceLink, wake_if_silent
 from encoder_conformance.dut.link.frames import Mark
 
 
@@ -22,7 +22,7 @@ def powered_on(before_on: Mark, after_on: Mark) -> Mark:
     return Mark(before_on.seq, after_on.time)
 
 
-def switch_off_and_on(dut: DeviceUnderTest, power: BenchPower) -> tuple[Mark, str | None]:
+def switch_off_and_on(dut: DeviceLink, power: BenchPower) -> tuple[Mark, str | None]:
     """Switch the device off and on and wake it if it waits for bus traffic; the power-on mark and the quirk the
     wake-up relied on (None: none needed). A PowerSwitchError is the caller's to judge."""
     before_on: list[Mark] = []
@@ -31,6 +31,6 @@ def switch_off_and_on(dut: DeviceUnderTest, power: BenchPower) -> tuple[Mark, st
     return powered_on(before_on[-1], dut.frames.mark()), quirk
 
 
-def power_cycler(dut: DeviceUnderTest, power: BenchPower) -> Callable[[], Mark]:
+def power_cycler(dut: DeviceLink, power: BenchPower) -> Callable[[], Mark]:
     """The power cycle the LSS views take (``LssDevice``, ``LssCustody``): off, on, woken; the power-on mark."""
     return lambda: switch_off_and_on(dut, power)[0]

@@ -38,8 +38,9 @@ from encoder_conformance.dut.custody.snapshot import (
 )
 from encoder_conformance.dut.custody.write_plan import plan_writes
 from encoder_conformance.dut.link.deadline import Deadline
-from encoder_conformance.dut.link.device import DeviceUnderTest, wake_if_silent
+from encoder_conformance.dut.link.device import DeviceLink, wake_if_silent
 from encoder_conformance.dut.link.frames import Mark
+from encoder_conformance.dut.nmt.commands import reset_and_reach, reset_node_and_wait, send_command
 from encoder_conformance.dut.sdo.identity import identity_mismatch, read_identity
 from encoder_conformance.dut.sdo.sdo_frames import abort_name
 from encoder_conformance.dut.store.boot_memory import errors_after_boot, memory_note
@@ -52,7 +53,7 @@ from encoder_conformance.errors import BusLostError, DutLostError, IdentityMisma
 class Custody:
     """One device's snapshot and restore for one run."""
 
-    def __init__(self, dut: DeviceUnderTest, snapshot_path: Path | None, watch: StoreWatch) -> None:
+    def __init__(self, dut: DeviceLink, snapshot_path: Path | None, watch: StoreWatch) -> None:
         self.dut = dut
         self.snapshot_path = snapshot_path
         self.watch = watch
@@ -87,7 +88,7 @@ class Custody:
     def _take(self, profile_sha256: str, read_stored: bool) -> Snapshot:
         dut = self.dut
         keys = custody_keys(dut.profile)
-        with dut.custody():
+        with dut.in_custody():
             before = dut.frames.mark()
             # the first request may only wake the device (automatic bit rate) or be lost while a remote
             # endpoint sets up (python-can-remote drops frames in its first ~20 ms): a short first try
@@ -103,7 +104,7 @@ class Custody:
                 self._save()
                 if not read_stored:
                     return snapshot
-            if not (self.restarts.shows_stored or dut.reset_and_reach()):  # a fresh boot-up shows what is stored
+            if not (self.restarts.shows_stored or reset_and_reach(dut)):  # a fresh boot-up shows what is stored
                 raise PreflightError(
                     f"no answer from node {dut.node_id}: no SDO answer and no boot-up after NMT reset node. "
                     "Check --node-id, the bit rate, termination, wiring and power"
@@ -160,7 +161,7 @@ class Custody:
         if self.snapshot is None or self.watch.total == 0:
             return []
         keys = [e.key for e in self.snapshot.entries if e.stored is not None]
-        self.dut.reset_node_and_wait()
+        reset_node_and_wait(self.dut)
         loaded = read_values(self.dut, keys)
         return [c.describe() for c in self._differences(loaded, lambda e: e.target_stored(), keys)]
 
@@ -179,7 +180,7 @@ class Custody:
             return record
         self.watch.restoring = True
         try:
-            with self.dut.custody():
+            with self.dut.in_custody():
                 self._give_back(record, deadline, check_stored or self.watch.total > 0, history_unknown=check_stored)
             record.done = True
         except DutLostError as exc:
@@ -196,7 +197,7 @@ class Custody:
         dut = self.dut
         snapshot = self.snapshot
         assert snapshot is not None
-        if dut.lost and not (dut.device_lost and dut.reset_and_reach()):  # a silent device: one NMT reset node
+        if dut.lost and not (dut.device_lost and reset_and_reach(dut)):  # a silent device: one NMT reset node
             raise DutLostError(dut.lost)
         mark = dut.frames.mark()  # before the switch is told to switch on: a boot-up during its command counts
         if self.power is not None and self.power.ensure_on():  # Ctrl-C between power off and on
@@ -208,7 +209,7 @@ class Custody:
             problem = step()
             if problem:
                 record.fail(problem)
-        dut.nmt("pre-operational")
+        send_command(dut, "pre-operational")
         if not (dut.responds() or dut.responds()):
             raise DutLostError("no SDO answer after NMT enter pre-operational")
         keys = [e.key for e in snapshot.entries]
@@ -372,7 +373,7 @@ class Custody:
         if self.restarts.shows_stored:
             return
         deadline.check("reset node")
-        if not dut.reset_and_reach():
+        if not reset_and_reach(dut):
             raise DutLostError(f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after reset node")
 
     def _back_to_found_state(self, record: RestoreRecord) -> None:
@@ -381,5 +382,5 @@ class Custody:
             return
         command = COMMAND_FOR_STATE.get(state)
         if command is not None and command != "pre-operational":
-            self.dut.nmt(command)
+            send_command(self.dut, command)
             record.written.append(f"NMT {command} (found {STATE_NAMES.get(state, '?')})")

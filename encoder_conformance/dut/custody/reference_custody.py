@@ -23,7 +23,7 @@ from encoder_conformance.dut.bench.reference_point import (
     has_reference_point,
     same_offset,
 )
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.sdo.sdo_frames import abort_name
 from encoder_conformance.dut.store.persist import CannotPersist, store_commands_for
 from encoder_conformance.dut.store.store_watch import AUTO_STORED
@@ -34,7 +34,7 @@ Key = tuple[int, int]
 class ReferenceCustody:
     """Reads and gives back one device's reference point (nothing where the profile declares no preset)."""
 
-    def __init__(self, dut: DeviceUnderTest) -> None:
+    def __init__(self, dut: DeviceLink) -> None:
         self.profile = dut.profile
         self.access = EncoderAccess(dut) if has_reference_point(dut.profile) else None
 

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.errors import DutLostError
 
 
 class SettingsJournal:
     """Writes through SDO and remembers the old values, to put them back after the test."""
 
-    def __init__(self, dut: DeviceUnderTest) -> None:
+    def __init__(self, dut: DeviceLink) -> None:
         self._dut = dut
         self._undo: list[tuple[int, int, bytes]] = []
 

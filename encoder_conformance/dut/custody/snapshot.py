@@ -19,7 +19,7 @@ from pathlib import Path
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.dut.bench.reference_point import ReferencePoint, preset_keys
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.sdo.patient_read import read_patiently
 from encoder_conformance.dut.store.store_watch import store_command_objects
 from encoder_conformance.profile.model import DeviceProfile, EntrySpec
@@ -138,7 +138,7 @@ class Snapshot:
             raise ValueError(f"{path}: malformed snapshot: {exc}") from None
 
 
-def read_values(dut: DeviceUnderTest, keys: list[Key]) -> dict[Key, bytes | None]:
+def read_values(dut: DeviceLink, keys: list[Key]) -> dict[Key, bytes | None]:
     """Each entry's value (None where the device refuses the read).
 
     A read that timed out while the device still answers is asked once more: custody needs the value, and a

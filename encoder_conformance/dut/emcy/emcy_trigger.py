@@ -35,7 +35,7 @@ from encoder_conformance.cia.cia301 import (
     NmtState,
 )
 from encoder_conformance.dut.bench.actuator import BenchActuator, ErrorStimulus
-from encoder_conformance.dut.link.device import DeviceUnderTest, answer_window
+from encoder_conformance.dut.link.device import DeviceLink, answer_window
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.profile import quirk_effects as fx
 
@@ -55,7 +55,7 @@ class EmcyCobId:
     extended: bool = False
 
     @classmethod
-    def of(cls, dut: DeviceUnderTest) -> EmcyCobId:
+    def of(cls, dut: DeviceLink) -> EmcyCobId:
         if dut.profile.entry(EMCY_COB_ID, 0) is None:
             return cls(EMCY_BASE + dut.node_id)
         value = dut.read_uint(EMCY_COB_ID)
@@ -88,7 +88,7 @@ class EmcyTrigger:
     repeatable = True
     #: ``clear`` makes the cause go away (the device owes the error-reset EMCY)
     clears = False
-    _dut: DeviceUnderTest
+    _dut: DeviceLink
 
     def fire(self) -> Mark:
         raise NotImplementedError
@@ -114,7 +114,7 @@ class BenchError(EmcyTrigger):
     code = BENCH_CODE
     clears = True
 
-    def __init__(self, dut: DeviceUnderTest, stimulus: ErrorStimulus) -> None:
+    def __init__(self, dut: DeviceLink, stimulus: ErrorStimulus) -> None:
         self._dut = dut
         self._stimulus = stimulus
 
@@ -136,14 +136,14 @@ class SyncLengthError(EmcyTrigger):
     basis = ("inferred", "CiA 301 table 21 names EMCY 8240h 'unexpected SYNC data length'; that a SYNC consumer "
                          "sends it on a SYNC whose length does not match 1019h is CANopenNode's and the CTT's reading")
 
-    def __init__(self, dut: DeviceUnderTest, write: Write) -> None:
+    def __init__(self, dut: DeviceLink, write: Write) -> None:
         self._dut = dut
         write(SYNC_COUNTER_OVERFLOW, 0, bytes([SYNC_OVERFLOW]))
         cob_id = dut.read_uint(SYNC_COB_ID_OBJECT) if dut.profile.entry(SYNC_COB_ID_OBJECT, 0) else SYNC_COB_ID
         self.sync_cob_id = cob_id & 0x7FF
 
     @staticmethod
-    def available(dut: DeviceUnderTest) -> str | None:
+    def available(dut: DeviceLink) -> str | None:
         """None where the device can be given this trigger, else why not."""
         entry = dut.profile.entry(SYNC_COUNTER_OVERFLOW, 0)
         if entry is None or not entry.writable:
@@ -157,7 +157,7 @@ class SyncLengthError(EmcyTrigger):
 class HeartbeatTimeout(EmcyTrigger):
     repeatable = False  # each fire needs a heartbeat and the silence after it
 
-    def __init__(self, dut: DeviceUnderTest, write: Write) -> None:
+    def __init__(self, dut: DeviceLink, write: Write) -> None:
         self._dut = dut
         self.producer = 0x7F if dut.node_id != 0x7F else 0x7E  # a node-ID the tester plays
         self.timeout_ms = HEARTBEAT_TIMEOUT_MS
@@ -175,7 +175,7 @@ class HeartbeatTimeout(EmcyTrigger):
         write(HEARTBEAT_CONSUMER, 1, (self.producer << 16 | HEARTBEAT_TIMEOUT_MS).to_bytes(4, "little"))
 
     @staticmethod
-    def available(dut: DeviceUnderTest) -> str | None:
+    def available(dut: DeviceLink) -> str | None:
         entry = dut.profile.entry(HEARTBEAT_CONSUMER, 1)
         if not dut.profile.capabilities.heartbeat_consumer_entries or entry is None or not entry.writable:
             return "the profile has no writable heartbeat-consumer entry (1016h sub 1)"
@@ -188,7 +188,7 @@ class HeartbeatTimeout(EmcyTrigger):
         return HEARTBEAT_TIMEOUT_MS / 1000 + super().window_s()
 
 
-def choose_trigger(dut: DeviceUnderTest, bench: BenchActuator, write: Write,
+def choose_trigger(dut: DeviceLink, bench: BenchActuator, write: Write,
                    repeatable: bool = False, clears: bool = False) -> EmcyTrigger | str:
     """The first trigger this bench and device offer (bench stimulus, SYNC length, heartbeat time-out) that can
     do what the test needs; else why there is none."""

@@ -1,9 +1,10 @@
-"""The device under test as the suites see it: one object for SDO, NMT, waits and raw frames.
+"""The link to the device under test: SDO, raw frames and the waits each owes, the one object every protocol of
+``dut/`` talks through (``dut/device.py``'s ``DeviceUnderTest`` adds a face per protocol on top of it).
 
-Suites talk only to this class; whether a simulator or a real encoder is on the bus is
-invisible here. Once the device stops answering (or the bus is gone), ``lost`` is set and every
-later call fails at once with the first reason (labgrid's "broken strategy" pattern). Once the run
-is stopping (Ctrl-C), calls raise RunInterrupted except inside ``custody()``, the restore's own access.
+Whether a simulator or a real encoder is on the bus is invisible here. Once the device stops answering (or the bus
+is gone), ``lost`` is set and every later call fails at once with the first reason (labgrid's "broken strategy"
+pattern). Once the run is stopping (Ctrl-C), calls raise RunInterrupted except inside ``in_custody()``, the restore's
+own access.
 """
 
 from __future__ import annotations
@@ -19,10 +20,9 @@ import can
 import canopen
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
+import encoder_conformance.dut.sdo.sdo_frames as sdo_frames
 from encoder_conformance.cia.cia301 import (
     HEARTBEAT_BASE,
-    NMT_COB_ID,
-    NMT_COMMAND_NAMES,
     NODE_TRANSMIT_BASES,
     SDO_REQUEST_BASE,
     SDO_RESPONSE_BASE,
@@ -31,7 +31,6 @@ from encoder_conformance.cia.cia301 import (
 )
 from encoder_conformance.dut.link.frames import FrameLog, Mark, format_frames
 from encoder_conformance.dut.link.time_budget import BUDGET
-from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.errors import BusLostError, DutLostError, EncoderConformanceError, RunInterrupted
 from encoder_conformance.models.encoder.freeze import FreezeRule
 from encoder_conformance.profile.model import DeviceProfile
@@ -57,7 +56,7 @@ def answer_window(device_s: float) -> float:
 AbortCodeMode = Literal["exact", "family"]
 STALE_REQUESTS = 8  # an SDO reply that fits one of this many requests before the current one is a late answer
 
-__all__ = ["DeviceUnderTest", "HeartbeatSample", "SdoAborted", "wake_if_silent"]
+__all__ = ["DeviceLink", "HeartbeatSample", "SdoAborted", "wake_if_silent"]
 #: failed probes in a row before the device counts as gone (one late answer on a busy PC is not a dead device)
 LOST_AFTER_PROBES = 2
 #: the tester's frames a lost device's verdict names (the last sent before it stopped answering)
@@ -88,7 +87,7 @@ class HeartbeatSample:
     dlc: int
 
 
-class DeviceUnderTest:
+class DeviceLink:
     """A CANopen node on a bus, with waits that take their limits from the profile."""
 
     def __init__(self, network: canopen.Network, frames: FrameLog, profile: DeviceProfile, node_id: int) -> None:
@@ -153,11 +152,11 @@ class DeviceUnderTest:
         self.bench_failure = self.bench_failure or reason
 
     def stop(self, reason: str) -> None:
-        """The run is ending early: from now on only ``custody()`` may talk to the device."""
+        """The run is ending early: from now on only ``in_custody()`` may talk to the device."""
         self.stopping = self.stopping or reason
 
     @contextmanager
-    def custody(self) -> Iterator[DeviceUnderTest]:
+    def in_custody(self) -> Iterator[DeviceLink]:
         """Device access for the snapshot and the restore, also while the run is stopping."""
         self._custody.active = True
         try:
@@ -244,11 +243,6 @@ class DeviceUnderTest:
         own = self._own_cob_ids()
         return bool(self.frames.since(mark, lambda m: m.is_rx and m.arbitration_id in own))
 
-    def reset_and_reach(self) -> bool:
-        """NMT reset node; True once a boot-up or an SDO answer shows the node is there."""
-        mark = self.nmt("reset-node")
-        return self.wait_bootup(mark) is not None or self.responds()
-
     def responds(self, timeout: float | None = None) -> bool:
         """One raw read of 1000h: does the node answer SDO at all (within ``timeout``, default the SDO timeout)?"""
         return self.sdo_request(sdo_frames.upload_request(0x1000, 0), check_alive=False, timeout=timeout) is not None
@@ -325,15 +319,7 @@ class DeviceUnderTest:
         self.network.send_message(cob_id, data, remote=remote)
         return mark
 
-    # -- NMT -----------------------------------------------------------------------------
-    def nmt(self, command: str, node_id: int | None = None) -> Mark:
-        """Send an NMT command (to this node, or ``node_id``; 0 = all). Returns a mark before it."""
-        mark = self.frames.mark()
-        target = self.node_id if node_id is None else node_id
-        self._check_alive()
-        self.network.send_message(NMT_COB_ID, bytes([NMT_COMMAND_NAMES[command], target]))
-        return mark
-
+    # -- NMT error control (the commands: dut/nmt/commands.py) ------------------------------
     def is_heartbeat(self, msg: can.Message) -> bool:
         return msg.is_rx and msg.arbitration_id == HEARTBEAT_BASE + self.node_id and not msg.is_remote_frame
 
@@ -375,21 +361,8 @@ class DeviceUnderTest:
     def is_pdo(self, msg: can.Message) -> bool:
         return msg.is_rx and msg.arbitration_id in {b + self.node_id for b in TPDO_BASES}
 
-    # -- helpers for state-changing tests ------------------------------------------------
-    def reset_node_and_wait(self) -> can.Message:
-        """NMT reset node; returns the boot-up frame or raises with the trace."""
-        mark = self.nmt("reset-node")
-        boot = self.wait_bootup(mark)
-        if boot is None:
-            raise AssertionError(
-                f"no boot-up ({HEARTBEAT_BASE + self.node_id:03X}h... [1] 00) within "
-                f"{self.profile.timing.bootup_max_ms:.0f} ms after reset node\n"
-                f"last frames:\n{format_frames(self.frames.last(10))}"
-            )
-        return boot
 
-
-def wake_if_silent(dut: DeviceUnderTest) -> str | None:
+def wake_if_silent(dut: DeviceLink) -> str | None:
     """Devices with automatic bit-rate detection stay silent after power-on until they see a
     frame; send one SYNC as the manual prescribes. Returns the quirk id relied on, if any."""
     found = dut.profile.quirk_of(SilentUntilBusTraffic)

@@ -175,3 +175,9 @@ def format_frames(frames: list[can.Message]) -> str:
         data = "R" if msg.is_remote_frame else msg.data.hex(" ").upper()
         lines.append(f"  {msg.timestamp:.4f} {direction} {msg.arbitration_id:03X} [{msg.dlc}] {data}")
     return "\n".join(lines)
+
+
+def received_on(can_id: int) -> Predicate:
+    """The data frames received on ``can_id`` (a TPDO's, a SYNC producer's): not the tester's own, not a remote
+    request."""
+    return lambda m: m.is_rx and m.arbitration_id == can_id and not m.is_remote_frame

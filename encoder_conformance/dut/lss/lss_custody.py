@@ -27,15 +27,14 @@ import can
 
 from encoder_conformance.cia.cia301 import (
     HEARTBEAT_BASE,
-    NMT_COB_ID,
-    NMT_COMMAND_NAMES,
     SDO_REQUEST_BASE,
     SDO_RESPONSE_BASE,
 )
 from encoder_conformance.cia.cia305 import UNCONFIGURED_NODE_ID, LssState
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.lss.lss_master import LssAddress, LssAnswer, LssMaster
+from encoder_conformance.dut.nmt.commands import send_in_custody
 from encoder_conformance.dut.sdo.sdo_frames import upload_request
 
 
@@ -65,7 +64,7 @@ class Found:
 class LssCustody:
     """One device's LSS put-back: ``target`` node-ID and ``bit_index`` as found, the places to look."""
 
-    dut: DeviceUnderTest
+    dut: DeviceLink
     master: LssMaster
     address: LssAddress
     target: int
@@ -99,7 +98,7 @@ class LssCustody:
             return found
         mark = self.dut.frames.mark()
         for node_id in [self.target, *self._others()]:
-            self._nmt("reset-communication", node_id)
+            send_in_custody(self.dut, "reset-communication", node_id)
         boot = self._wait_bootup([self.target, *self._others()], mark)
         if boot is not None:
             return Found(boot, f"booted at node-ID {boot} after NMT reset communication")
@@ -115,7 +114,7 @@ class LssCustody:
     def _by_lss(self) -> Found | None:
         """Selected by its LSS address, found by fastscan, or identified as non-configured."""
         for node_id in [self.target, *self._others()]:  # a device that takes LSS only in some NMT states
-            self._nmt("pre-operational", node_id)
+            send_in_custody(self.dut, "pre-operational", node_id)
         if "switch_selective" in self.services and self.master.switch_selective(self.address):
             active = self.master.inquire_node_id() if "inquire_node_id" in self.services else None
             state = "unconfigured" if active == UNCONFIGURED_NODE_ID else \
@@ -126,12 +125,6 @@ class LssCustody:
         if "identify_non_configured" in self.services and self.master.identify_non_configured() > 0:
             return Found(UNCONFIGURED_NODE_ID, "unconfigured (identify non-configured answered)")
         return None
-
-    def _nmt(self, command: str, node_id: int) -> Mark:
-        """An NMT command to ``node_id``, also while the run is stopping (custody may always talk)."""
-        mark = self.dut.frames.mark()
-        self.dut.network.send_message(NMT_COB_ID, bytes([NMT_COMMAND_NAMES[command], node_id]))
-        return mark
 
     def _wait_bootup(self, node_ids: Iterable[int], after: Mark) -> int | None:
         """The node-ID of the first boot-up at one of ``node_ids`` within the profile's boot-up time."""
@@ -163,9 +156,11 @@ class LssCustody:
     def _select(self, found: Found) -> bool:
         if found.selected:
             return True
-        if found.node_id not in (None, UNCONFIGURED_NODE_ID):  # LSS may be obeyed only in some NMT states, and a
-            self._nmt("pre-operational", found.node_id)  # device that started itself is operational: its answer
-            self.answers_at(found.node_id)  # shows the command was taken (pre-operational offers SDO)
+        if found.node_id not in (None, UNCONFIGURED_NODE_ID):
+            # LSS may be obeyed only in some NMT states, and a device that started itself is operational: its answer
+            # shows the command was taken (pre-operational offers SDO)
+            send_in_custody(self.dut, "pre-operational", found.node_id)
+            self.answers_at(found.node_id)
         if "switch_selective" in self.services:
             return self.master.switch_selective(self.address)
         self.master.switch_global(LssState.CONFIGURATION)  # one device on the bench: global is the way
@@ -204,7 +199,7 @@ class LssCustody:
         mark = self.master.switch_global(LssState.WAITING)
         others = [n for n in [found.node_id] if n not in (None, UNCONFIGURED_NODE_ID)] or self._others()
         for node_id in others:
-            self._nmt("reset-communication", node_id)
+            send_in_custody(self.dut, "reset-communication", node_id)
         boot = self._wait_bootup([self.target, *others], mark)
         if boot == self.target or (boot is None and self.answers_at(self.target)):
             return None

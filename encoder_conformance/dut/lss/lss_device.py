@@ -23,10 +23,11 @@ from encoder_conformance.cia.cia305 import (
     LssCommand,
     LssState,
 )
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.lss.lss_custody import Changes, LssCustody, failure
 from encoder_conformance.dut.lss.lss_master import LssAddress, LssAnswer, LssMaster
+from encoder_conformance.dut.nmt.commands import send_command
 from encoder_conformance.dut.nmt.heartbeat_state import describe
 from encoder_conformance.dut.sdo.sdo_frames import upload_request
 from encoder_conformance.profile import quirk_effects as fx
@@ -41,7 +42,7 @@ def table_index(bitrate: int, table: dict[int, int] = BIT_TIMING_TABLE_0) -> int
 class LssDevice:
     """LSS view of the device under test."""
 
-    dut: DeviceUnderTest
+    dut: DeviceLink
     master: LssMaster
     address: LssAddress
     bit_index: int | None  # the table-0 index of the bit rate in use, where known
@@ -101,7 +102,7 @@ class LssDevice:
         quirk = self.dut.profile.params_of(fx.LssOnlyInStates)
         if quirk is None or "operational" in quirk.states:
             return
-        self.dut.nmt("pre-operational", node_id=node_id)
+        send_command(self.dut, "pre-operational", node_id=node_id)
         assert self.answers_at(node_id), f"no SDO answer at node-ID {node_id} after NMT enter pre-operational"
 
     def leave(self) -> Mark:
@@ -147,7 +148,7 @@ class LssDevice:
 
     def reset_communication(self, node_id: int) -> Mark:
         """NMT reset communication addressed to ``node_id`` (the device's active node-ID)."""
-        return self.dut.nmt("reset-communication", node_id=node_id)
+        return send_command(self.dut, "reset-communication", node_id=node_id)
 
     def moving_to(self, node_id: int) -> None:
         """A test is about to give the device ``node_id`` (255: unconfigured): custody looks there afterwards."""

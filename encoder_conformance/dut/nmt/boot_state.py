@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import can
 
 from encoder_conformance.cia.cia301 import NmtState
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.nmt.heartbeat_state import is_state_beat
 from encoder_conformance.profile import quirk_effects as fx
@@ -32,7 +32,7 @@ class Expected:
     quirk_id: str | None = None
 
 
-def expected_after_reset(dut: DeviceUnderTest) -> Expected:
+def expected_after_reset(dut: DeviceLink) -> Expected:
     """Pre-operational, or operational where the documented autostart object or 1F80h bit 3 says so (read by SDO
     now, before the reset: the value a reset reloads is the one the device holds between tests)."""
     found = dut.profile.quirk_of(fx.NmtAutostartObject)
@@ -54,13 +54,13 @@ def expected_after_reset(dut: DeviceUnderTest) -> Expected:
     return Expected(NmtState.PRE_OPERATIONAL, CIA301)
 
 
-def boot_up_after(dut: DeviceUnderTest, mark: Mark) -> can.Message | None:
+def boot_up_after(dut: DeviceLink, mark: Mark) -> can.Message | None:
     """The boot-up message (00h) after ``mark`` in the log."""
     boots = dut.frames.since(mark, lambda m: dut.is_heartbeat(m) and bytes(m.data) == b"\x00")
     return boots[0] if boots else None
 
 
-def settled_state(dut: DeviceUnderTest, after: Mark, boot: can.Message, period_ms: int,
+def settled_state(dut: DeviceLink, after: Mark, boot: can.Message, period_ms: int,
                   slack_s: float = 0.0) -> int | None:
     """The state the first heartbeat after ``after`` reports once the settle time after ``boot`` is over (a
     self-starting device may still show pre-operational right after its boot-up); None: no heartbeat came within

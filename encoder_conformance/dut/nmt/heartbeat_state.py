@@ -7,8 +7,9 @@ from __future__ import annotations
 import can
 
 from encoder_conformance.cia.cia301 import NMT_COB_ID, STATE_NAMES, NmtCommand, NmtState
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
+from encoder_conformance.dut.nmt.commands import send_command
 
 #: the states that offer SDO (CiA 301 v4.2.0 §7.3.2.2)
 SDO_STATES = frozenset({NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL})
@@ -16,7 +17,7 @@ SDO_STATES = frozenset({NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL})
 LOOK_BACK = 2000
 
 
-def state_window_s(dut: DeviceUnderTest, period_ms: float) -> float:
+def state_window_s(dut: DeviceLink, period_ms: float) -> float:
     """How long a state change may take to show in the heartbeat: the settle time plus two heartbeat periods."""
     return (dut.profile.timing.nmt_settle_ms + 2 * period_ms) / 1000
 
@@ -26,24 +27,24 @@ def describe(state: int | None) -> str:
     return "no heartbeat" if state is None else f"{state:02X}h ({STATE_NAMES.get(state, 'no NMT state')})"
 
 
-def is_state_beat(dut: DeviceUnderTest, msg: can.Message) -> bool:
+def is_state_beat(dut: DeviceLink, msg: can.Message) -> bool:
     """A heartbeat of the node that carries a state (not its boot-up message, 00h)."""
     return dut.is_heartbeat(msg) and bool(msg.data) and msg.data[0] != 0
 
 
-def _is_command(dut: DeviceUnderTest, msg: can.Message) -> bool:
+def _is_command(dut: DeviceLink, msg: can.Message) -> bool:
     """An NMT command this tester sent to the node or to all nodes."""
     return (not msg.is_rx and msg.arbitration_id == NMT_COB_ID and len(msg.data) == 2
             and msg.data[1] in (0, dut.node_id))
 
 
-def newest_state(dut: DeviceUnderTest, after: Mark) -> int | None:
+def newest_state(dut: DeviceLink, after: Mark) -> int | None:
     """The state the newest heartbeat after ``after`` reports (None: none came)."""
     beats = dut.frames.since(after, lambda m: is_state_beat(dut, m))
     return beats[-1].data[0] if beats else None
 
 
-def wait_state(dut: DeviceUnderTest, after: Mark, state: int, window_s: float) -> int | None:
+def wait_state(dut: DeviceLink, after: Mark, state: int, window_s: float) -> int | None:
     """The heartbeat after ``after`` that reports ``state`` (waited for up to ``window_s``), else the state the
     newest one reports (None: no heartbeat at all)."""
     if dut.wait_heartbeat(after, window_s, state=state) is not None:
@@ -51,13 +52,13 @@ def wait_state(dut: DeviceUnderTest, after: Mark, state: int, window_s: float) -
     return newest_state(dut, after)
 
 
-def period_seen_s(dut: DeviceUnderTest) -> float | None:
+def period_seen_s(dut: DeviceLink) -> float | None:
     """The producer's period as the newest two heartbeats of the log show it (None: fewer than two)."""
     beats = dut.frames.before(dut.frames.mark(), lambda m: is_state_beat(dut, m), LOOK_BACK)
     return beats[-1].timestamp - beats[-2].timestamp if len(beats) >= 2 else None
 
 
-def since_last_command(dut: DeviceUnderTest) -> tuple[int | None, int | None]:
+def since_last_command(dut: DeviceLink) -> tuple[int | None, int | None]:
     """(the newest NMT command sent to the node, the state the newest heartbeat after it reports); None for either
     where the log holds none."""
     frames = dut.frames.before(dut.frames.mark(), lambda m: _is_command(dut, m) or is_state_beat(dut, m), LOOK_BACK)
@@ -67,7 +68,7 @@ def since_last_command(dut: DeviceUnderTest) -> tuple[int | None, int | None]:
     return (frames[last].data[0] if last >= 0 else None), (beats[-1].data[0] if beats else None)
 
 
-def may_be_stopped(dut: DeviceUnderTest) -> bool:
+def may_be_stopped(dut: DeviceLink) -> bool:
     """True where the heartbeat after the newest NMT command reports stopped, or, without a heartbeat since, that
     command was stop (only NMT stop leads there, CiA 301 v4.2.0 §7.3.2.2)."""
     command, state = since_last_command(dut)
@@ -76,7 +77,7 @@ def may_be_stopped(dut: DeviceUnderTest) -> bool:
     return command == NmtCommand.STOP
 
 
-def leave_stopped(dut: DeviceUnderTest) -> bool:
+def leave_stopped(dut: DeviceLink) -> bool:
     """SDO is offered: the device is not in stopped, or it left it on NMT enter pre-operational as its heartbeat
     shows (7Fh). False where it may be in stopped and no heartbeat shows it left: a caller that needs SDO resets
     communication instead (and waits for the boot-up)."""
@@ -85,6 +86,6 @@ def leave_stopped(dut: DeviceUnderTest) -> bool:
     period = period_seen_s(dut)
     if period is None:
         return False
-    mark = dut.nmt("pre-operational")
+    mark = send_command(dut, "pre-operational")
     window = state_window_s(dut, period * 1000)
     return wait_state(dut, mark, NmtState.PRE_OPERATIONAL, window) == NmtState.PRE_OPERATIONAL

@@ -12,8 +12,9 @@ from collections.abc import Callable
 from typing import Protocol
 
 from encoder_conformance.cia.cia301 import NMT_COMMAND_NAMES, NMT_COMMAND_TARGET, STATE_NAMES
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
+from encoder_conformance.dut.nmt.commands import send_command
 from encoder_conformance.dut.nmt.nmt_states import confirm, window_s
 from encoder_conformance.dut.nmt.persistent_error import raise_if_held_out_of
 from encoder_conformance.dut.sdo.sdo_frames import upload_request
@@ -25,7 +26,7 @@ ENTER = {"pre-operational": "pre-operational", "operational": "start", "stopped"
 
 
 class NmtObserver(Protocol):
-    dut: DeviceUnderTest
+    dut: DeviceLink
     method: str
 
     @property
@@ -39,13 +40,13 @@ class NmtObserver(Protocol):
 class _Commands:
     """Sending NMT commands and bringing the device into a state, shared by both observers."""
 
-    dut: DeviceUnderTest
+    dut: DeviceLink
     expect_state: Callable[[Mark, int, str], None]  # each observer's own (NmtObserver.expect_state)
 
     def command(self, name: str, node_id: int | None = None) -> Mark:
         if name not in NMT_COMMAND_NAMES:
             raise ValueError(f"unknown NMT command {name!r}")
-        return self.dut.nmt(name, node_id)
+        return send_command(self.dut, name, node_id)
 
     def go_to(self, state_name: str) -> None:
         """Bring the device into pre-operational, operational or stopped and confirm it (the heartbeat at the period
@@ -60,7 +61,7 @@ class HeartbeatObserver(_Commands):
 
     method = "heartbeat state byte"
 
-    def __init__(self, dut: DeviceUnderTest, period_ms: int) -> None:
+    def __init__(self, dut: DeviceLink, period_ms: int) -> None:
         self.dut = dut
         self.period_ms = period_ms
 
@@ -82,7 +83,7 @@ class ServiceObserver(_Commands):
 
     method = "SDO answers and SYNC-driven TPDOs"
 
-    def __init__(self, dut: DeviceUnderTest, tpdo_comm_index: int) -> None:
+    def __init__(self, dut: DeviceLink, tpdo_comm_index: int) -> None:
         self.dut = dut
         self.tpdo_cob_id = dut.read_uint(tpdo_comm_index, 1) & 0x7FF
         every = dut.read_uint(tpdo_comm_index, 2)

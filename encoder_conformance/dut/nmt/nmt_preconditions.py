@@ -11,7 +11,7 @@ periodic capture; the NMT states themselves are reached through ``nmt_states`` a
 
 from __future__ import annotations
 
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import format_frames
 from encoder_conformance.dut.link.notes import Notes
 from encoder_conformance.dut.nmt.persistent_error import (
@@ -23,7 +23,7 @@ from encoder_conformance.dut.nmt.persistent_error import (
 __all__ = ["clear_left_error", "error_register"]
 
 
-def clear_left_error(dut: DeviceUnderTest, notes: Notes, why: str, before: int = 0) -> int:
+def clear_left_error(dut: DeviceLink, notes: Notes, why: str, before: int = 0) -> int:
     """Where 1001h shows an error that was not there ``before``: NMT reset communication and its boot-up, noted
     (an AssertionError where no boot-up comes). Returns 1001h after the reset (0: none was needed, or it cleared)."""
     if not dut.usable:

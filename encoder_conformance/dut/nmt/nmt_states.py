@@ -16,9 +16,10 @@ from __future__ import annotations
 
 from encoder_conformance.cia.cia301 import NmtState
 from encoder_conformance.dut.custody.settings_journal import SettingsJournal
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark, format_frames
 from encoder_conformance.dut.link.notes import Notes
+from encoder_conformance.dut.nmt.commands import reset_node_and_wait, send_command
 from encoder_conformance.dut.nmt.heartbeat_state import describe, is_state_beat, leave_stopped, wait_state
 from encoder_conformance.dut.nmt.heartbeat_state import state_window_s as window_s
 from encoder_conformance.dut.nmt.persistent_error import error_register, raise_if_held_by_error
@@ -30,7 +31,7 @@ STATES = {"pre-operational": (NmtState.PRE_OPERATIONAL, "pre-operational"),
 CLAUSE = "CiA 301 v4.2.0 §7.3.2.2 (NMT state diagram), §7.2.8.3.2.2 (heartbeat state byte)"
 
 
-def confirm(dut: DeviceUnderTest, after: Mark, state: int, period_ms: float, why: str) -> None:
+def confirm(dut: DeviceLink, after: Mark, state: int, period_ms: float, why: str) -> None:
     """A heartbeat after ``after`` reports ``state``; else AssertionError naming the state it reports (operational
     not reached: not testable where an error the device keeps explains it)."""
     wait = window_s(dut, period_ms)
@@ -45,11 +46,11 @@ def confirm(dut: DeviceUnderTest, after: Mark, state: int, period_ms: float, why
     raise AssertionError(problem)
 
 
-def heartbeat_on(dut: DeviceUnderTest, journal: SettingsJournal) -> int:
+def heartbeat_on(dut: DeviceLink, journal: SettingsJournal) -> int:
     """1017h now, set to the profile's state-watch period (put back by the journal) where it is 0. Needs SDO: the
     device is brought out of stopped first (``leave_stopped``, else NMT reset communication and its boot-up)."""
     if not leave_stopped(dut):
-        mark = dut.nmt("reset-communication")
+        mark = send_command(dut, "reset-communication")
         assert dut.wait_bootup(mark) is not None, (
             f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after reset communication (sent to bring "
             f"the device out of stopped)\n{format_frames(dut.frames.since(mark)[-8:])}")
@@ -60,7 +61,7 @@ def heartbeat_on(dut: DeviceUnderTest, journal: SettingsJournal) -> int:
     return period
 
 
-def reach(dut: DeviceUnderTest, journal: SettingsJournal, notes: Notes, state_name: str) -> None:
+def reach(dut: DeviceLink, journal: SettingsJournal, notes: Notes, state_name: str) -> None:
     """Bring the device into ``state_name`` (pre-operational, operational, stopped) and see it there (see the
     module's docstring); AssertionError naming the state observed otherwise."""
     state, command = STATES[state_name]
@@ -68,14 +69,14 @@ def reach(dut: DeviceUnderTest, journal: SettingsJournal, notes: Notes, state_na
         _reach_by_services(dut, notes, state_name)
         return
     period = heartbeat_on(dut, journal)
-    mark = dut.nmt(command)
+    mark = send_command(dut, command)
     confirm(dut, mark, state, period, f"NMT {command} (to enter {state_name})")
 
 
-def _reach_by_services(dut: DeviceUnderTest, notes: Notes, state_name: str) -> None:
+def _reach_by_services(dut: DeviceLink, notes: Notes, state_name: str) -> None:
     """Without a heartbeat: SDO answers in pre-operational and operational, none in stopped."""
     state, command = STATES[state_name]
-    dut.nmt(command)
+    send_command(dut, command)
     if state == NmtState.STOPPED:
         answered = dut.responds(dut.sdo_silence_s)
         assert not answered, f"NMT stop: SDO still answered (no heartbeat producer to show the state) ({CLAUSE})"
@@ -86,7 +87,7 @@ def _reach_by_services(dut: DeviceUnderTest, notes: Notes, state_name: str) -> N
                f"{state_name} itself is not seen)")
 
 
-def start_operational(dut: DeviceUnderTest, journal: SettingsJournal, notes: Notes) -> None:
+def start_operational(dut: DeviceLink, journal: SettingsJournal, notes: Notes) -> None:
     """NMT start, and operational seen in the heartbeat (or an SDO answer without one); AssertionError otherwise,
     naming the state the heartbeat reports and 1001h. Works from stopped too."""
     try:
@@ -96,11 +97,11 @@ def start_operational(dut: DeviceUnderTest, journal: SettingsJournal, notes: Not
         raise AssertionError(f"{exc}{register}") from None
 
 
-def return_to_preoperational(dut: DeviceUnderTest, period_ms: int | None = None) -> None:
+def return_to_preoperational(dut: DeviceLink, period_ms: int | None = None) -> None:
     """NMT enter pre-operational: the heartbeat's 7Fh where ``period_ms`` (1017h) is known, else SDO answering
     again; marks the device lost when it went silent, and recovers with reset node (raising AssertionError) when it
     is alive but not back."""
-    mark = dut.nmt("pre-operational")
+    mark = send_command(dut, "pre-operational")
     if period_ms:
         observed = wait_state(dut, mark, NmtState.PRE_OPERATIONAL, window_s(dut, period_ms))
         if observed == NmtState.PRE_OPERATIONAL:
@@ -113,6 +114,6 @@ def return_to_preoperational(dut: DeviceUnderTest, period_ms: int | None = None)
     if not dut.heard_since(mark):
         dut.mark_lost("no SDO answer and no frame after NMT enter pre-operational")
         return
-    dut.reset_node_and_wait()  # alive but not back in pre-operational: recover, and say so
+    reset_node_and_wait(dut)  # alive but not back in pre-operational: recover, and say so
     raise AssertionError(f"the device did not return to pre-operational on NMT enter pre-operational ({seen}, but "
                          f"it still sends frames); recovered with NMT reset node ({CLAUSE})")

@@ -14,8 +14,9 @@ from __future__ import annotations
 from weakref import WeakKeyDictionary
 
 from encoder_conformance.cia.cia301 import ERROR_HISTORY, ERROR_REGISTER, NmtState
-from encoder_conformance.dut.link.device import DeviceUnderTest, SdoAborted
+from encoder_conformance.dut.link.device import DeviceLink, SdoAborted
 from encoder_conformance.dut.link.frames import Mark
+from encoder_conformance.dut.nmt.commands import send_command
 from encoder_conformance.dut.nmt.heartbeat_state import leave_stopped
 from encoder_conformance.errors import HeldByPersistentError
 
@@ -25,12 +26,12 @@ CLAUSE = ("CiA 301 v4.2.0 object 1029h (error behaviour, §7.5.2.32): a device f
 OUT_OF_OPERATIONAL = f"and does not stay in operational ({CLAUSE})"
 
 
-def error_register(dut: DeviceUnderTest) -> int:
+def error_register(dut: DeviceLink) -> int:
     """1001h now (0 where the profile has none)."""
     return dut.read_uint(ERROR_REGISTER) if dut.profile.entry(ERROR_REGISTER, 0) is not None else 0
 
 
-def _newest_error(dut: DeviceUnderTest) -> str:
+def _newest_error(dut: DeviceLink) -> str:
     """", newest 1003h entry XXXXXXXXh" where the device has an error history with an entry, else ""."""
     if dut.profile.entry(ERROR_HISTORY, 1) is None:
         return ""
@@ -44,18 +45,18 @@ def _newest_error(dut: DeviceUnderTest) -> str:
 
 #: per device, the 1001h value it kept after a reset communication: seen again, it is not reset once more (a device
 #: that boots in seconds would spend them on every test that needs operational)
-_KEPT: WeakKeyDictionary[DeviceUnderTest, int] = WeakKeyDictionary()
+_KEPT: WeakKeyDictionary[DeviceLink, int] = WeakKeyDictionary()
 
 
-def kept_error(dut: DeviceUnderTest) -> int:
+def kept_error(dut: DeviceLink) -> int:
     """1001h as the device kept it after a reset communication in this run (0: none seen)."""
     return _KEPT.get(dut, 0)
 
 
-def reset_and_read(dut: DeviceUnderTest) -> tuple[Mark, int | None]:
+def reset_and_read(dut: DeviceLink) -> tuple[Mark, int | None]:
     """NMT reset communication, its boot-up, then 1001h (remembered: ``kept_error``); None where no boot-up came.
     Returns the mark before the reset too, for a caller that names the frames after it."""
-    mark = dut.nmt("reset-communication")
+    mark = send_command(dut, "reset-communication")
     if dut.wait_bootup(mark) is None:
         return mark, None
     after = error_register(dut)
@@ -66,7 +67,7 @@ def reset_and_read(dut: DeviceUnderTest) -> tuple[Mark, int | None]:
     return mark, after
 
 
-def persisting_error(dut: DeviceUnderTest) -> int | None:
+def persisting_error(dut: DeviceLink) -> int | None:
     """1001h where it is set and stays set after NMT reset communication and its boot-up, else None (1001h is 0,
     the reset cleared it, or no boot-up came: the caller's own verdict stands then). The value the device kept
     after an earlier reset in this run counts without a new one. A device that may be in stopped is brought out of
@@ -83,13 +84,13 @@ def persisting_error(dut: DeviceUnderTest) -> int | None:
     return reset_and_read(dut)[1] or None
 
 
-def describe_hold(dut: DeviceUnderTest, what: str, register: int, consequence: str = OUT_OF_OPERATIONAL) -> str:
+def describe_hold(dut: DeviceLink, what: str, register: int, consequence: str = OUT_OF_OPERATIONAL) -> str:
     """The skip reason: ``what`` is not testable, the device holding error register ``register`` after a reset."""
     return (f"not testable: {what}: the device keeps an error that NMT reset communication does not clear (1001h = "
             f"{register:02X}h{_newest_error(dut)}) {consequence}")
 
 
-def raise_if_held_by_error(dut: DeviceUnderTest, what: str, consequence: str = OUT_OF_OPERATIONAL) -> None:
+def raise_if_held_by_error(dut: DeviceLink, what: str, consequence: str = OUT_OF_OPERATIONAL) -> None:
     """``HeldByPersistentError`` where 1001h is set and stays set after NMT reset communication; else returns, the
     device without an error (the reset cleared it). Where operational was not reached, the caller's own verdict
     follows; as a test's precondition, the test then starts with no error active."""
@@ -98,7 +99,7 @@ def raise_if_held_by_error(dut: DeviceUnderTest, what: str, consequence: str = O
         raise HeldByPersistentError(describe_hold(dut, what, register, consequence))
 
 
-def raise_if_held_out_of(dut: DeviceUnderTest, expected: int, what: str) -> None:
+def raise_if_held_out_of(dut: DeviceLink, expected: int, what: str) -> None:
     """A state was expected and not reached: where it was operational, ``HeldByPersistentError`` if an error the
     device keeps explains it (the caller raises its own verdict otherwise)."""
     if expected == NmtState.OPERATIONAL:

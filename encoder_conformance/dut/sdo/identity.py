@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.sdo.patient_read import read_patiently
 from encoder_conformance.profile.model import DeviceProfile
 
@@ -49,7 +49,7 @@ class DeviceIdentity:
         }
 
 
-def _optional_u32(dut: DeviceUnderTest, index: int, sub: int, malformed: list[str]) -> int | None:
+def _optional_u32(dut: DeviceLink, index: int, sub: int, malformed: list[str]) -> int | None:
     try:
         data = read_patiently(dut, index, sub)
     except SdoAbortedError:
@@ -68,7 +68,7 @@ def text_of(data: bytes) -> str:
         return data.decode("latin-1")
 
 
-def read_identity(dut: DeviceUnderTest) -> DeviceIdentity:
+def read_identity(dut: DeviceLink) -> DeviceIdentity:
     """Everything the device says about itself; absent objects read as None."""
     try:
         name = text_of(read_patiently(dut, 0x1008, 0))

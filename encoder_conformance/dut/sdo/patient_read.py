@@ -4,10 +4,10 @@ loaded tester host is far more often the host than the device, and the timing su
 
 from __future__ import annotations
 
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 
 
-def read_patiently(dut: DeviceUnderTest, index: int, sub: int = 0) -> bytes:
+def read_patiently(dut: DeviceLink, index: int, sub: int = 0) -> bytes:
     """``dut.read``, asked once more when it timed out and the device is not lost (aborts raise at once)."""
     try:
         return dut.read(index, sub)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import can
 
 from encoder_conformance.cia.cia301 import SDO_ABORT, SDO_REQUEST_BASE, SDO_RESPONSE_BASE, SdoAbortCode, block_crc
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.sdo.sdo_frames import SdoResponse, abort_name, expedited_download_request, upload_request
 from encoder_conformance.dut.sdo.sdo_words import Stamped
@@ -54,7 +54,7 @@ def echoes(request: bytes, response: bytes) -> bool:
 class SdoProtocolClient:
     """Frames of the SDO protocol, one step at a time, to the device's default SDO server."""
 
-    def __init__(self, dut: DeviceUnderTest) -> None:
+    def __init__(self, dut: DeviceLink) -> None:
         self.dut = dut
 
     # -- single steps ------------------------------------------------------------------------

@@ -13,13 +13,13 @@ from __future__ import annotations
 import can
 
 from encoder_conformance.cia.cia301 import EMCY_BASE, EmcyCode
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 
 #: frames looked at back from now for the last boot-up (a give-back reads and writes every value: ~1,000 frames)
 LOOK_BACK = 5000
 
 
-def errors_after_boot(dut: DeviceUnderTest) -> list[int]:
+def errors_after_boot(dut: DeviceLink) -> list[int]:
     """The EMCY error codes the node sent after its latest boot-up in the frame log (none: [])."""
     emcy = EMCY_BASE + dut.node_id
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from encoder_conformance.cia.cia301 import SAVE, STORE_PARAMETERS, STORE_SUB_OF_GROUP
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.errors import CannotPersist
 from encoder_conformance.profile import quirk_effects as fx
@@ -42,7 +42,7 @@ class StoreCommand:
         frame = sdo_frames.expedited_download_request(self.index, self.sub, self.signature)
         return bytes([0x22]) + frame[1:] if self.reboots else frame
 
-    def issue(self, dut: DeviceUnderTest) -> None:
+    def issue(self, dut: DeviceLink) -> None:
         """Send it; for a rebooting store, wait for the boot-up (AssertionError if none comes)."""
         if not self.reboots:
             dut.write(self.index, self.sub, self.signature)
@@ -104,7 +104,7 @@ def store_commands_for(profile: DeviceProfile, keys: list[tuple[int, int]]) -> l
     return sorted(commands, key=lambda c: c.reboots)  # a rebooting store last: it resets the device
 
 
-def persist_entry(dut: DeviceUnderTest, index: int, sub: int) -> str:
+def persist_entry(dut: DeviceLink, index: int, sub: int) -> str:
     """Store the entry's current value; returns how (for the evidence). Raises CannotPersist."""
     command = _store_command(dut.profile, index, sub)
     if command is None:

@@ -16,7 +16,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid, mapping_fields, mapping_word, pdo_mapping_of
 from encoder_conformance.dut.custody.write_plan import Key, plan_writes
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 
 Entry = tuple[int, int, int]  # (index, sub-index, length in bits)
 U8, U32 = 1, 4
@@ -29,13 +29,13 @@ def mapping_object(comm: int) -> int:
     return mapping
 
 
-def read_mapping(dut: DeviceUnderTest, comm: int) -> list[Entry]:
+def read_mapping(dut: DeviceLink, comm: int) -> list[Entry]:
     """The entries the PDO maps now (sub 1 .. sub 0)."""
     mapping = mapping_object(comm)
     return [mapping_fields(dut.read_uint(mapping, sub)) for sub in range(1, dut.read_uint(mapping, 0) + 1)]
 
 
-def invalidate(dut: DeviceUnderTest, comm: int) -> int:
+def invalidate(dut: DeviceLink, comm: int) -> int:
     """Step 1: COB-ID bit 31 set (where it is clear); returns the COB-ID found."""
     cob_id = dut.read_uint(comm, 1)
     if not cob_id & COB_ID_INVALID:
@@ -43,7 +43,7 @@ def invalidate(dut: DeviceUnderTest, comm: int) -> int:
     return cob_id
 
 
-def apply_mapping(dut: DeviceUnderTest, comm: int, entries: list[Entry], enable: bool = True) -> None:
+def apply_mapping(dut: DeviceLink, comm: int, entries: list[Entry], enable: bool = True) -> None:
     """The CiA 301 procedure: PDO invalid, sub 0 = 0, the entries, sub 0 = n, then the COB-ID valid
     (``enable``) or as found. A refused step raises SdoAbortedError (the caller's custody puts it back)."""
     mapping = mapping_object(comm)
@@ -66,7 +66,7 @@ class MappingCustody:
     in the CiA 301 order. Give the device back in pre-operational before the exit where a device allows
     mapping changes only there."""
 
-    def __init__(self, dut: DeviceUnderTest, comm: int) -> None:
+    def __init__(self, dut: DeviceLink, comm: int) -> None:
         self.dut = dut
         self.comm = comm
         mapping = mapping_object(comm)

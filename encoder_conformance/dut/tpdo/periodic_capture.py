@@ -20,9 +20,10 @@ from canopen.sdo.exceptions import SdoAbortedError
 from encoder_conformance.cia.cia301 import NmtState
 from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.custody.settings_journal import SettingsJournal
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.link.latency_probe import HostLatency, LatencyProbe, TwinLateness
+from encoder_conformance.dut.nmt.commands import send_command
 from encoder_conformance.dut.nmt.heartbeat_state import state_window_s
 from encoder_conformance.dut.nmt.nmt_preconditions import error_register
 from encoder_conformance.dut.nmt.nmt_states import return_to_preoperational
@@ -65,13 +66,13 @@ class PeriodicCapture:
     leave_alone: frozenset[tuple[int, int]] = frozenset()
 
     @classmethod
-    def at_test_period(cls, dut: DeviceUnderTest, count: int) -> PeriodicCapture:
+    def at_test_period(cls, dut: DeviceLink, count: int) -> PeriodicCapture:
         """Both streams at the profile's heartbeat test period, ``count`` frames each."""
         period = dut.profile.timing.heartbeat_test_period_ms
         return cls(PeriodicStream("heartbeat", period, count), PeriodicStream("event timer", period, count),
                    clock=dut.frames.clock.describe())
 
-    def take(self, dut: DeviceUnderTest, twin: TwinLateness | None) -> None:
+    def take(self, dut: DeviceLink, twin: TwinLateness | None) -> None:
         """Set up both streams, capture them, and put the settings back and the device into pre-operational
         (a problem with that fails the stream(s) it concerns)."""
         journal = SettingsJournal(dut)
@@ -80,7 +81,7 @@ class PeriodicCapture:
         finally:
             self._put_back(dut, journal)
 
-    def _put_back(self, dut: DeviceUnderTest, journal: SettingsJournal) -> None:
+    def _put_back(self, dut: DeviceLink, journal: SettingsJournal) -> None:
         """Pre-operational again and the settings as found; a problem fails the stream(s) it concerns."""
         if not dut.usable:
             return
@@ -93,7 +94,7 @@ class PeriodicCapture:
         if problems:
             self.heartbeat.error = self.event_timer.error = "could not put back: " + "; ".join(problems)
 
-    def _capture(self, dut: DeviceUnderTest, journal: SettingsJournal, twin: TwinLateness | None) -> None:
+    def _capture(self, dut: DeviceLink, journal: SettingsJournal, twin: TwinLateness | None) -> None:
         beat, timer = self.heartbeat, self.event_timer
         self._no_error_left(dut)
         if dut.profile.capabilities.heartbeat_producer:
@@ -109,7 +110,7 @@ class PeriodicCapture:
             return
         if timer in streams:
             self.started = True
-            started = dut.nmt("start")
+            started = send_command(dut, "start")
             problem = _not_operational(dut, started, beat) if beat in streams else None
             if problem is not None and self.kept_error:  # an error no reset clears may hold it in pre-operational
                 timer.skip = describe_hold(dut, "the event-timer TPDO stream", self.kept_error)
@@ -132,7 +133,7 @@ class PeriodicCapture:
                 timer.timestamps = [m.timestamp for m in hits]
         self.host = probe.result()
 
-    def _no_error_left(self, dut: DeviceUnderTest) -> None:
+    def _no_error_left(self, dut: DeviceLink) -> None:
         """1001h = 0 before the capture; an error left active by an earlier test is cleared by NMT reset
         communication (its boot-up waited for), and both streams say so. An error the reset does not clear is
         kept (``kept_error``): where it holds the device out of operational, the TPDO stream is not testable."""
@@ -147,7 +148,7 @@ class PeriodicCapture:
         self.event_timer.notes.append(note)
 
 
-def _not_operational(dut: DeviceUnderTest, started: Mark, beat: PeriodicStream) -> str | None:
+def _not_operational(dut: DeviceLink, started: Mark, beat: PeriodicStream) -> str | None:
     """None once the heartbeat reports operational after NMT start (settle time + 2 periods), else what it shows."""
     wait = state_window_s(dut, beat.period_ms)
     if dut.wait_heartbeat(started, wait, state=NmtState.OPERATIONAL) is not None:
@@ -169,7 +170,7 @@ def _configure(stream: PeriodicStream, configure: Callable[[], None]) -> None:
         stream.error = f"{stream.what}: setting up the capture failed: {exc}"
 
 
-def _configure_event_timer(dut: DeviceUnderTest, journal: SettingsJournal, stream: PeriodicStream,
+def _configure_event_timer(dut: DeviceLink, journal: SettingsJournal, stream: PeriodicStream,
                            leave_alone: frozenset[tuple[int, int]]) -> None:
     choice = choose_tpdo(dut, 5, EVENT_TIMER_TYPES, leave_alone)
     stream.deviations.extend(choice.deviations)

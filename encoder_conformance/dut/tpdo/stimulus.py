@@ -7,14 +7,14 @@ from collections.abc import Callable
 import can
 
 from encoder_conformance.dut.bench.actuator import ShaftDrive
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 
 SYNC_SPACING_S = 0.01  # 100 SYNCs per second: a usual bus cycle
 TURN_PER_SYNC = 0.01  # revolutions the shaft turns before each SYNC (1 rev/s at the SYNC spacing)
 
 
-def pdo_stimulus(dut: DeviceUnderTest, shaft: ShaftDrive | None, syncs: int = 10,
+def pdo_stimulus(dut: DeviceLink, shaft: ShaftDrive | None, syncs: int = 10,
                  until: Callable[[can.Message], bool] | None = None) -> Mark:
     """Turn the shaft (where the bench can) a little before each of ``syncs`` SYNCs, SYNC_SPACING_S apart,
     then watch the device's PDO silence window after the last one; returns a mark before the first SYNC.

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, cob_id_valid
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.errors import NoUsableTpdo
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.model import resolve_node_id_expression
@@ -28,7 +28,7 @@ class TpdoChoice:
     deviations: list[tuple[str, str]] = field(default_factory=list)  # (quirk id, text)
 
 
-def fixed_behaviour_tpdos(dut: DeviceUnderTest) -> tuple[set[int], tuple[str, str] | None]:
+def fixed_behaviour_tpdos(dut: DeviceLink) -> tuple[set[int], tuple[str, str] | None]:
     """TPDOs whose behaviour a fixed-layout quirk decides (e.g. POSITAL 1800h: cyclic by 2200h, sub 2
     ignored), and the deviation to report for skipping them."""
     found = dut.profile.quirk_of(fx.FixedTpdoMapping)
@@ -43,7 +43,7 @@ def fixed_behaviour_tpdos(dut: DeviceUnderTest) -> tuple[set[int], tuple[str, st
     return fixed, (quirk_id, f"{title}: {', '.join(f'{c:04X}h' for c in sorted(fixed))} not used here")
 
 
-def choose_tpdo(dut: DeviceUnderTest, sub: int, usable_types: list[int],
+def choose_tpdo(dut: DeviceLink, sub: int, usable_types: list[int],
                 leave_alone: frozenset[tuple[int, int]] = frozenset()) -> TpdoChoice:
     """The first TPDO that maps something, whose sub-index ``sub`` is writable and whose type is one of
     ``usable_types`` (in order of preference): to be written if sub 2 is writable, else as the device has

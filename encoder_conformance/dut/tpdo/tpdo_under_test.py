@@ -9,48 +9,33 @@ from dataclasses import dataclass
 
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.cia.cia301 import PDO_MAPPING_OFFSET
 from encoder_conformance.dut.custody.settings_journal import SettingsJournal
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.sdo.sdo_frames import abort_name
 from encoder_conformance.dut.tpdo.pdo_mapping import Entry, read_mapping
+from encoder_conformance.dut.tpdo.tpdo import TpdoParameters
 from encoder_conformance.dut.tpdo.tpdo_choice import TpdoChoice
 from encoder_conformance.dut.tpdo.tpdo_while_invalid import WhileInvalid
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.model import DeviceProfile
 
-CAN_ID_BITS = 0x7FF  # the 11-bit CAN-ID in a COB-ID
-
 
 @dataclass
-class TpdoUnderTest:
+class TpdoUnderTest(TpdoParameters):
     """One TPDO of the device, configured for a test; every write goes through ``journal``."""
 
-    dut: DeviceUnderTest
+    dut: DeviceLink
     journal: SettingsJournal
     comm: int  # its communication parameter (18xxh)
     trans_type: int  # the transmission type the test uses (the device's own where sub 2 is read-only)
 
     @classmethod
-    def chosen(cls, dut: DeviceUnderTest, journal: SettingsJournal, choice: TpdoChoice) -> TpdoUnderTest:
+    def chosen(cls, dut: DeviceLink, journal: SettingsJournal, choice: TpdoChoice) -> TpdoUnderTest:
         """The TPDO ``choice`` names (``choose_tpdo``), enabled for the test where it is disabled."""
         tpdo = cls(dut, journal, choice.comm, choice.transmission_type)
         if choice.enable_cob_id is not None:
             tpdo.configure(cob_id=choice.enable_cob_id)
         return tpdo
-
-    @property
-    def mapping_index(self) -> int:
-        """Its mapping parameter (1Axxh)."""
-        return self.comm + PDO_MAPPING_OFFSET
-
-    def cob_id(self) -> int:
-        """Sub 1 (COB-ID) as the device has it now."""
-        return self.dut.read_uint(self.comm, 1)
-
-    def can_id(self) -> int:
-        """The CAN-ID it is sent on, from sub 1 read now."""
-        return self.cob_id() & CAN_ID_BITS
 
     def configure(self, *, cob_id: int | None = None, trans_type: int | None = None,
                   event_timer: int | None = None) -> None:

@@ -9,7 +9,7 @@ from functools import partial
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID
-from encoder_conformance.dut.link.device import DeviceUnderTest
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.notes import Notes
 
 
@@ -19,7 +19,7 @@ class WhileInvalid:
     device refuse a change of either while the TPDO exists (open reading tpdo-inhibit-and-sync-start-fixed-while-
     valid)."""
 
-    def __init__(self, dut: DeviceUnderTest, notes: Notes) -> None:
+    def __init__(self, dut: DeviceLink, notes: Notes) -> None:
         self._dut = dut
         self._notes = notes
         self._undo: list[tuple[int, int, bytes]] = []
