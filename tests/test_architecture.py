@@ -397,11 +397,7 @@ def test_the_state_command_finder_sees_every_spelling():
 
 #: modules outside dut/nmt/ that may build an NMT command frame themselves: the twin decodes them (sim/), cia/ names
 #: them; every other NMT command the tester sends goes through dut.nmt (issue 41)
-NMT_FRAMES_ALSO_IN = {
-    "encoder_conformance/probe/link.py": "the probe's own link to a device no profile describes yet",
-    "encoder_conformance/probe/entries.py": "through the probe's link (values across a reset)",
-    "encoder_conformance/probe/session.py": "through the probe's link (transmission types in operational)",
-}
+NMT_FRAMES_ALSO_IN: dict[str, str] = {}
 NMT_FRAMES_HOMES = ("encoder_conformance/dut/nmt/", "encoder_conformance/sim/", "encoder_conformance/cia/")
 _NMT_FRAME = re.compile(r"\b(NMT_COB_ID|NMT_COMMAND_NAMES)\b|\.nmt\(")
 

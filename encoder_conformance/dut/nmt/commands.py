@@ -6,6 +6,7 @@ frame (``tests/test_architecture.py``)."""
 from __future__ import annotations
 
 import can
+import canopen
 
 from encoder_conformance.cia.cia301 import HEARTBEAT_BASE, NMT_COB_ID, NMT_COMMAND_NAMES
 from encoder_conformance.dut.link.device import DeviceLink
@@ -18,6 +19,11 @@ def command_frame(command: str, node_id: int) -> bytes:
     return bytes([NMT_COMMAND_NAMES[command], node_id])
 
 
+def send_on(network: canopen.Network, command: str, node_id: int) -> None:
+    """NMT command ``command`` to ``node_id`` on ``network``, whoever holds it (the probe's link too)."""
+    network.send_message(NMT_COB_ID, command_frame(command, node_id))
+
+
 def send_command(dut: DeviceLink, command: str, node_id: int | None = None) -> Mark:
     """Send an NMT command (to the device, or ``node_id``; 0 = all). Returns a mark before it."""
     return dut.send(NMT_COB_ID, command_frame(command, dut.node_id if node_id is None else node_id))
@@ -27,7 +33,7 @@ def send_in_custody(dut: DeviceLink, command: str, node_id: int) -> Mark:
     """An NMT command to ``node_id`` also while the run is stopping or the device counts as lost (custody may always
     talk). Returns a mark before it."""
     mark = dut.frames.mark()
-    dut.network.send_message(NMT_COB_ID, command_frame(command, node_id))
+    send_on(dut.network, command, node_id)
     return mark
 
 
