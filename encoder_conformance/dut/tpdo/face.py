@@ -7,8 +7,9 @@ from __future__ import annotations
 from encoder_conformance.cia.cia301 import TPDO_COMMUNICATION
 from encoder_conformance.dut.custody.settings_journal import SettingsJournal
 from encoder_conformance.dut.link.device import DeviceLink
+from encoder_conformance.dut.link.notes import Notes
 from encoder_conformance.dut.tpdo.tpdo import Tpdo
-from encoder_conformance.dut.tpdo.tpdo_choice import TpdoChoice, choose_tpdo
+from encoder_conformance.dut.tpdo.tpdo_choice import NoUsableTpdo, TpdoChoice, choose_tpdo
 from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 
 
@@ -33,3 +34,19 @@ class Tpdos:
     def chosen(self, journal: SettingsJournal, choice: TpdoChoice) -> TpdoUnderTest:
         """The TPDO ``choice`` names, enabled through ``journal`` where it is disabled."""
         return TpdoUnderTest.chosen(self._dut, journal, choice)
+
+    def for_test(self, sub: int, usable_types: list[int], journal: SettingsJournal, notes: Notes) -> TpdoUnderTest:
+        """The TPDO a test uses (``choose``), set up through ``journal`` (which puts it back), the choice's documented
+        deviations and notes in ``notes``; NoUsableTpdo (its deviations noted) where none qualifies."""
+        try:
+            choice = self.choose(sub, usable_types)
+        except NoUsableTpdo as exc:
+            for quirk_id, text in exc.deviations:
+                notes.deviation(quirk_id, text)
+            raise
+        for quirk_id, text in choice.deviations:
+            notes.deviation(quirk_id, text)
+        tpdo = self.chosen(journal, choice)
+        for note in choice.notes:
+            notes.note(note)
+        return tpdo
