@@ -34,7 +34,7 @@ from encoder_conformance.dut.link import LatencyProbe, format_frames
 from encoder_conformance.dut.nmt import raise_if_held_by_error
 from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import inconclusive_if_host_late
+from encoder_conformance.suite_support import inconclusive_if_host_late
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.7 (EMCY)"), pytest.mark.requires("emcy")]
 

@@ -54,7 +54,7 @@ from encoder_conformance.models.nmt import NmtModel, Tracked
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
-from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter
+from encoder_conformance.suite_support import STORE_GROUPS, changeable_parameter
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2.2 (NMT state diagram, services per state, initialisation)")
 

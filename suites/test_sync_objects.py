@@ -31,8 +31,7 @@ from encoder_conformance.dut.sdo import SdoResponse, abort_name, sdo_frames
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
-from encoder_conformance.suite_support.checks import abort_accepted
-from encoder_conformance.suite_support.tpdo import tpdo_under_test
+from encoder_conformance.suite_support import abort_accepted, tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 v4.2.0 §7.5.2.5 object 1005h (COB-ID SYNC)"),
               pytest.mark.requires("sync_consumer"), pytest.mark.usefixtures("no_error_left")]

@@ -416,26 +416,29 @@ def test_nmt_commands_are_sent_only_through_dut_nmt():
 
 
 def _faces() -> dict[str, set[str]]:
-    """Each package of dut/ (and dut itself), and the names its face exports: its ``__init__``'s names, and its
-    modules."""
+    """Each package of dut/ (and dut itself, and suite_support/), and the names its face exports: its ``__init__``'s
+    names, and its modules."""
     from encoder_conformance.dut.face_exports import face_names
 
-    packages = [LIBRARY / "dut", *(p.parent for p in (LIBRARY / "dut").glob("*/__init__.py"))]
+    packages = [LIBRARY / "dut", LIBRARY / "suite_support",
+                *(p.parent for p in (LIBRARY / "dut").glob("*/__init__.py"))]
     return {_module_name(p): set(face_names(str(p / "__init__.py"))) | {m.stem for m in p.glob("*.py")}
             for p in packages}
 
 
 def test_suites_import_only_the_faces_of_dut():
-    """A suite imports from ``encoder_conformance.dut`` or one of its packages (``dut.nmt``, ``dut.tpdo``, ...) the
-    names its face exports, never a module inside a package: what a test uses has one address per protocol."""
+    """A suite imports from ``encoder_conformance.dut`` or one of its packages (``dut.nmt``, ``dut.tpdo``, ...), and
+    from ``suite_support``, the names its face exports, never a module inside a package: what a test uses has one
+    address per protocol."""
     faces = _faces()
     found = []
     for path in (REPO / "suites").glob("*.py"):
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.Import):
                 found += [f"{path.name}: import {a.name}" for a in node.names if a.name.startswith(
-                    "encoder_conformance.dut")]
-            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("encoder_conformance.dut"):
+                    ("encoder_conformance.dut", "encoder_conformance.suite_support"))]
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith(
+                    ("encoder_conformance.dut", "encoder_conformance.suite_support")):
                 module = node.module or ""
                 if module not in faces:
                     found.append(f"{path.name}: from {module}")
