@@ -3,9 +3,9 @@
 Every exception class the library defines is in this picture, and each but one derives from
 ``EncoderConformanceError``, so ``except EncoderConformanceError`` catches whatever the library raises on
 purpose. Each is defined below, and the module that raises it imports it from here (and keeps it importable
-under its old name, e.g. ``encoder_conformance.dut.custody.PreflightError``). Where a class also needs a base of
+under its old name, e.g. ``encoder_conformance.dut.custody.custody.PreflightError``). Where a class also needs a base of
 a library this package builds on, it derives from both; ``SdoAborted`` is defined beside the code that raises
-it (``dut/device.py``), so that this module, at the bottom of every layer, imports no third-party package.
+it (``dut/link/device.py``), so that this module, at the bottom of every layer, imports no third-party package.
 The exit code a class leads to is set where it is caught (``exit_codes.py`` names them)::
 
     Exception
@@ -19,17 +19,17 @@ The exit code a class leads to is set where it is caught (``exit_codes.py`` name
           +-- BusSetupError             the CAN bus could not be opened
           +-- DutLostError              the device stopped answering (a finding about the device)
           |    +-- BusLostError         the tester lost its bus: nothing can be tested
-          +-- PreflightError            the run cannot start: pre-flight (dut/custody.py)
+          +-- PreflightError            the run cannot start: pre-flight (dut/custody/custody.py)
           |    +-- IdentityMismatch     the node is plainly another product than the profile's
-          +-- SdoAborted                the device refused an SDO request (dut/device.py); also canopen's
+          +-- SdoAborted                the device refused an SDO request (dut/link/device.py); also canopen's
           |                             SdoAbortedError (-> SdoError), so a finding about the device
-          +-- PowerSwitchError          the bench's power switch failed (dut/power.py)
-          +-- CannotPersist             the profile gives no way to store an entry (dut/persist.py)
-          +-- NoUsableTpdo              no TPDO of the profile can serve a test: a skip (dut/tpdo_choice.py)
+          +-- PowerSwitchError          the bench's power switch failed (dut/bench/power.py)
+          +-- CannotPersist             the profile gives no way to store an entry (dut/store/persist.py)
+          +-- NoUsableTpdo              no TPDO of the profile can serve a test: a skip (dut/tpdo/tpdo_choice.py)
           +-- NotJudged                 a check in scope could not judge the device (coverage.Hold says why): a
           |    |                        skip that makes the verdict INCOMPLETE or at most PASS WITH WARNINGS
           |    +-- HeldByPersistentError  an error no reset clears keeps the device out of the state a test needs
-          |                             (dut/persistent_error.py)
+          |                             (dut/nmt/persistent_error.py)
           |   the simulator (control flow of its SDO server, never seen by a test)
           +-- SdoAbort                  makes the twin's SDO server answer with an abort (sim/sdo_server.py)
           +-- SdoNoReply                makes the twin's SDO server send nothing (sim/sdo_server.py)

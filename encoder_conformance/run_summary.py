@@ -152,7 +152,7 @@ class RunSummary:
     device_failed: str | None = None  # the finding that stopped the run (start-up check, a device gone silent)
     not_run: int = 0  # tests collected but not run (the run stopped early)
     device_restored: bool | None = None
-    device_memory: str | None = None  # the memory is not as found where the values are (dut/boot_memory.py)
+    device_memory: str | None = None  # the memory is not as found where the values are (dut/store/boot_memory.py)
     report_dir: str | None = None
     time_budget: dict[str, Any] | None = None  # where the run's time went (plugin/time_budget.py)
     scope: dict[str, str] = field(default_factory=dict)  # what the station and the options left out, declared up front

@@ -23,21 +23,33 @@ from dataclasses import replace
 
 import pytest
 
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.encoder_bench import EncoderBench
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
-from encoder_conformance.dut.pdo_mapping import MappingCustody, apply_mapping, describe
-from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.bench import EncoderBench
+from encoder_conformance.dut.link import format_frames
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.tpdo import (
+    MappingCustody,
+    NoUsableTpdo,
+    TpdoUnderTest,
+    apply_mapping,
+    choose_tpdo,
+    describe,
+)
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.cam import Cam
 from encoder_conformance.models.encoder.position import units_per_rev
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable, skip_text
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.cam import CHANNEL, WINDOW_RULE, CamChannel, Findings, Remapped, cam_names
-from encoder_conformance.suite_support.checks import abort_accepted
+from encoder_conformance.suite_support import (
+    CHANNEL,
+    WINDOW_RULE,
+    CamChannel,
+    Findings,
+    Remapped,
+    abort_accepted,
+    cam_names,
+)
 
 # the position is put by preset (capability preset), so the tests run on a bench without a motor
 pytestmark = [pytest.mark.spec("CiA 406 6300h-6337h (CAM)"), pytest.mark.requires("cam", "preset"),
@@ -410,25 +422,24 @@ def cam_tpdo(cam_channel: CamChannel, evidence: Evidence) -> Iterator[Remapped]:
                       f"mapping before {describe(before)}")
         yield Remapped(comm, tpdo.can_id())
         if dut.usable:
-            return_to_preoperational(dut)
+            dut.nmt.back_to_preoperational()
 
 
 @pytest.mark.usefixtures("no_error_left")  # NMT start: no error may hold the device out of operational
 def test_cam_state_in_tpdo_matches_sdo(cam_channel: CamChannel, cam_tpdo: Remapped, settings_journal,
-                                       evidence: Evidence) -> None:
+                                       evidence: Evidence, dut: DeviceUnderTest) -> None:
     """6300h sub 1 mapped into a TPDO: after each SYNC the PDO carries the state 6300h shows over SDO and the model
     expects (CiA 406 6300h PDO-mappable, CiA 301 §7.2.2; WDGA T 6.6)."""
     cams = cam_channel.windows()
     reference = cam_channel.configure(cams, enable=(1 << cam_channel.count) - 1)
-    dut = cam_channel.dut
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     problems: list[str] = []
     positions = [cam_channel.outside(cams), *(_mid(cam) for cam in list(cams.values())[:3])]
     window = dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
     for position in positions:
         observed, expected = cam_channel.visit(reference, position)
         mark = dut.send_sync()
-        frame = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cam_tpdo.cob_id, window, mark)
+        frame = dut.frames.wait_for(dut.tpdo.at(cam_tpdo.comm).frames(cam_tpdo.cob_id), window, mark)
         if frame is None:
             problems.append(f"at {position}: no TPDO {cam_tpdo.cob_id:03X}h after SYNC\n"
                             f"{format_frames(dut.frames.since(mark)[:10])}")

@@ -29,14 +29,12 @@ from encoder_conformance.cia.cia301 import (
     EmcyCode,
 )
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.emcy_trigger import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.latency_probe import LatencyProbe
-from encoder_conformance.dut.nmt_states import reach, return_to_preoperational, start_operational
-from encoder_conformance.dut.persistent_error import raise_if_held_by_error
+from encoder_conformance.dut.emcy import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
+from encoder_conformance.dut.link import LatencyProbe, format_frames
+from encoder_conformance.dut.nmt import raise_if_held_by_error
 from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import inconclusive_if_host_late
+from encoder_conformance.suite_support import inconclusive_if_host_late
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.7 (EMCY)"), pytest.mark.requires("emcy")]
 
@@ -165,7 +163,7 @@ def test_emcy_sent_in_state(dut, emcy, settings_journal, back_to_preoperational,
     evidence.rests_on("cia", STATE_CLAUSE)
     trigger = emcy.trigger()
     if state == "operational":
-        start_operational(dut, settings_journal, evidence)
+        dut.nmt.transition("operational", settings_journal, evidence)
     emcy.wait(trigger.fire(), trigger, f"in {state}, after {trigger.name}")
 
 
@@ -175,11 +173,11 @@ def test_no_emcy_in_stopped(dut, emcy, settings_journal, back_to_preoperational,
     evidence.rests_on("cia", STATE_CLAUSE)
     trigger = emcy.trigger()
     cob_id = emcy.cob_id()
-    reach(dut, settings_journal, evidence, "stopped")  # seen there (heartbeat 04h) before the error is caused
+    dut.nmt.transition("stopped", settings_journal, evidence)  # seen there (heartbeat 04h) before the error is caused
     mark = trigger.fire()
     sent = dut.frames.quiet_period(cob_id.matches, trigger.silence_s(), mark)
     found = dut.profile.quirk_of(fx.EmcyInStopped)
-    return_to_preoperational(dut)
+    dut.nmt.back_to_preoperational()
     if found is not None:
         evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
         evidence.note(f"in stopped, after {trigger.name}: " + ("EMCY sent" if sent else "no EMCY"))

@@ -13,18 +13,17 @@ import time
 
 import pytest
 
-from encoder_conformance.cia.cia301 import PDO_MAPPING_OFFSET
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.reference_custody import ReferenceCustody
-from encoder_conformance.dut.store_watch import AUTO_STORED
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, can_id_of, cob_id_valid
+from encoder_conformance.dut.custody import ReferenceCustody
+from encoder_conformance.dut.link import format_frames
+from encoder_conformance.dut.store import AUTO_STORED
+from encoder_conformance.dut.tpdo import TpdoUnderTest
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.position import position_limits, units_per_rev, unsigned_in_span
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.plugin.skips import not_applicable, not_equipped
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import documented_quirk
+from encoder_conformance.suite_support import documented_quirk
 
 pytestmark = [pytest.mark.spec("CiA 406 §6 (6000h-6004h, 6500h, 6509h)"), pytest.mark.requires("encoder")]
 
@@ -382,21 +381,22 @@ def test_position_in_tpdo_equals_sdo(encoder, dut, settings_journal, back_to_pre
     comm, offset, bits, (kind, timer) = candidates[0]
     tpdo = TpdoUnderTest(dut, settings_journal, comm, kind)
     cob_id = tpdo.cob_id()
+    can_id = can_id_of(cob_id)
     enable = None
-    if cob_id & 0x80000000:
+    if cob_id & COB_ID_INVALID:
         if not tpdo.writable(1):
             not_applicable(f"{comm:04X}h is disabled and its COB-ID is read-only")
-        enable = cob_id & 0x7FFFFFFF
+        enable = cob_id_valid(cob_id)
     tpdo.configure(cob_id=enable, trans_type=kind, event_timer=timer)
     before = encoder.access.position()
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     mark = dut.frames.mark()
     if 1 <= kind <= 240:
         for _ in range(kind):
             dut.send_sync()
-    pdo = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id & 0x7FF, 2.0, mark)
+    pdo = dut.frames.wait_for(tpdo.frames(can_id), 2.0, mark)
     after = encoder.access.position()
-    assert pdo is not None, f"no TPDO on {cob_id & 0x7FF:03X}h ({comm:04X}h type {kind}) after start" + (
+    assert pdo is not None, f"no TPDO on {can_id:03X}h ({comm:04X}h type {kind}) after start" + (
         " and SYNC" if 1 <= kind <= 240 else "")
     raw = int.from_bytes(bytes(pdo.data[offset:offset + bits // 8]), "little")
     flags = encoder.access.description.flags
@@ -406,7 +406,7 @@ def test_position_in_tpdo_equals_sdo(encoder, dut, settings_journal, back_to_pre
         raw -= 1 << bits
     evidence.note(f"SDO {before} / TPDO {raw} / SDO {after}: {format_frames([pdo])}")
     assert before == after, f"the position changed while the shaft was at rest ({before} -> {after})"
-    assert raw == before, f"TPDO {cob_id & 0x7FF:03X}h carries position {raw}, SDO 6004h reads {before}"
+    assert raw == before, f"TPDO {can_id:03X}h carries position {raw}, SDO 6004h reads {before}"
 
 
 @pytest.mark.destructive
@@ -453,7 +453,8 @@ def test_limit_switch_flags_in_the_process_value(encoder, dut, settings_journal,
         not_applicable("no fixed SYNC TPDO carries the process value")
     evidence.rests_on("manual", "the manual's limit switches (quirk limit_switch_flags)")
     access = encoder.access
-    cob_id = dut.read_uint(sync.tpdo, 1) & 0x7FF
+    tpdo = dut.tpdo.at(sync.tpdo)
+    cob_id = tpdo.can_id()
     every = max(1, dut.read_uint(sync.tpdo, sync.counter_subindex))
     settings = access.settings(functions=False)
     if access.description.preset:  # room on both sides of the position for the limits
@@ -466,7 +467,7 @@ def test_limit_switch_flags_in_the_process_value(encoder, dut, settings_journal,
     for switch, _ in switches:
         encoder.write(params.enable_object, 0, enable | 1 << switch.enable_bit)
         enable |= 1 << switch.enable_bit
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     problems = []
     for switch, below in switches:
         for beyond in (True, False):  # position beyond the limit, then the limit moved past the position
@@ -475,7 +476,7 @@ def test_limit_switch_flags_in_the_process_value(encoder, dut, settings_journal,
             mark = dut.frames.mark()
             for _ in range(every):
                 dut.send_sync()
-            frame = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id, 1.0, mark)
+            frame = dut.frames.wait_for(tpdo.frames(cob_id), 1.0, mark)
             if frame is None:
                 problems.append(f"no TPDO {cob_id:03X}h after {every} SYNC(s)")
                 break

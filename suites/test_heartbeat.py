@@ -5,9 +5,8 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import reach
-from encoder_conformance.suite_support.periodic import judge_stream
+from encoder_conformance.dut.link import format_frames
+from encoder_conformance.suite_support import judge_stream
 
 pytestmark = [
     pytest.mark.spec("CiA 301 §7.2.8.3.2.2 (heartbeat protocol)"),
@@ -22,7 +21,7 @@ def test_heartbeat_period_within_tolerance(dut, periodic_capture, evidence):
 
 def test_heartbeat_frame_format(dut, heartbeat, settings_journal, evidence):
     """Heartbeat frames are 700h+node-id, DLC 1, and report pre-operational as 7Fh."""
-    reach(dut, settings_journal, evidence, "pre-operational")  # seen there first (a device may start itself)
+    dut.nmt.transition("pre-operational", settings_journal, evidence)  # seen there first (a device may start itself)
     mark = dut.frames.mark()
     samples = dut.heartbeats(mark, 3, timeout=4 * heartbeat / 1000 + 0.5)
     assert len(samples) == 3, f"only {len(samples)} heartbeats within {4 * heartbeat} ms"

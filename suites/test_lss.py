@@ -26,21 +26,21 @@ from encoder_conformance.cia.cia305 import (
     LssCommand,
     LssState,
 )
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.lss_device import LssDevice, expect_success
-from encoder_conformance.dut.lss_master import LssAddress
-from encoder_conformance.dut.lss_steps import (
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link import format_frames
+from encoder_conformance.dut.lss import (
     SWITCH_DELAY_MS,
+    LssAddress,
+    LssDevice,
     activate,
     cob_ids_not_reset,
+    expect_success,
     manual_excludes,
     stored_node_id_survives_power_cycle,
 )
-from encoder_conformance.dut.nmt_states import confirm
 from encoder_conformance.plugin.skips import not_applicable, not_equipped
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import documented_quirk
-from encoder_conformance.suite_support.lss import destructive_if_self_stored, require_service
+from encoder_conformance.suite_support import destructive_if_self_stored, documented_quirk, require_service
 
 pytestmark = pytest.mark.spec(cia305.CIA305)
 #: the WDGA manual's "new boot-up" after LSS changes (M §8.2.4): open readings lss-node-id-activation and
@@ -104,7 +104,7 @@ def test_configuration_services_not_answered_in_waiting_state(lss: LssDevice, se
 
 @pytest.mark.spec(cia305.CLAUSE_FSA)
 @pytest.mark.parametrize("state", list(NMT_STATES))
-def test_lss_in_nmt_state(lss: LssDevice, state: str, evidence, request: pytest.FixtureRequest):
+def test_lss_in_nmt_state(lss: LssDevice, state: str, evidence, request: pytest.FixtureRequest, dut: DeviceUnderTest):
     """LSS works in every NMT state (the LSS FSA is independent of the NMT state); a device whose manual allows it
     only in some (quirk lss_only_in_states, e.g. WDGA M §8.2.1) must ignore it in the others."""
     require_service(lss, "inquire_node_id")
@@ -112,14 +112,14 @@ def test_lss_in_nmt_state(lss: LssDevice, state: str, evidence, request: pytest.
     beats = lss.dut.profile.capabilities.heartbeat_producer
     period = request.getfixturevalue("heartbeat") / 1000 if beats else 0.0  # set up while SDO still works,
     request.getfixturevalue("back_to_preoperational")  # and put back after the device is pre-operational again
-    mark = lss.dut.nmt(command)
+    mark = dut.nmt.command(command)
     quirk = lss.dut.profile.params_of(fx.LssOnlyInStates)
     allowed = quirk is None or state in quirk.states
     if quirk is not None:
         documented_quirk(lss.dut, fx.LssOnlyInStates, evidence, "")
     settle = lss.dut.profile.timing.nmt_settle_ms / 1000
     if beats:  # the state is reached when the heartbeat says so (a kept error may hold it in pre-operational)
-        confirm(lss.dut, mark, code, period * 1000, f"NMT {command}, so that LSS in {state} can be judged")
+        dut.nmt.confirm(mark, code, period * 1000, f"NMT {command}, so that LSS in {state} can be judged")
     else:
         lss.dut.frames.quiet_period(lambda m: False, settle)  # nothing shows the state: the profile's settle time
     with lss.master.no_answer_expected() if not allowed else nullcontext():

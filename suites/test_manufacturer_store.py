@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import documented_quirk
-from encoder_conformance.suite_support.parameters import changeable_parameter, other_valid_value
+from encoder_conformance.suite_support import changeable_parameter, documented_quirk, other_valid_value
 
 pytestmark = [pytest.mark.spec("manufacturer store commands (profile quirks store_reboots_without_reply, "
                                 "manufacturer_store_object)"),
@@ -85,7 +84,7 @@ def test_manufacturer_store_object_keeps_value(dut, extra_store, evidence):
     dut.write(index, sub, changed.to_bytes(len(original), "little"))
     try:
         dut.write(*command, signature)
-        dut.reset_node_and_wait()
+        dut.nmt.reset_node()
         observed = dut.read_uint(index, sub)
         evidence.note(f"{index:04X}h.{sub:02X} = {changed}, {command[0]:04X}h 'save', reset node -> {observed}")
         assert observed == changed, (
@@ -95,4 +94,4 @@ def test_manufacturer_store_object_keeps_value(dut, extra_store, evidence):
         if dut.usable:  # put the device back as it was, store that, and make it effective
             dut.write(index, sub, original)
             dut.write(*command, signature)
-            dut.reset_node_and_wait()
+            dut.nmt.reset_node()

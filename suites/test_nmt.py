@@ -5,19 +5,22 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, HEARTBEAT_BASE, PDO_MAPPING_OFFSET, STATE_NAMES, cob_id_valid
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.boot_state import expected_after_reset, settled_state
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.heartbeat_state import describe
-from encoder_conformance.dut.nmt_observer import HeartbeatObserver, NmtObserver, ServiceObserver
-from encoder_conformance.dut.persist import CannotPersist, persist_entry
-from encoder_conformance.dut.persistent_error import raise_if_held_out_of
-from encoder_conformance.dut.stimulus import pdo_stimulus
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.link import format_frames
+from encoder_conformance.dut.nmt import (
+    HeartbeatObserver,
+    NmtObserver,
+    ServiceObserver,
+    describe,
+    expected_after_reset,
+    raise_if_held_out_of,
+    settled_state,
+)
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.store import CannotPersist
+from encoder_conformance.dut.tpdo import TpdoUnderTest, pdo_stimulus
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import documented_quirk
-from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
+from encoder_conformance.suite_support import STORE_GROUPS, changeable_parameter, documented_quirk, other_valid_value
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2 (NMT state machine)")
 
@@ -47,7 +50,7 @@ def nmt(dut, settings_journal, back_to_preoperational, request, evidence) -> Nmt
 @pytest.mark.parametrize("reset", ["reset-node", "reset-communication"])
 def test_bootup_after_reset(dut, reset, evidence):
     """After NMT reset node / reset communication the device sends one boot-up frame 700h+id [00h]."""
-    mark = dut.nmt(reset)
+    mark = dut.nmt.command(reset)
     boot = dut.wait_bootup(mark)
     assert boot is not None, (
         f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after {reset}\n"
@@ -219,7 +222,7 @@ def test_reset_node_reloads_application_parameters(dut, settings_journal, eviden
                                      and e.persisted_by in STORE_GROUPS)
     if found is None:
         not_applicable("the profile declares no writable application parameter with a default")
-    dut.reset_node_and_wait()
+    dut.nmt.reset_node()
     observed = dut.read_uint(found.index, found.sub)
     evidence.note(f"{found.label}: stored {stored}, changed without storing, {observed} after reset node")
     assert observed == stored, f"{found.label}: {observed} after reset node, expected the stored value {stored}"
@@ -232,7 +235,7 @@ def test_reset_communication_reloads_communication_parameters(dut, settings_jour
                                      and e.persisted_by in STORE_GROUPS, prefer=(0x1017,))
     if found is None:
         not_applicable("no communication parameter is stored on command (all persisted_by auto/none)")
-    mark = dut.nmt("reset-communication")
+    mark = dut.nmt.command("reset-communication")
     assert dut.wait_bootup(mark) is not None, "no boot-up after reset communication"
     observed = dut.read_uint(found.index, found.sub)
     evidence.note(f"{found.label}: stored {stored}, changed without storing, {observed} after reset communication")
@@ -243,7 +246,7 @@ def test_reset_communication_reloads_communication_parameters(dut, settings_jour
 
 def _boots_into(dut, settings_journal, evidence) -> int:
     """Reset node; after the boot-up, switch the heartbeat on (RAM only) and return the state it reports."""
-    dut.reset_node_and_wait()
+    dut.nmt.reset_node()
     period = dut.profile.timing.heartbeat_state_period_ms
     mark = dut.frames.mark()
     settings_journal.write(0x1017, 0, period.to_bytes(2, "little"))
@@ -268,7 +271,7 @@ def test_autostart_object_starts_device_after_reset(dut, settings_journal, evide
     dut.write(index, sub, operational)
     try:
         try:
-            how = persist_entry(dut, index, sub)
+            how = dut.store.persist(index, sub)
         except CannotPersist as exc:
             not_applicable(f"{exc}")
         evidence.note(f"{index:04X}h.{sub:02X} = {operational.hex(' ').upper()}, stored with {how}")
@@ -282,7 +285,7 @@ def test_autostart_object_starts_device_after_reset(dut, settings_journal, evide
     finally:
         if dut.usable:
             dut.write(index, sub, original)
-            persist_entry(dut, index, sub)
+            dut.store.persist(index, sub)
             settings_journal.restore()
     state = _boots_into(dut, settings_journal, evidence)
     wanted = 0x05 if params.operational_value == int.from_bytes(original, "little") else 0x7F
@@ -305,7 +308,7 @@ def test_state_after_reset(dut, reset, settings_journal, request, evidence):
     if reset == "power-on":
         request.getfixturevalue("power_cycle")()  # not available without a power switch
     else:
-        dut.nmt(reset)
+        dut.nmt.command(reset)
     boot = dut.wait_bootup(mark)
     assert boot is not None, f"no boot-up within {dut.profile.timing.bootup_max_ms:.0f} ms after {reset}"
     if not period:  # no heartbeat after the reset: switched on by SDO, which pre-operational and operational offer

@@ -37,20 +37,24 @@ from hypothesis import strategies as st
 from hypothesis.control import currently_in_test_context
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule, run_state_machine_as_test
 
-from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, STATE_NAMES, NmtCommand, NmtState
-from encoder_conformance.dut.boot_state import settled_state
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.heartbeat_state import describe, newest_state
-from encoder_conformance.dut.nmt_observer import HeartbeatObserver
-from encoder_conformance.dut.persistent_error import raise_if_held_by_error
-from encoder_conformance.dut.sdo_frames import upload_request
-from encoder_conformance.dut.settings_journal import SettingsJournal
+from encoder_conformance.cia.cia301 import (
+    COB_ID_INVALID,
+    PDO_MAPPING_OFFSET,
+    STATE_NAMES,
+    NmtCommand,
+    NmtState,
+    can_id_of,
+)
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.custody import SettingsJournal
+from encoder_conformance.dut.link import Mark, format_frames
+from encoder_conformance.dut.nmt import HeartbeatObserver, describe, newest_state, raise_if_held_by_error, settled_state
+from encoder_conformance.dut.sdo import upload_request
 from encoder_conformance.models.nmt import NmtModel, Tracked
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
-from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter
+from encoder_conformance.suite_support import STORE_GROUPS, changeable_parameter
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2.2 (NMT state diagram, services per state, initialisation)")
 
@@ -292,7 +296,7 @@ class NmtMachine(RuleBasedStateMachine):
     # -- set-up: pre-operational, values as stored, heartbeat on ------------------------
     def _start(self) -> None:
         dut = self.dut
-        dut.nmt("pre-operational")
+        dut.nmt.command("pre-operational")
         assert dut.responds() or dut.responds(), "no SDO answer after NMT enter pre-operational"
         for key, tracked in self.model.values.items():
             if int.from_bytes(dut.read(*key), "little") != tracked.stored:
@@ -361,7 +365,7 @@ class NmtMachine(RuleBasedStateMachine):
             name = "start"  # another node on a bench is only ever started or sent back to pre-operational
         target = {"node": dut.node_id, "all nodes": 0, "other node": self.run.other}[to]
         before = self.model.state
-        mark = dut.nmt(name, target)
+        mark = dut.nmt.command(name, target)
         self.model.command(COMMAND[name], target)
         why = f"NMT {name} to {'node ' + str(target) if target else 'all nodes'} from {STATE_NAMES[before]}"
         if self.model.state is not before or to == "node" or to == "all nodes":
@@ -378,7 +382,7 @@ class NmtMachine(RuleBasedStateMachine):
         dut = self.dut
         target = dut.node_id if to == "node" else 0
         began = time.monotonic()
-        mark = dut.nmt(name, target)
+        mark = dut.nmt.command(name, target)
         self.model.command(COMMAND[name], target)
         boot = dut.wait_bootup(mark)
         self.run.budget.spend(time.monotonic() - began)
@@ -441,9 +445,8 @@ class NmtMachine(RuleBasedStateMachine):
         mark = dut.send_sync()
         comm = self.found.sync_tpdo
         if comm is not None and self.model.pdo_allowed and self._sync_armed(comm):
-            cob_id = self.model.expected((comm, 1)) & 0x7FF
-            pdo = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id,
-                                      dut.pdo_silence_s + SLACK_S, mark)
+            cob_id = can_id_of(self.model.expected((comm, 1)))
+            pdo = dut.frames.wait_for(dut.tpdo.at(comm).frames(cob_id), dut.pdo_silence_s + SLACK_S, mark)
             assert pdo is not None, f"no TPDO {cob_id:03X}h on a SYNC in operational ({comm:04X}h type 1, valid)"
         # outside operational the invariant judges what came, now or after the next step (teardown waits)
         self._say("SYNC", mark)
@@ -511,7 +514,7 @@ class NmtMachine(RuleBasedStateMachine):
 
     def _is_tracked_tpdo(self, msg) -> bool:
         comm = self.found.sync_tpdo
-        return comm is not None and msg.is_rx and msg.arbitration_id == self.model.expected((comm, 1)) & 0x7FF
+        return comm is not None and self.dut.tpdo.at(comm).frames(can_id_of(self.model.expected((comm, 1))))(msg)
 
 
 def test_nmt_sequences_follow_the_cia301_model(dut, settings_journal, back_to_preoperational, evidence):

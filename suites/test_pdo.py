@@ -11,12 +11,10 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.stimulus import pdo_stimulus
+from encoder_conformance.dut.link import format_frames
+from encoder_conformance.dut.tpdo import pdo_stimulus
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import documented_quirk
-from encoder_conformance.suite_support.tpdo import tpdo_under_test
+from encoder_conformance.suite_support import documented_quirk, tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]
@@ -28,16 +26,16 @@ def test_sync_tpdo_sent_on_every_nth_sync(dut, settings_journal, back_to_preoper
     comm, every = tpdo.comm, tpdo.trans_type
     cob_id = tpdo.can_id()
     tpdo.configure(trans_type=every)
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     mark = dut.frames.mark()
     syncs = 3 * every
     owed = dut.profile.timing.pdo_response_max_ms / 1000
     for _ in range(syncs):  # each SYNC processed before the next: its TPDO came, or the time the device owes passed
-        dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id, owed, dut.send_sync())
+        dut.frames.wait_for(tpdo.frames(cob_id), owed, dut.send_sync())
     evidence.note(f"{syncs} SYNCs, each after the TPDO the previous one brought or timing.pdo_response_max_ms "
                   f"({owed * 1000:g} ms, SYNC to TPDO)")
     window = dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
-    pdos = dut.pdos_counted(lambda m: m.is_rx and m.arbitration_id == cob_id, 3, mark, window)
+    pdos = dut.pdos_counted(tpdo.frames(cob_id), 3, mark, window)
     evidence.measure(f"TPDO {cob_id:03X}h frames for {syncs} SYNCs", len(pdos), "frames", 3, 3)
     assert len(pdos) == 3, (
         f"{comm:04X}h.02 = {every}: expected 3 TPDOs on {cob_id:03X}h for {syncs} SYNCs, observed {len(pdos)}\n"
@@ -52,12 +50,12 @@ def test_type_255_without_event_timer_sends_nothing(dut, settings_journal, back_
     tpdo = tpdo_under_test(dut, 5, evidence, settings_journal, [255])
     comm, cob_id = tpdo.comm, tpdo.can_id()
     tpdo.configure(trans_type=255, event_timer=0)
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     control = shaft
     if control is None:
         evidence.note("hardware: only SYNCs are sent; turn the shaft during the test to cover position changes")
     mark = pdo_stimulus(dut, control)
-    pdos = dut.frames.since(mark, lambda m: m.is_rx and m.arbitration_id == cob_id)
+    pdos = dut.frames.since(mark, tpdo.frames(cob_id))
     evidence.measure(f"TPDO {cob_id:03X}h frames with type 255, timer 0", len(pdos), "frames", 0, 0)
     assert not pdos, (
         f"{comm:04X}h.02 = 255 and sub 5 = 0 must switch the TPDO off (documented); observed {len(pdos)} on "
@@ -76,16 +74,15 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
     period_s = 0.02
     tpdo.configure(trans_type=tpdo.trans_type, event_timer=round(period_s * 1000))
 
-    def is_this_tpdo(msg) -> bool:
-        return msg.is_rx and msg.arbitration_id == cob_id
+    is_this_tpdo = tpdo.frames(cob_id)
 
     window = 5 * period_s + dut.pdo_silence_s
     mark = dut.frames.mark()
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     running = dut.frames.wait_count(is_this_tpdo, 2, window, mark)
     assert len(running) == 2, f"{comm:04X}h with event timer {period_s * 1000:.0f} ms: {len(running)} TPDO(s) in " \
                               f"operational within {window * 1000:.0f} ms"
-    dut.nmt(state)
+    dut.nmt.command(state)
     dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)  # the state change
     after = dut.frames.mark()
     late = dut.frames.quiet_period(is_this_tpdo, window, after)
@@ -94,6 +91,6 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
     assert not late, f"{len(late)} TPDO(s) on {cob_id:03X}h in {state}, {window * 1000:.0f} ms after the " \
                      f"transition (event timer {period_s * 1000:.0f} ms):\n{format_frames(late[:5])}"
     again = dut.frames.mark()
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     resumed = dut.frames.wait_for(is_this_tpdo, window, again)
     assert resumed is not None, f"no TPDO on {cob_id:03X}h within {window * 1000:.0f} ms after NMT start again"

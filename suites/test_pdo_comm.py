@@ -26,22 +26,19 @@ from encoder_conformance.cia.cia301 import (
     SYNC_COB_ID,
     SYNC_COUNTER_OVERFLOW,
     SdoAbortCode,
+    can_id_of,
     cob_id_valid,
     is_restricted_can_id,
+    with_can_id,
 )
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.device import answer_window
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
-from encoder_conformance.dut.sdo_frames import abort_name
-from encoder_conformance.dut.tpdo_choice import fixed_behaviour_tpdos
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.link import answer_window, format_frames, received_on
+from encoder_conformance.dut.sdo import abort_name, sdo_frames
+from encoder_conformance.dut.tpdo import TpdoUnderTest, fixed_behaviour_tpdos
 from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
-from encoder_conformance.suite_support.checks import abort_accepted, expected_aborts
-from encoder_conformance.suite_support.tpdo import tpdo_under_test
+from encoder_conformance.suite_support import abort_accepted, expected_aborts, tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.37 (TPDO communication parameter)"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]
@@ -59,10 +56,6 @@ def _u32(value: int) -> bytes:
     return value.to_bytes(4, "little")
 
 
-def _is_tpdo(cob_id: int):
-    return lambda m: m.is_rx and m.arbitration_id == cob_id and not m.is_remote_frame
-
-
 def _window(dut) -> float:
     """How long to wait for a TPDO that must come after its trigger."""
     return dut.pdo_silence_s + dut.profile.timing.nmt_settle_ms / 1000
@@ -74,11 +67,11 @@ def _syncs(dut, count: int, cob_id: int, until_first: bool = False) -> list[can.
     mark = dut.frames.mark()
     for _ in range(count):
         dut.send_sync()
-        if until_first and dut.frames.wait_for(_is_tpdo(cob_id), dut.pdo_silence_s, mark) is not None:
+        if until_first and dut.frames.wait_for(received_on(cob_id), dut.pdo_silence_s, mark) is not None:
             break
         if not until_first:
             dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
-    return dut.frames.since(mark, _is_tpdo(cob_id))
+    return dut.frames.since(mark, received_on(cob_id))
 
 
 def _need_shaft(shaft, what: str) -> None:
@@ -172,18 +165,18 @@ def test_invalid_tpdo_sends_nothing(dut, settings_journal, back_to_preoperationa
     comm = tpdo.comm
     _writable_cob_id(dut, comm)
     cob = tpdo.cob_id()
-    cob_id = cob & 0x7FF
+    cob_id = can_id_of(cob)
 
     def frames(expected: bool = True) -> list[can.Message]:
         """The TPDOs of three SYNCs or five event-timer periods (up to the first where one is ``expected``)."""
-        start_operational(dut, settings_journal, evidence)
+        dut.nmt.transition("operational", settings_journal, evidence)
         if trigger == "SYNC":
             found = _syncs(dut, 3, cob_id, until_first=expected)
         elif expected:  # a TPDO the 20 ms timer owes: the answer window ends when it comes
-            found = dut.frames.wait_count(_is_tpdo(cob_id), 1, answer_window(TIMER_S), dut.frames.mark())
+            found = dut.frames.wait_count(received_on(cob_id), 1, answer_window(TIMER_S), dut.frames.mark())
         else:  # five timer periods of silence
-            found = dut.frames.quiet_period(_is_tpdo(cob_id), 5 * TIMER_S)
-        return_to_preoperational(dut)
+            found = dut.frames.quiet_period(received_on(cob_id), 5 * TIMER_S)
+        dut.nmt.back_to_preoperational()
         return found
 
     assert frames(), f"{comm:04X}h valid ({cob:08X}h): no TPDO on {cob_id:03X}h on its {trigger} in operational"
@@ -212,8 +205,8 @@ def test_cob_id_change_refused_while_valid(dut, settings_journal, evidence):
         settings_journal.write(comm, 1, _u32(cob_id_valid(found)))
         evidence.note(f"{comm:04X}h.01 bit 31 cleared (TPDO valid) for the test")
     valid = cob_id_valid(found)
-    other = _other_can_id(valid & 0x7FF)
-    moved = (valid & ~0x7FF) | other
+    other = _other_can_id(can_id_of(valid))
+    moved = with_can_id(valid, other)
     what = f"{comm:04X}h.01 = {moved:08X}h while it reads {valid:08X}h (valid)"
     response = _write_refused(dut, settings_journal, comm, 1, moved, what)
     _judge_code(dut, response, {SdoAbortCode.VALUE_INVALID}, what, evidence,
@@ -238,7 +231,7 @@ def test_restricted_cob_id_refused(dut, settings_journal, evidence):
     rests_on = "06090030h (value range of parameter exceeded) as the CTT expects for 1005h; " + ANY_ABORT
     accepted = []
     for can_id in RESTRICTED_PROBES:
-        value = (cob_id_valid(found) & ~0x7FF) | can_id
+        value = with_can_id(cob_id_valid(found), can_id)
         what = f"{comm:04X}h.01 = {value:08X}h (restricted CAN-ID {can_id:03X}h)"
         response = dut.expect_abort(sdo_frames.expedited_download_request(comm, 1, _u32(value)))
         evidence.note(f"{can_id:03X}h: {response.describe()}")
@@ -294,22 +287,22 @@ def test_rtr_answered(dut, settings_journal, back_to_preoperational, evidence):
     """A remote frame on the COB-ID of a TPDO that answers RTR (type 253, or polled per manual) makes the device
     send that TPDO within the PDO response time; a type-253 TPDO is not sent on SYNC."""
     comm, how = _rtr_tpdo(dut, evidence, settings_journal)
-    cob_id = dut.read_uint(comm, 1) & 0x7FF
+    cob_id = dut.tpdo.at(comm).can_id()
     dlc = _rtr_dlc(dut, comm)
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     if how == "type 253":
         unasked = _syncs(dut, 2, cob_id)
         assert not unasked, f"{comm:04X}h type 253 sent on SYNC:\n{format_frames(unasked[:5])}"
     # a TPDO that is also sent by itself (POSITAL 1800h: cyclic): ask right after one of its own frames, and wait
     # for the answer less than half its period, so that its next own frame cannot pass for the answer
     window = dut.pdo_silence_s
-    own = dut.frames.wait_count(_is_tpdo(cob_id), 2, 2.0) if _sent_by_itself(dut, comm) else []
+    own = dut.frames.wait_count(received_on(cob_id), 2, 2.0) if _sent_by_itself(dut, comm) else []
     if len(own) == 2:
         window = min(window, (own[1].timestamp - own[0].timestamp) / 2)
         evidence.note(f"{cob_id:03X}h is also sent by itself (every {(own[1].timestamp - own[0].timestamp) * 1000:.0f}"
                       " ms): the remote frame followed one of its own frames")
     mark = dut.send(cob_id, bytes(dlc), remote=True)
-    answer = dut.frames.wait_for(_is_tpdo(cob_id), window, mark)
+    answer = dut.frames.wait_for(received_on(cob_id), window, mark)
     assert answer is not None, (f"no TPDO on {cob_id:03X}h within {window * 1000:.0f} ms of a remote frame "
                                 f"(DLC {dlc}) on it ({how})\n{format_frames(dut.frames.since(mark)[:8])}")
     evidence.measure("RTR to TPDO", round((answer.timestamp - dut.frames.since(mark)[0].timestamp) * 1000, 2), "ms")
@@ -322,10 +315,10 @@ def test_rtr_not_answered_without_rtr_bit(dut, settings_journal, back_to_preoper
     comm, cob = tpdo.comm, tpdo.cob_id()
     if not cob & COB_ID_NO_RTR:
         not_applicable(f"{comm:04X}h.01 = {cob:08X}h allows RTR (bit 30 clear)")
-    cob_id = cob & 0x7FF
-    start_operational(dut, settings_journal, evidence)
+    cob_id = can_id_of(cob)
+    dut.nmt.transition("operational", settings_journal, evidence)
     mark = dut.send(cob_id, bytes(_rtr_dlc(dut, comm)), remote=True)
-    answers = dut.frames.quiet_period(_is_tpdo(cob_id), dut.pdo_silence_s, mark)
+    answers = dut.frames.quiet_period(received_on(cob_id), dut.pdo_silence_s, mark)
     evidence.measure(f"TPDO {cob_id:03X}h frames after a remote frame", len(answers), "frames", 0, 0)
     assert not answers, f"{comm:04X}h.01 = {cob:08X}h (no RTR): answered a remote frame:\n{format_frames(answers)}"
 
@@ -340,14 +333,14 @@ def test_type_0_sends_on_sync_only_after_change(dut, settings_journal, back_to_p
     if not tpdo.maps_position():
         not_applicable(f"{comm:04X}h maps no position value the shaft could change")
     cob_id = tpdo.can_id()
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     _syncs(dut, 1, cob_id)  # whether the first SYNC after start sends is not this test's business
     standing = _syncs(dut, 3, cob_id)
     assert not standing, f"{comm:04X}h type 0: {len(standing)} TPDO(s) on SYNCs without a change:\n" \
                          f"{format_frames(standing[:5])}"
     mark = dut.frames.mark()
     shaft.turn_by(TURN)
-    early = dut.frames.quiet_period(_is_tpdo(cob_id), dut.pdo_silence_s, mark)
+    early = dut.frames.quiet_period(received_on(cob_id), dut.pdo_silence_s, mark)
     assert not early, f"{comm:04X}h type 0 sent on the change itself, before any SYNC:\n{format_frames(early)}"
     first, then = _syncs(dut, 1, cob_id), _syncs(dut, 2, cob_id)
     evidence.measure(f"TPDO {cob_id:03X}h frames for 3 SYNCs after one change", len(first) + len(then), "frames",
@@ -363,12 +356,12 @@ def test_change_of_state_sends_event_tpdo(dut, settings_journal, back_to_preoper
                       "is a change of its position (e.g. WDGA T 8.46); CiA 406 leaves it to the manufacturer")
     tpdo = _event_tpdo(dut, evidence, settings_journal, shaft)
     comm, kind, cob_id = tpdo.comm, tpdo.trans_type, tpdo.can_id()
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     dut.frames.quiet_period(lambda m: False, _window(dut))  # a TPDO on entering operational is allowed
-    standing = dut.frames.quiet_period(_is_tpdo(cob_id), dut.pdo_silence_s)
+    standing = dut.frames.quiet_period(received_on(cob_id), dut.pdo_silence_s)
     mark = dut.frames.mark()
     shaft.turn_by(TURN)
-    sent = dut.frames.wait_for(_is_tpdo(cob_id), _window(dut), mark)
+    sent = dut.frames.wait_for(received_on(cob_id), _window(dut), mark)
     rests_on = "254/255 with timer 0 are sent on a change of the mapped value (our reading)"
     if standing:
         evidence.inferred_problem(f"{comm:04X}h type {kind}, timer 0: {len(standing)} TPDO(s) while the shaft "
@@ -398,15 +391,15 @@ def test_sync_start_value(dut, settings_journal, tpdo_while_invalid, back_to_pre
     tpdo.configure(trans_type=1)
     tpdo.configure_while_invalid(tpdo_while_invalid, sync_start_value=start)
     cob_id = tpdo.can_id()
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     sent = []
     for counter in range(1, overflow + 1):
         mark = dut.send(SYNC_COB_ID, bytes([counter]))
         if counter >= start:
-            dut.frames.wait_for(_is_tpdo(cob_id), _window(dut), mark)
+            dut.frames.wait_for(received_on(cob_id), _window(dut), mark)
         else:
             dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
-        if dut.frames.since(mark, _is_tpdo(cob_id)):
+        if dut.frames.since(mark, received_on(cob_id)):
             sent.append(counter)
     evidence.measure("SYNC counters followed by a TPDO", len(sent), "SYNCs", overflow - start + 1,
                      overflow - start + 1)
@@ -489,7 +482,7 @@ def test_tpdo_parameters_writable_in_preoperational_only(dut, settings_journal, 
                     "may change")
     for comm, sub, _, _, _ in changes:
         settings_journal.remember(comm, sub)
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     problems = []
     for comm, sub, size, value, wanted in changes:
         before = dut.read(comm, sub)
@@ -502,7 +495,7 @@ def test_tpdo_parameters_writable_in_preoperational_only(dut, settings_journal, 
             evidence.inferred_problem(f"{what}: {abort_name(response.abort_code or 0)}", "the quirk's abort code")
         if dut.read(comm, sub) != before and response.is_abort:
             problems.append(f"{what}: refused, but the value changed")
-    return_to_preoperational(dut)
+    dut.nmt.back_to_preoperational()
     for comm, sub, size, value, _ in changes:
         dut.write(comm, sub, value.to_bytes(size, "little"))  # raises if refused in pre-operational
     assert not problems, "; ".join(problems)
@@ -521,7 +514,7 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
     else:
         tpdo = _event_tpdo(dut, evidence, settings_journal, shaft)
     comm, cob_id = tpdo.comm, tpdo.can_id()
-    is_this = _is_tpdo(cob_id)
+    is_this = received_on(cob_id)
 
     def stimulate(expected: bool = True) -> list[can.Message]:
         """Three triggers, each followed by a PDO silence window (cut short by the first TPDO where one is
@@ -538,16 +531,16 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
                 dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
         return dut.frames.since(mark, is_this)
 
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     running = stimulate()
     if trigger != "SYNC" and not running:
         not_judged(Hold.NO_TPDO_ON_CHANGE, f"{comm:04X}h sent nothing on a change in operational (see "
                     "test_change_of_state_sends_event_tpdo), so its silence outside operational proves nothing")
     assert running, f"{comm:04X}h: no TPDO on {cob_id:03X}h on {trigger} in operational"
-    dut.nmt(state)
+    dut.nmt.command(state)
     dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)
     late = stimulate(expected=False)
     evidence.measure(f"TPDO {cob_id:03X}h frames on {trigger} in {state}", len(late), "frames", 0, 0)
     assert not late, f"{len(late)} TPDO(s) on {cob_id:03X}h on {trigger} after NMT {state}:\n{format_frames(late[:5])}"
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     assert stimulate(), f"no TPDO on {cob_id:03X}h on {trigger} after NMT start again"

@@ -3,7 +3,7 @@ dummy entries and fixed mappings.
 
 A variable mapping changes only in the CiA 301 procedure: COB-ID bit 31 set, sub 0 = 0, the entries,
 sub 0 = n, bit 31 cleared. Every test that changes a mapping holds it in a ``MappingCustody``
-(``dut/pdo_mapping.py``), which puts the COB-ID and the mapping back in that order, also when the test
+(``dut/tpdo/pdo_mapping.py``), which puts the COB-ID and the mapping back in that order, also when the test
 fails (after Ctrl-C the run's restore does it from its snapshot). After each refused write the mapping
 is read back: it must be unchanged. The equality of each 1A0xh entry with the profile's default is
 test_object_dictionary's (factory defaults); here the default mapping is checked against the objects
@@ -27,25 +27,24 @@ from encoder_conformance.cia.cia301 import (
     mapping_word,
 )
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import return_to_preoperational, start_operational
-from encoder_conformance.dut.pdo_mapping import (
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link import format_frames
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.tpdo import (
     Entry,
     MappingCustody,
+    NoUsableTpdo,
+    TpdoUnderTest,
     apply_mapping,
     describe,
     invalidate,
     read_mapping,
 )
-from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable, not_judged, skip_text
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import assert_abort, documented_quirk, expected_aborts
+from encoder_conformance.suite_support import assert_abort, documented_quirk, expected_aborts
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.38 (TPDO mapping)"), pytest.mark.requires("tpdos")]
 
@@ -127,7 +126,7 @@ def variable_tpdo(dut: DeviceUnderTest) -> Iterator[tuple[VariableMapping, Mappi
     with MappingCustody(dut, found.comm) as custody:
         yield found, custody
         if dut.usable:
-            return_to_preoperational(dut)
+            dut.nmt.back_to_preoperational()
 
 
 def _write(dut: DeviceUnderTest, index: int, sub: int, value: int, size: int) -> sdo_frames.SdoResponse:
@@ -188,7 +187,7 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
     that order, each equal to its SDO value read before and after (shaft at rest) (CiA 301 §7.5.2.38, §7.2.2;
     CTT PDO 22)."""
     try:
-        choice = choose_tpdo(dut, 1, [1])
+        choice = dut.tpdo.choose(1, [1])
     except NoUsableTpdo as exc:
         skip_text(str(exc), exc.hold)
     tpdo = _variable(dut, choice.comm)
@@ -210,16 +209,16 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
         cob_id = sent.can_id()
         try:
             before = [dut.read(i, s)[: b // 8] for i, s, b in plan]
-            start_operational(dut, settings_journal, evidence)
+            dut.nmt.transition("operational", settings_journal, evidence)
             mark = dut.frames.mark()
             for _ in range(choice.transmission_type):
                 dut.send_sync()
             window = 2 * dut.sdo_timeout + dut.pdo_silence_s
-            frame = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id, window, mark)
+            frame = dut.frames.wait_for(sent.frames(cob_id), window, mark)
             after = [dut.read(i, s)[: b // 8] for i, s, b in plan]
         finally:
             if dut.usable:
-                return_to_preoperational(dut)
+                dut.nmt.back_to_preoperational()
     assert frame is not None, f"no TPDO {cob_id:03X}h after SYNC\n{format_frames(dut.frames.since(mark)[:10])}"
     data, offset, problems, judged = bytes(frame.data), 0, [], 0
     evidence.note(f"TPDO {format_frames([frame])}")
@@ -391,7 +390,7 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
     if not dummies:
         not_applicable("the profile declares no dummy mapping (capabilities.pdo_dummy_mapping)")
     try:
-        choice = choose_tpdo(dut, 1, [1])
+        choice = dut.tpdo.choose(1, [1])
     except NoUsableTpdo as exc:
         skip_text(str(exc), exc.hold)
     tpdo = _variable(dut, choice.comm)
@@ -411,15 +410,15 @@ def test_dummy_mapping(dut: DeviceUnderTest, settings_journal, shaft, evidence: 
         cob_id = sent.can_id()
         try:
             expected = dut.read(target[0], target[1])[: target[2] // 8]
-            start_operational(dut, settings_journal, evidence)
+            dut.nmt.transition("operational", settings_journal, evidence)
             mark = dut.frames.mark()
             for _ in range(choice.transmission_type):
                 dut.send_sync()
-            frame = dut.frames.wait_for(lambda m: m.is_rx and m.arbitration_id == cob_id, 2 * dut.sdo_timeout, mark)
+            frame = dut.frames.wait_for(sent.frames(cob_id), 2 * dut.sdo_timeout, mark)
             again = dut.read(target[0], target[1])[: target[2] // 8]
         finally:
             if dut.usable:
-                return_to_preoperational(dut)
+                dut.nmt.back_to_preoperational()
     assert frame is not None, f"no TPDO {cob_id:03X}h after SYNC with {describe(plan)}"
     start = DUMMY_BITS[dummy] // 8
     carried = bytes(frame.data)[start:start + target[2] // 8]

@@ -9,13 +9,12 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.cia.cia301 import COB_ID_INVALID, cob_id_valid
-from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, can_id_of, cob_id_valid
+from encoder_conformance.dut.link import Mark, format_frames, received_on
+from encoder_conformance.dut.tpdo import TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable, not_equipped
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import documented_quirk
+from encoder_conformance.suite_support import documented_quirk
 
 RESET_EVENTS = {"reset-node": "nmt_81h", "reset-communication": "nmt_82h"}
 
@@ -36,15 +35,11 @@ def _valid_cob_id(dut, comm: int, settings_journal) -> int:
     cob_id = dut.read_uint(comm, 1)
     if cob_id & COB_ID_INVALID:
         settings_journal.write(comm, 1, cob_id_valid(cob_id).to_bytes(4, "little"))
-    return cob_id & 0x7FF
+    return can_id_of(cob_id)
 
 
 def _window(dut) -> float:
     return dut.sdo_timeout + dut.profile.timing.nmt_settle_ms / 1000
-
-
-def _is(cob_id: int):
-    return lambda m: m.is_rx and m.arbitration_id == cob_id and not m.is_remote_frame
 
 
 @pytest.mark.spec("CiA 301 §7.2.2.2 (event-driven TPDO); manufacturer send-repeat counter (quirk)")
@@ -62,11 +57,11 @@ def test_send_repeat_counter_sends_each_change_n_times(
     settings_journal.write(comm, 5, (0).to_bytes(2, "little"))
     settings_journal.write(counter, 0, bytes([repeats]))
     mark = dut.frames.mark()
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     turned = dut.frames.mark()
     shaft.turn_by(0.25)
-    pdos = dut.pdos_counted(_is(cob_id), repeats, turned, _window(dut))
-    since_start = dut.frames.since(mark, _is(cob_id))
+    pdos = dut.pdos_counted(received_on(cob_id), repeats, turned, _window(dut))
+    since_start = dut.frames.since(mark, received_on(cob_id))
     after_turn = {id(m) for m in dut.frames.since(turned)}
     standing = [m for m in since_start if id(m) not in after_turn]
     evidence.measure(f"TPDO {cob_id:03X}h frames for one position change", len(pdos), "frames", repeats, repeats)
@@ -83,7 +78,7 @@ def _sync_burst(dut, cob_id: int, syncs: int, expected: int) -> tuple[list, Mark
     mark = dut.frames.mark()
     for _ in range(syncs):
         dut.send_sync()
-    return dut.pdos_counted(_is(cob_id), expected, mark, _window(dut)), mark
+    return dut.pdos_counted(received_on(cob_id), expected, mark, _window(dut)), mark
 
 
 @pytest.mark.spec("CiA 301 §7.2.2.2 (synchronous TPDO); manufacturer send-repeat counter (quirk)")
@@ -98,7 +93,7 @@ def test_send_repeat_counter_limits_sync_tpdo(
     cob_id = _valid_cob_id(dut, comm, settings_journal)
     TpdoUnderTest(dut, settings_journal, comm, 1).configure(trans_type=1)
     settings_journal.write(counter, 0, bytes([limit]))
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     for step in ("still shaft", "after a position change"):
         if step != "still shaft":
             if shaft is None:
@@ -126,7 +121,7 @@ def test_bits_forced_again_at_init(dut, settings_journal, back_to_preoperational
     settings_journal.write(index, sub, (dut.read_uint(index, sub) & ~bits).to_bytes(size, "little"))
     cleared = dut.read_uint(index, sub)
     assert not cleared & bits, f"{label} = {cleared:08X}h after writing it with {bits:08X}h cleared"
-    mark = dut.nmt(reset)
+    mark = dut.nmt.command(reset)
     assert dut.wait_bootup(mark) is not None, f"no boot-up after {reset}"
     observed = dut.read_uint(index, sub)
     evidence.note(f"{label}: {cleared:08X}h written, {observed:08X}h after {reset}")

@@ -18,14 +18,10 @@ import pytest
 
 from encoder_conformance.cia.cia301 import SYNC_COB_ID
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.latency_probe import LatencyProbe
-from encoder_conformance.dut.tpdo_choice import NoUsableTpdo
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.link import LatencyProbe, format_frames
+from encoder_conformance.dut.tpdo import NoUsableTpdo, TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
-from encoder_conformance.suite_support.checks import inconclusive_if_host_late
-from encoder_conformance.suite_support.periodic import judge_stream
-from encoder_conformance.suite_support.tpdo import tpdo_under_test
+from encoder_conformance.suite_support import inconclusive_if_host_late, judge_stream, tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]
@@ -53,10 +49,9 @@ def test_sync_to_tpdo_latency(dut, settings_journal, back_to_preoperational, twi
     tpdo.configure(trans_type=1)
     limit = dut.profile.timing.pdo_response_max_ms
 
-    def is_tpdo(msg: can.Message) -> bool:
-        return msg.is_rx and msg.arbitration_id == cob_id
+    is_tpdo = tpdo.frames(cob_id)
 
-    started = dut.nmt("start")
+    started = dut.nmt.command("start")
     dut.send_sync()  # the device is operational once it answers a SYNC (no fixed settle time)
     ready = dut.frames.wait_for(is_tpdo, dut.profile.timing.nmt_settle_ms / 1000 + dut.pdo_silence_s, started)
     assert ready is not None, f"no TPDO on {cob_id:03X}h ({comm:04X}h type 1) after NMT start and a SYNC"
@@ -127,10 +122,9 @@ def test_inhibit_time_spaces_tpdos(dut, settings_journal, tpdo_while_invalid, ba
     comm = tpdo.comm
     tolerance = dut.profile.timing.heartbeat_tolerance.allowed_ms(INHIBIT_MS)
 
-    def is_tpdo(msg: can.Message) -> bool:
-        return msg.is_rx and msg.arbitration_id == cob_id
+    is_tpdo = tpdo.frames(cob_id)
 
-    mark = dut.nmt("start")
+    mark = dut.nmt.command("start")
     frames: list[can.Message] = []
     reactions: list[float] = []  # ms from a frame to the tester's next position change (inside the inhibit time?)
     wait = (INHIBIT_MS + dut.profile.timing.pdo_response_max_ms) / 1000 + dut.pdo_silence_s
@@ -183,10 +177,9 @@ def test_inhibit_time_delays_events_not_drops(dut, settings_journal, tpdo_while_
         not_applicable(f"{comm:04X}h does not map the position value {POSITION:04X}h on byte bounds")
     window = (HOLD_INHIBIT_MS + dut.profile.timing.pdo_response_max_ms) / 1000 + dut.pdo_silence_s
 
-    def is_tpdo(msg: can.Message) -> bool:
-        return msg.is_rx and msg.arbitration_id == cob_id
+    is_tpdo = tpdo.frames(cob_id)
 
-    dut.nmt("start")
+    dut.nmt.command("start")
     judged = 0
     for _ in range(3):
         mark = dut.frames.mark()

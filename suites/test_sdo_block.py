@@ -18,11 +18,11 @@ from collections.abc import Iterator
 import pytest
 
 from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
-from encoder_conformance.dut.sdo_client import SdoProtocolClient
+from encoder_conformance.dut.sdo import SdoProtocolClient
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import judge_refusal
+from encoder_conformance.suite_support import judge_refusal
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3.9-16 (SDO block transfer)")
 
@@ -33,7 +33,7 @@ BLOCK = "CiA 301 §7.2.4.3.9-16 (SDO block download / upload)"
 
 @pytest.fixture
 def sdo(dut) -> SdoProtocolClient:
-    return SdoProtocolClient(dut)
+    return dut.sdo.protocol()
 
 
 class OpenTransfers:

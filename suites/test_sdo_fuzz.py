@@ -23,13 +23,13 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from encoder_conformance.cia.cia301 import COB_ID_INVALID, EMCY_BASE, SDO_REQUEST_BASE, SdoAbortCode
-from encoder_conformance.dut import sdo_frames
+from encoder_conformance.cia.cia301 import COB_ID_INVALID, EMCY_BASE, SDO_REQUEST_BASE, SdoAbortCode, can_id_of
+from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.fuzz import exclusions, replay, rounds
 from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.runner import Failure, FuzzRunner
 from encoder_conformance.fuzz.watch import EMCY_RULE, DeviceWatch
-from encoder_conformance.suite_support.checks import abort_accepted
+from encoder_conformance.suite_support import abort_accepted
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocol)")
 
@@ -50,7 +50,7 @@ def _emcy_cob_id(dut) -> int | None:
     if dut.profile.entry(0x1014, 0) is None:
         return EMCY_BASE + dut.node_id
     value = dut.read_uint(0x1014, 0)
-    return None if value & COB_ID_INVALID else value & 0x7FF
+    return None if value & COB_ID_INVALID else can_id_of(value)
 
 
 def _heartbeat_ms(dut, settings_journal) -> int:

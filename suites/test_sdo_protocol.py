@@ -2,7 +2,7 @@
 
 CiA 301 §7.2.4.3 (SDO protocols), table 22 (abort codes); CTT cases SDO 08/09 (too long / too
 short), 13-18 (segmented, wrong toggle bit). Every request goes out as the frame a step names
-(``dut/sdo_client.py``); every initiate response must echo the request's multiplexer. Abort codes:
+(``dut/sdo/sdo_client.py``); every initiate response must echo the request's multiplexer. Abort codes:
 CiA's code (or the manual's), else one the CiA conformance test tool accepts; any other code is a
 warning (inferred), a write that is confirmed is a failure. Only entries that are harmless to write
 are written (heartbeat and guard times, event timers, transmission types), each put back.
@@ -14,12 +14,11 @@ import pytest
 
 from encoder_conformance.cia.cia301 import SDO_ABORT, SdoAbortCode
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.device import SdoAborted
-from encoder_conformance.dut.sdo_client import SdoProtocolClient, echoes
-from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name, upload_request
+from encoder_conformance.dut.link import SdoAborted
+from encoder_conformance.dut.sdo import SdoProtocolClient, SdoResponse, abort_name, echoes, upload_request
 from encoder_conformance.plugin.skips import not_applicable, not_judged
 from encoder_conformance.profile import datatypes
-from encoder_conformance.suite_support.checks import assert_one_answer, expected_aborts, judge_refusal
+from encoder_conformance.suite_support import assert_one_answer, expected_aborts, judge_refusal
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocols)")
 
@@ -35,7 +34,7 @@ SEGMENTED = "CiA 301 §7.2.4.3.4-7 (SDO segment download / upload: toggle bit, n
 
 @pytest.fixture
 def sdo(dut) -> SdoProtocolClient:
-    return SdoProtocolClient(dut)
+    return dut.sdo.protocol()
 
 
 def _harmless(profile, size: int) -> tuple[int, int] | None:

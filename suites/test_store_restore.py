@@ -5,12 +5,18 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import LOAD, SAVE
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.persist import CannotPersist, persist_entry
+from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.store import CannotPersist
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support.checks import assert_abort, documented_quirk, expected_aborts
-from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter, other_valid_value
+from encoder_conformance.suite_support import (
+    STORE_GROUPS,
+    assert_abort,
+    changeable_parameter,
+    documented_quirk,
+    expected_aborts,
+    other_valid_value,
+)
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.13/§7.5.2.14"), pytest.mark.destructive]
 
@@ -22,7 +28,7 @@ def _store(dut, index: int, sub: int) -> str:
     if 1 in dut.profile.capabilities.store_subindices and entry.persisted_by in STORE_GROUPS:
         dut.write(0x1010, 1, SAVE)
         return "1010h.01 'save'"
-    return persist_entry(dut, index, sub)
+    return dut.store.persist(index, sub)
 
 
 @pytest.fixture
@@ -48,7 +54,7 @@ def stored_change(dut, settings_journal, evidence):
 def test_stored_value_survives_reset_node(dut, stored_change):
     """A stored value (1010h sub 1 'save', or stored by the device itself) is still there after NMT reset node."""
     index, sub, entry, value = stored_change
-    dut.reset_node_and_wait()
+    dut.nmt.reset_node()
     observed = dut.read_uint(index, sub)
     assert observed == value, f"{index:04X}h.{sub:02X} {entry.name}: stored {value}, {observed} after reset node"
 
@@ -69,7 +75,7 @@ def test_restore_defaults_effective_after_reset(dut, stored_change):
     if excluded is not None and index in excluded[1]:
         not_applicable(f"restore leaves {index:04X}h unchanged (quirk {excluded[0]})")
     dut.write(0x1011, 1, LOAD)
-    dut.reset_node_and_wait()
+    dut.nmt.reset_node()
     observed = dut.read_uint(index, sub)
     assert observed == entry.default, (
         f"{index:04X}h.{sub:02X}: {observed} after restore + reset, expected the default {entry.default}"

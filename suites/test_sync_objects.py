@@ -22,17 +22,16 @@ from encoder_conformance.cia.cia301 import (
     RESTRICTED_CAN_IDS,
     SYNC_COB_ID_OBJECT,
     SdoAbortCode,
+    can_id_of,
     is_restricted_can_id,
+    with_can_id,
 )
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
+from encoder_conformance.dut.link import format_frames, received_on
+from encoder_conformance.dut.sdo import SdoResponse, abort_name, sdo_frames
 from encoder_conformance.plugin.skips import not_applicable
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
-from encoder_conformance.suite_support.checks import abort_accepted
-from encoder_conformance.suite_support.tpdo import tpdo_under_test
+from encoder_conformance.suite_support import abort_accepted, tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 v4.2.0 §7.5.2.5 object 1005h (COB-ID SYNC)"),
               pytest.mark.requires("sync_consumer"), pytest.mark.usefixtures("no_error_left")]
@@ -108,10 +107,8 @@ def test_sync_producer_sends_every_cycle(dut, sync_cob_id, settings_journal, evi
     generating = sync_cob_id | COB_ID_SYNC_GENERATE
     if _write(dut, generating).is_abort:
         not_applicable(f"1005h = {generating:08X}h refused (the device does not generate SYNC)")
-    can_id = sync_cob_id & 0x7FF
-
-    def is_own_sync(msg) -> bool:
-        return msg.is_rx and msg.arbitration_id == can_id and not msg.is_remote_frame
+    can_id = can_id_of(sync_cob_id)
+    is_own_sync = received_on(can_id)
 
     settings_journal.remember(COMMUNICATION_CYCLE_PERIOD, 0)
     mark = dut.frames.mark()
@@ -141,7 +138,7 @@ def test_sync_restricted_can_id_refused(dut, sync_cob_id, evidence):
     found = dut.profile.quirk_of(fx.SyncCobIdAnyCanId)
     accepted = []
     for can_id in RESTRICTED_PROBES:
-        value = (sync_cob_id & ~0x7FF) | can_id
+        value = with_can_id(sync_cob_id, can_id)
         what = f"1005h = {value:08X}h (restricted CAN-ID {can_id:03X}h)"
         response = _write(dut, value)
         evidence.note(f"{can_id:03X}h: {response.describe()}")
@@ -166,7 +163,7 @@ def test_sync_taken_on_its_cob_id(dut, sync_cob_id, settings_journal, back_to_pr
     CAN-ID."""
     evidence.rests_on("cia", CLAUSE + " (bits 0-10: the CAN-ID of the SYNC the device consumes)")
     assert not is_restricted_can_id(OTHER_SYNC_CAN_ID)
-    other = (sync_cob_id & ~0x7FF) | OTHER_SYNC_CAN_ID
+    other = with_can_id(sync_cob_id, OTHER_SYNC_CAN_ID)
     domain = declared_domain(dut.profile, SYNC_COB_ID_OBJECT, 0)
     if domain is not None and other not in domain:
         not_applicable(f"the profile declares 1005h in {domain}, without {other:08X}h")
@@ -176,13 +173,12 @@ def test_sync_taken_on_its_cob_id(dut, sync_cob_id, settings_journal, back_to_pr
                     "not on each")
     chosen.configure(trans_type=1)
     tpdo = chosen.can_id()
-    old = sync_cob_id & 0x7FF
+    old = can_id_of(sync_cob_id)
     settings_journal.write(SYNC_COB_ID_OBJECT, 0, other.to_bytes(4, "little"))
-    start_operational(dut, settings_journal, evidence)
+    dut.nmt.transition("operational", settings_journal, evidence)
     window = dut.pdo_silence_s + dut.profile.timing.nmt_settle_ms / 1000
 
-    def is_tpdo(msg) -> bool:
-        return msg.is_rx and msg.arbitration_id == tpdo and not msg.is_remote_frame
+    is_tpdo = chosen.frames(tpdo)
 
     mark = dut.send(OTHER_SYNC_CAN_ID)
     answered = dut.frames.wait_for(is_tpdo, window, mark)

@@ -17,10 +17,9 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_HISTORY, NmtState, emcy_meaning
-from encoder_conformance.dut.emcy_trigger import emcy_code
-from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.persistent_error import error_register
+from encoder_conformance.dut.emcy import emcy_code
+from encoder_conformance.dut.link import Mark, format_frames
+from encoder_conformance.dut.nmt import error_register
 from encoder_conformance.errors import NotJudged
 from encoder_conformance.plugin import acceptance
 from encoder_conformance.plugin.skips import not_selected
@@ -91,7 +90,7 @@ def test_no_error_reported_at_start_up(dut, goods_in, evidence):
 def test_nmt_start_reaches_operational(dut, goods_in, settings_journal, back_to_preoperational, evidence):
     """At goods-in, NMT start brings the device into operational (its heartbeat reports 05h)."""
     try:
-        start_operational(dut, settings_journal, evidence)
+        dut.nmt.transition("operational", settings_journal, evidence)
     except NotJudged as held:  # staying out of operational may be conformant; a device in working order does not
         pytest.fail(f"NMT start: the device does not stay in operational ({NmtState.OPERATIONAL:02X}h): {held}",
                     pytrace=False)  # back_to_preoperational gives the device back to pre-operational

@@ -24,8 +24,8 @@ import canopen
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from encoder_conformance.cia.cia301 import SAVE
-from encoder_conformance.dut import connection
-from encoder_conformance.dut.frames import FrameLog
+from encoder_conformance.dut.link import connection
+from encoder_conformance.dut.link.frames import FrameLog
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.sim.process import SimulatorControl, SimulatorProcess, start_simulator

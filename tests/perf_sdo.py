@@ -13,10 +13,10 @@ from collections.abc import Callable
 
 import can
 
-from encoder_conformance.dut.connection import connect, disconnect
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.frames import FrameLog
-from encoder_conformance.dut.sdo_frames import upload_request
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link.connection import connect, disconnect
+from encoder_conformance.dut.link.frames import FrameLog
+from encoder_conformance.dut.sdo.sdo_frames import upload_request
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.sim.process import start_simulator
 

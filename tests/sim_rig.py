@@ -18,8 +18,8 @@ import canopen
 import pytest
 
 from encoder_conformance.config.bus import BusConfig
-from encoder_conformance.dut.frames import FrameLog, Mark
-from encoder_conformance.dut.tracing_bus import TracingBus
+from encoder_conformance.dut.link.frames import FrameLog, Mark
+from encoder_conformance.dut.link.tracing_bus import TracingBus
 from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.sim.faults import FaultSet
 from encoder_conformance.sim.host import SimulatorHost

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 from encoder_conformance.sim.process import SimulatorControl, parse_address
 
 if TYPE_CHECKING:
-    from encoder_conformance.dut.actuator import ShaftDriveConfig
+    from encoder_conformance.dut.bench.actuator import ShaftDriveConfig
 
 
 def drive(config: ShaftDriveConfig) -> SimulatorControl:

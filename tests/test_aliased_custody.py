@@ -2,7 +2,7 @@
 node that gives back what no order can, and the twin variant that plays the WDGA's open reading (6200h and
 1800h sub 5 one value, open reading ``cyclic-timer-vs-event-timer``) against a custody driven directly, in an
 accept and in a full run (~50 s in all). And a memory that had no valid stored data at the start (EMCY 5000h
-after the boot-up) and has after the run's store: reported as not as found (``dut/boot_memory.py``)."""
+after the boot-up) and has after the run's store: reported as not as found (``dut/store/boot_memory.py``)."""
 
 from __future__ import annotations
 
@@ -14,10 +14,10 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.cia.cia301 import SAVE
-from encoder_conformance.dut.aliased_values import AliasRepair, entries_that_may_alias, write_order
-from encoder_conformance.dut.custody import Custody
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.store_watch import StoreWatch
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.custody.aliased_values import AliasRepair, entries_that_may_alias, write_order
+from encoder_conformance.dut.custody.custody import Custody
+from encoder_conformance.dut.store.store_watch import StoreWatch
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile
@@ -212,5 +212,5 @@ def test_aliased_timers_stored_by_the_run_given_back_group_by_group(rig, tmp_pat
     assert [line.split(" =")[0] for line in alone] == ["1800h.05", "6200h.00"]
     assert record.store_commands[-2:] == ["1010h.02 'save'", "1010h.03 'save'"]
     assert (dut.read(*CYCLIC), dut.read(*EVENT)) == (u16(1), u16(0))
-    assert dut.reset_and_reach()
+    assert dut.nmt.reset_and_reach()
     assert (dut.read(*CYCLIC), dut.read(*EVENT)) == (u16(1), u16(0)), "the memory as delivered"

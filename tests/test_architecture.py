@@ -6,6 +6,7 @@ from __future__ import annotations
 import ast
 import builtins
 import importlib
+import importlib.util
 import inspect
 import io
 import re
@@ -291,7 +292,7 @@ def _resolve(module: ModuleType, expression: ast.expr) -> object:
 def test_every_exception_class_is_in_the_one_tree():
     """Every exception class of the library derives from errors.EncoderConformanceError (RunInterrupted, by design
     a KeyboardInterrupt, and TypedSkip, by design pytest's skip, aside: ``except Exception`` must not catch them)
-    and is defined in errors.py, unless it also needs a base of another library (dut/device.py's SdoAborted, also
+    and is defined in errors.py, unless it also needs a base of another library (dut/link/device.py's SdoAborted, also
     canopen's SdoAbortedError)."""
     from encoder_conformance.errors import EncoderConformanceError, RunInterrupted
     from encoder_conformance.plugin.skips import TypedSkip
@@ -357,28 +358,101 @@ def test_suites_skip_only_with_a_typed_reason():
     assert bare == []
 
 
-#: where an NMT state command (start, stop, enter pre-operational) may be sent other than through dut/nmt_states.py:
-#: places that judge the command itself or time from it, and custody, which may always talk (issue 39: one way into a
-#: state, seen by what the state answers)
+#: where an NMT state command (start, stop, enter pre-operational) may be sent other than through dut/nmt/nmt_states.py
+#: (``dut.nmt.transition``): places that judge the command itself or time from it, and custody, which may always talk
+#: (issue 39: one way into a state, seen by what the state answers)
 NMT_STATE_COMMANDS_ALSO_IN = {
-    "encoder_conformance/dut/heartbeat_state.py": "leaves stopped before an SDO request, seeing 7Fh",
-    "encoder_conformance/dut/lss_device.py": "the LSS states of a device whose manual allows LSS only in some",
-    "encoder_conformance/dut/lss_custody.py": "the LSS put-back",
-    "encoder_conformance/dut/custody.py": "the snapshot and the give-back",
-    "encoder_conformance/dut/periodic_capture.py": "times the event-timer stream from the start",
+    "encoder_conformance/dut/nmt/heartbeat_state.py": "leaves stopped before an SDO request, seeing 7Fh",
+    "encoder_conformance/dut/lss/lss_device.py": "the LSS states of a device whose manual allows LSS only in some",
+    "encoder_conformance/dut/lss/lss_custody.py": "the LSS put-back",
+    "encoder_conformance/dut/custody/custody.py": "the snapshot and the give-back",
+    "encoder_conformance/dut/tpdo/periodic_capture.py": "times the event-timer stream from the start",
     "suites/test_pdo_timing.py": "times the TPDOs from the start",
     "suites/test_nmt_state_machine.py": "the model's own steps, each confirmed against the model",
 }
-_STATE_COMMAND = re.compile(r"""\bnmt\(\s*["'](start|stop|pre-operational)["']""")
+_STATE_COMMAND = re.compile(
+    r"""(\.nmt\.command|\bsend_command|\bsend_in_custody)\((\s*[\w.]+,)?\s*["'](start|stop|pre-operational)["']""")
+NMT_HOME = "encoder_conformance/dut/nmt/nmt_states.py"
 
 
 def test_nmt_states_are_entered_in_one_place():
-    """Suites, fixtures and the DUT layer enter an NMT state through dut/nmt_states.py, which sees it there."""
+    """Suites, fixtures and the DUT layer enter an NMT state through ``dut.nmt.transition`` (dut/nmt/nmt_states.py),
+    which sees it there."""
     found = []
     for folder in (REPO / "suites", REPO / "fixtures", LIBRARY / "dut", LIBRARY / "suite_support"):
         for path in folder.rglob("*.py"):
             where = path.relative_to(REPO).as_posix()
-            if where != "encoder_conformance/dut/nmt_states.py" and where not in NMT_STATE_COMMANDS_ALSO_IN:
+            if where != NMT_HOME and where not in NMT_STATE_COMMANDS_ALSO_IN:
                 found += [f"{where}:{n}" for n, line in enumerate(path.read_text().splitlines(), 1)
                           if _STATE_COMMAND.search(line)]
-    assert found == [], "NMT state commands outside dut/nmt_states.py (use reach, start_operational, ...)"
+    assert found == [], "NMT state commands outside dut/nmt/nmt_states.py (use dut.nmt.transition)"
+
+
+def test_the_state_command_finder_sees_every_spelling():
+    """The face's command, the DUT layer's own sender and custody's are all seen; other commands are not."""
+    lines = ['dut.nmt.command("start")', 'send_command(self.dut, "pre-operational", node_id=3)',
+             "send_in_custody(dut, 'stop', 5)", 'dut.nmt.command("reset-node")', 'dut.nmt.transition("stopped", j, n)',
+             'nmt.command("start", node_id=0)']  # the last: the NMT suite's observer, judging the command itself
+    assert [bool(_STATE_COMMAND.search(line)) for line in lines] == [True, True, True, False, False, False]
+
+
+#: modules outside dut/nmt/ that may build an NMT command frame themselves: the twin decodes them (sim/), cia/ names
+#: them; every other NMT command the tester sends goes through dut.nmt (issue 41)
+NMT_FRAMES_ALSO_IN: dict[str, str] = {}
+NMT_FRAMES_HOMES = ("encoder_conformance/dut/nmt/", "encoder_conformance/sim/", "encoder_conformance/cia/")
+_NMT_FRAME = re.compile(r"\b(NMT_COB_ID|NMT_COMMAND_NAMES)\b|\.nmt\(")
+
+
+def test_nmt_commands_are_sent_only_through_dut_nmt():
+    """No module builds an NMT command frame (COB-ID 000h, the command table) or calls a device's old ``nmt()``
+    outside dut/nmt/: tests of NMT commands call ``dut.nmt.command``, custody and the LSS steps dut/nmt/commands.py."""
+    found = []
+    for folder in (REPO / "suites", REPO / "fixtures", LIBRARY):
+        for path in folder.rglob("*.py"):
+            where = path.relative_to(REPO).as_posix()
+            if not where.startswith(NMT_FRAMES_HOMES) and where not in NMT_FRAMES_ALSO_IN:
+                found += [f"{where}:{n}" for n, line in enumerate(path.read_text().splitlines(), 1)
+                          if _NMT_FRAME.search(line.split("#")[0])]
+    assert found == [], "NMT commands outside dut/nmt/ (use dut.nmt.command or dut/nmt/commands.py)"
+
+
+def _faces() -> dict[str, set[str]]:
+    """Each package of dut/ (and dut itself, and suite_support/), and the names its face exports: its ``__init__``'s
+    names, and its modules."""
+    from encoder_conformance.dut.face_exports import face_names
+
+    packages = [LIBRARY / "dut", LIBRARY / "suite_support",
+                *(p.parent for p in (LIBRARY / "dut").glob("*/__init__.py"))]
+    return {_module_name(p): set(face_names(str(p / "__init__.py"))) | {m.stem for m in p.glob("*.py")}
+            for p in packages}
+
+
+def test_suites_import_only_the_faces_of_dut():
+    """A suite imports from ``encoder_conformance.dut`` or one of its packages (``dut.nmt``, ``dut.tpdo``, ...), and
+    from ``suite_support``, the names its face exports, never a module inside a package: what a test uses has one
+    address per protocol."""
+    faces = _faces()
+    found = []
+    for path in (REPO / "suites").glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                found += [f"{path.name}: import {a.name}" for a in node.names if a.name.startswith(
+                    ("encoder_conformance.dut", "encoder_conformance.suite_support"))]
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith(
+                    ("encoder_conformance.dut", "encoder_conformance.suite_support")):
+                module = node.module or ""
+                if module not in faces:
+                    found.append(f"{path.name}: from {module}")
+                else:
+                    found += [f"{path.name}: {module}.{a.name}" for a in node.names if a.name not in faces[module]]
+    assert found == [], "suites import dut's faces only (add the name to the package's __init__)"
+
+
+def test_every_face_name_resolves():
+    """Each name a face of dut/ exports is there on first use (``dut/face_exports.py`` imports it lazily)."""
+    missing = []
+    for package, names in _faces().items():
+        module = importlib.import_module(package)
+        missing += [f"{package}.{name}" for name in sorted(names) if not hasattr(module, name)
+                    and importlib.util.find_spec(f"{package}.{name}") is None]
+    assert missing == []

@@ -13,7 +13,7 @@ from pathlib import Path
 import can
 import pytest
 
-from encoder_conformance.dut.frames import FrameLog
+from encoder_conformance.dut.link.frames import FrameLog
 from encoder_conformance.profile.loader import DEFAULT_PROFILE_DIR
 from encoder_conformance.sim.fault_catalogue import FAULTS, VARIANTS
 from encoder_conformance.sim.process import SimulatorControl, start_simulator

@@ -16,17 +16,17 @@ from encoder_conformance.cia.cia301 import LOAD, SAVE
 from encoder_conformance.cli.restore_actions import RestoreRequest, restore_from_snapshot
 from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.config.station import StationError, load_station
-from encoder_conformance.dut.custody import Custody, RestoreRecord
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.encoder_access import EncoderAccess
-from encoder_conformance.dut.patient_read import read_patiently
-from encoder_conformance.dut.persist import StoreCommand, persist_entry, store_commands_for
-from encoder_conformance.dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
-from encoder_conformance.dut.reference_custody import ReferenceCustody
-from encoder_conformance.dut.reference_point import ReferencePoint, read_reference_point
-from encoder_conformance.dut.snapshot import Snapshot, SnapshotEntry, custody_keys
-from encoder_conformance.dut.store_watch import AUTO_STORED, StoreWatch
-from encoder_conformance.dut.write_plan import SCALING_GATE, plan_writes
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.bench.encoder_access import EncoderAccess
+from encoder_conformance.dut.bench.power import BenchPower, PowerSwitchError, ShellPowerSwitch
+from encoder_conformance.dut.bench.reference_point import ReferencePoint, read_reference_point
+from encoder_conformance.dut.custody.custody import Custody, RestoreRecord
+from encoder_conformance.dut.custody.reference_custody import ReferenceCustody
+from encoder_conformance.dut.custody.snapshot import Snapshot, SnapshotEntry, custody_keys
+from encoder_conformance.dut.custody.write_plan import SCALING_GATE, plan_writes
+from encoder_conformance.dut.sdo.patient_read import read_patiently
+from encoder_conformance.dut.store.persist import StoreCommand, persist_entry, store_commands_for
+from encoder_conformance.dut.store.store_watch import AUTO_STORED, StoreWatch
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile
@@ -250,7 +250,7 @@ class Bench:
 
     def reset(self) -> ReferencePoint:
         """Reset node: the reference point the device stored."""
-        assert self.dut.reset_and_reach()
+        assert self.dut.nmt.reset_and_reach()
         return read_reference_point(self.access)
 
     def custody(self, tmp_path: Path) -> Custody:

@@ -9,8 +9,8 @@ import threading
 import can
 import pytest
 
-from encoder_conformance.dut.frames import FrameLog
-from encoder_conformance.dut.tracing_bus import TracingBus
+from encoder_conformance.dut.link.frames import FrameLog
+from encoder_conformance.dut.link.tracing_bus import TracingBus
 from encoder_conformance.plugin.bus_trace import BusTrace
 
 

@@ -10,8 +10,8 @@ from pathlib import Path
 import can
 import pytest
 
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.frames import FrameLog, format_frames
+from encoder_conformance.dut.link.frames import FrameLog, format_frames
+from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.models.timing import interval_stats
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import HeartbeatTolerance

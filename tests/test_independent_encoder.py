@@ -25,7 +25,7 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance.dut.actuator import ShaftDrivePlugin
+from encoder_conformance.dut.bench.actuator import ShaftDrivePlugin
 from tests.independent.encoder_function import (
     CamSettings,
     CamSwitch,

@@ -25,9 +25,9 @@ from encoder_conformance.cia.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, 
 from encoder_conformance.cli.lss_actions import LssOptions, Target, scan, set_bitrate, set_node_id
 from encoder_conformance.cli.main import main as cli_main
 from encoder_conformance.config.bus import BusConfig
-from encoder_conformance.dut.frames import FrameLog
-from encoder_conformance.dut.lss_find import error_text
-from encoder_conformance.dut.lss_master import LssAnswer
+from encoder_conformance.dut.link.frames import FrameLog
+from encoder_conformance.dut.lss.lss_find import error_text
+from encoder_conformance.dut.lss.lss_master import LssAnswer
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.sim.host import SimulatorHost

@@ -1,5 +1,6 @@
-"""The LSS custody (dut/lss_custody.py) against in-process twins: a device an LSS test (or a crash) left elsewhere is
-found and put back at its node-ID, with its node-ID and bit rate as found, without storing what needs no store.
+"""The LSS custody (dut/lss/lss_custody.py) against in-process twins: a device an LSS test (or a crash) left
+elsewhere is found and put back at its node-ID, with its node-ID and bit rate as found, without storing what needs
+no store.
 
 Issue 26: with the WDGA variant that applies a configured node-ID at NMT reset communication and no power switch,
 the put-back configured 127, stored it and waited for a power cycle while the device answered at the new node-ID
@@ -14,14 +15,14 @@ from pathlib import Path
 from encoder_conformance.cia.cia305 import MASTER_COB_ID, UNCONFIGURED_NODE_ID, LssCommand, LssState
 from encoder_conformance.cli.restore_actions import RestoreRequest, restore_from_snapshot
 from encoder_conformance.config.bus import BusConfig
-from encoder_conformance.dut.custody import Custody
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.lss_device import LssDevice, expect_success, table_index
-from encoder_conformance.dut.lss_master import LssAddress, LssMaster
-from encoder_conformance.dut.power import BenchPower, SimulatorPowerSwitch
-from encoder_conformance.dut.power_on import power_cycler
-from encoder_conformance.dut.snapshot import Snapshot
-from encoder_conformance.dut.store_watch import StoreWatch
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.bench.power import BenchPower, SimulatorPowerSwitch
+from encoder_conformance.dut.bench.power_on import power_cycler
+from encoder_conformance.dut.custody.custody import Custody
+from encoder_conformance.dut.custody.snapshot import Snapshot
+from encoder_conformance.dut.lss.lss_device import LssDevice, expect_success, table_index
+from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster
+from encoder_conformance.dut.store.store_watch import StoreWatch
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.sim.node import SimulatedNode

@@ -15,10 +15,9 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE, NmtCommand
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.nmt_states import reach
-from encoder_conformance.dut.persistent_error import persisting_error
-from encoder_conformance.dut.settings_journal import SettingsJournal
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.custody.settings_journal import SettingsJournal
+from encoder_conformance.dut.nmt.persistent_error import persisting_error
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.runs.fault_matrix import run_suite
 from encoder_conformance.sim.nmt import NmtState
@@ -67,7 +66,7 @@ def test_the_check_for_a_kept_error_sends_no_sdo_to_a_stopped_device(rig):
     pre-operational, 7Fh seen) before its first SDO request, and finds the kept error."""
     dut, node = _dut(rig, ("device_error_at_start_stays_stopped",))
     journal, notes = SettingsJournal(dut), _Notes()
-    reach(dut, journal, notes, "stopped")
+    dut.nmt.transition("stopped", journal, notes)
     stopped = rig.nmt(NmtCommand.START, node.node_id)
     assert rig.log.wait_for(lambda m: dut.is_heartbeat(m) and bytes(m.data) == b"\x04", sim_rig.WAIT_S, stopped)
     assert node.state is NmtState.STOPPED
@@ -83,9 +82,9 @@ def test_the_check_for_a_kept_error_sends_no_sdo_to_a_stopped_device(rig):
 def test_a_state_not_reached_names_the_state_the_heartbeat_reports(rig):
     dut, _node = _dut(rig, ("ignore_enter_preop",))
     journal, notes = SettingsJournal(dut), _Notes()
-    reach(dut, journal, notes, "operational")
+    dut.nmt.transition("operational", journal, notes)
     with pytest.raises(AssertionError, match=r"the heartbeat reports 05h \(operational\), not 7Fh \(pre-operational\)"):
-        reach(dut, journal, notes, "pre-operational")
+        dut.nmt.transition("pre-operational", journal, notes)
     journal.restore()
 
 

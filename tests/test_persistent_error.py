@@ -7,11 +7,10 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.cia.cia301 import EMCY_BASE, ERROR_REGISTER, EmcyCode, NmtCommand
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.nmt_states import start_operational
-from encoder_conformance.dut.periodic_capture import PeriodicCapture
-from encoder_conformance.dut.persistent_error import kept_error, persisting_error
-from encoder_conformance.dut.settings_journal import SettingsJournal
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.custody.settings_journal import SettingsJournal
+from encoder_conformance.dut.nmt.persistent_error import kept_error, persisting_error
+from encoder_conformance.dut.tpdo.periodic_capture import PeriodicCapture
 from encoder_conformance.errors import HeldByPersistentError
 from encoder_conformance.plugin.outcomes import is_device_finding
 from encoder_conformance.profile.loader import load_profile
@@ -81,7 +80,7 @@ def test_an_error_kept_after_a_reset_makes_operational_not_testable_resetting_on
     for _ in range(2):
         held_by = r"not testable: NMT start \(to enter operational\): .*1001h = 01h.*00005000h"
         with pytest.raises(HeldByPersistentError, match=held_by) as held:
-            start_operational(dut, journal, notes)
+            dut.nmt.transition("operational", journal, notes)
         assert not is_device_finding(held.value)
     assert _resets_sent(rig, dut.node_id, mark) == 1
     assert kept_error(dut) == 0x01

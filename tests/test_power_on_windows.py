@@ -13,12 +13,12 @@ import json
 import time
 
 from encoder_conformance.cia.cia305 import UNCONFIGURED_NODE_ID
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.frames import Mark
-from encoder_conformance.dut.lss_device import LssDevice, expect_success
-from encoder_conformance.dut.lss_master import LssAddress, LssMaster
-from encoder_conformance.dut.power import BenchPower
-from encoder_conformance.dut.power_on import power_cycler, powered_on
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.bench.power import BenchPower
+from encoder_conformance.dut.bench.power_on import power_cycler, powered_on
+from encoder_conformance.dut.link.frames import Mark
+from encoder_conformance.dut.lss.lss_device import LssDevice, expect_success
+from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.sim.node import SimulatedNode
 from tests import sim_rig

@@ -134,7 +134,7 @@ def test_checks_not_judged_shown_open_apart_from_the_scope():
 
 
 def test_memory_not_as_found_is_shown_though_the_values_were_given_back():
-    """Values given back, memory not (dut/boot_memory.py): the alarm unfolded, never "given back as found"."""
+    """Values given back, memory not (dut/store/boot_memory.py): the alarm unfolded, never "given back as found"."""
     summary = _summary(PASSED, restored=True)
     summary.device_memory = "the device reported no valid stored parameters when the run began"
     page = render(summary, PageContext(custody=[("MEMORY NOT AS FOUND: it stores now", True)]))

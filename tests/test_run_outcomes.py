@@ -20,7 +20,7 @@ from pathlib import Path
 import can
 import pytest
 
-from encoder_conformance.dut import startup_frames
+from encoder_conformance.dut.sdo import startup_frames
 from encoder_conformance.errors import BusLostError, DutLostError
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR

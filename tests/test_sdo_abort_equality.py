@@ -12,8 +12,9 @@ from canopen.sdo.exceptions import SdoAbortedError
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from encoder_conformance.dut.device import DeviceUnderTest, SdoAborted
-from encoder_conformance.dut.frames import FrameLog
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link.device import SdoAborted
+from encoder_conformance.dut.link.frames import FrameLog
 
 STATE_REFUSED = 0x08000022  # CiA 301 §7.2.4.3.17: "... because of the present device state"
 

@@ -1,4 +1,4 @@
-"""The byte-exact SDO client (dut/sdo_client.py) against the simulator's SDO server, expedited to block.
+"""The byte-exact SDO client (dut/sdo/sdo_client.py) against the simulator's SDO server, expedited to block.
 
 A twin of the block-transfer self-test profile on a private virtual bus; each test checks that the
 client reads what a conformant server sends as conformant, and names what a faulty one breaks.
@@ -11,8 +11,8 @@ import struct
 import pytest
 
 from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.sdo_client import SdoProtocolClient
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.sdo.sdo_client import SdoProtocolClient
 from encoder_conformance.profile.loader import load_profile
 from tests import sim_rig
 from tests.sim_rig import REPO, Rig

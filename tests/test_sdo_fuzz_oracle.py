@@ -85,7 +85,7 @@ def test_a_short_download_initiate_is_served_only_with_its_multiplexer():
 
 def test_a_failure_names_the_request_and_both_answers():
     """A last segment confirmed and then aborted: two answers to one request, both named, with the time between."""
-    from encoder_conformance.dut.sdo_words import Stamped
+    from encoder_conformance.dut.sdo.sdo_words import Stamped
 
     initiate = bytes.fromhex("21 00 20 00 0C 00 00 00")
     last = bytes.fromhex("15 01 02 03 04 05 00 00")

@@ -11,7 +11,7 @@ import struct
 import pytest
 
 from encoder_conformance.cia.cia301 import SdoAbortCode
-from encoder_conformance.dut import sdo_frames
+from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.attribution import attribute
 from encoder_conformance.fuzz.oracle import Exchange, Judge
@@ -45,7 +45,7 @@ def _hex(value: object) -> str | None:
     return value.hex(" ").upper() if isinstance(value, bytes) else None
 
 
-# -- matching a reply to its request (dut/sdo_frames.py) -------------------------------------------------------------
+# -- matching a reply to its request (dut/sdo/sdo_frames.py) -----------------------------------------------------------
 @pytest.mark.parametrize(("request_", "reply", "fits"), [
     (RESERVED_UPLOAD_1001, STALE_REFUSAL, True),  # refused as an invalid command: any multiplexer
     (RESERVED_UPLOAD_1001, _abort(0, 0, INVALID), True),

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.runner import FuzzRunner
 from encoder_conformance.fuzz.watch import DeviceWatch
@@ -126,7 +126,7 @@ def test_a_confirmation_and_then_an_abort_are_two_answers(rig):
 
 def test_a_reply_stamped_before_the_next_request_answers_the_one_before():
     """The tester's log took the second answer in after it sent the next request; its receive stamp is earlier."""
-    from encoder_conformance.dut.sdo_words import Stamped
+    from encoder_conformance.dut.sdo.sdo_words import Stamped
     from encoder_conformance.fuzz.attribution import attribute
 
     segment, fence = bytes.fromhex("09 01 02 03 00 00 00 00"), UPLOAD_1000.frame

@@ -8,10 +8,10 @@ import struct
 import can
 import pytest
 
-from encoder_conformance.dut import sdo_frames
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.frames import FrameLog
-from encoder_conformance.dut.tracing_bus import TracingBus
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link.frames import FrameLog
+from encoder_conformance.dut.link.tracing_bus import TracingBus
+from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.profile.loader import load_profile
 from tests.sim_rig import MINIMAL
 

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import can
 
-from encoder_conformance.dut.frames import FrameLog
-from encoder_conformance.dut.time_budget import TimeBudget, difference
-from encoder_conformance.dut.tracing_bus import TracingBus
+from encoder_conformance.dut.link.frames import FrameLog
+from encoder_conformance.dut.link.time_budget import TimeBudget, difference
+from encoder_conformance.dut.link.tracing_bus import TracingBus
 from tests.suite_session import run_suite
 
 
@@ -40,7 +40,7 @@ def test_waits_of_other_threads_are_not_booked():
 
 
 def test_an_answer_wait_that_times_out_is_a_silence():
-    from encoder_conformance.dut import time_budget
+    from encoder_conformance.dut.link import time_budget
 
     before = time_budget.BUDGET.snapshot()
     assert FrameLog().wait_for(lambda m: True, 0.03) is None
@@ -51,7 +51,7 @@ def test_an_answer_wait_that_times_out_is_a_silence():
 
 def test_a_frame_handed_to_the_bus_is_traffic_and_an_sdo_transfer_books_its_own_once():
     """A raw frame's send is booked as ``send`` (the interface's time); inside a transfer it is the transfer's."""
-    from encoder_conformance.dut import time_budget
+    from encoder_conformance.dut.link import time_budget
 
     log = FrameLog()
     bus = TracingBus(can.interface.Bus(interface="virtual", channel="budget-send"), log)

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
 
-from encoder_conformance.dut.latency_probe import HostLatency, LatencyProbe
+from encoder_conformance.dut.link.latency_probe import HostLatency, LatencyProbe
 from encoder_conformance.models.timing import schedule_fit
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.profile.model import HeartbeatTolerance
@@ -146,7 +146,7 @@ def test_timing_measurement_gives_junit_figures_csv_and_a_small_svg():
 
 
 def test_frame_clock_says_which_clock_judged():
-    from encoder_conformance.dut.clock import frame_clock
+    from encoder_conformance.dut.link.clock import frame_clock
 
     assert frame_clock({"interface": "pcan"}).hardware
     virtual = frame_clock({"interface": "virtual"})

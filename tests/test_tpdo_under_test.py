@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut.tpdo.tpdo_under_test import TpdoUnderTest
 
 
 def _tpdo(listed: list[int]) -> TpdoUnderTest:

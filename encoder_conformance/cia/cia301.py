@@ -44,6 +44,7 @@ NODE_TRANSMIT_BASES = (EMCY_BASE, *TPDO_BASES, SDO_RESPONSE_BASE, HEARTBEAT_BASE
 COB_ID_INVALID = 0x80000000  # bit 31 of a PDO/SYNC/EMCY COB-ID: the object does not exist / is not valid
 COB_ID_NO_RTR = 0x40000000  # bit 30 of a TPDO COB-ID: no RTR allowed on this PDO (CiA 301 §7.5.2.37)
 COB_ID_FRAME_29_BIT = 0x20000000  # bit 29 of a PDO COB-ID: 29-bit (extended) CAN-ID
+CAN_ID_MASK = 0x7FF  # bits 0-10 of a COB-ID entry: the 11-bit CAN-ID (CiA 301 §7.5.2.35, §7.5.2.37, 1005h)
 #: bits 0-29 of a PDO COB-ID: "shall not be changed while the PDO exists (bit 31 = 0)" (CiA 301 §7.5.2.35, §7.5.2.37)
 COB_ID_FIXED_WHILE_VALID = 0x3FFFFFFF
 #: CAN-IDs no configurable communication object may use (CiA 301 §7.3.5, restricted CAN-IDs table)
@@ -153,6 +154,16 @@ COMMAND_FOR_STATE: dict[int, str] = {
 def is_restricted_can_id(can_id: int) -> bool:
     """A CAN-ID of the restricted table (CiA 301 §7.3.5): refused for PDOs, SYNC, EMCY, TIME and SDO."""
     return any(can_id in ids for ids in RESTRICTED_CAN_IDS)
+
+
+def can_id_of(cob_id: int) -> int:
+    """The 11-bit CAN-ID a COB-ID entry (PDO, SYNC, EMCY) names."""
+    return cob_id & CAN_ID_MASK
+
+
+def with_can_id(cob_id: int, can_id: int) -> int:
+    """The COB-ID entry with its 11-bit CAN-ID replaced by ``can_id`` (its flag bits kept)."""
+    return (cob_id & ~CAN_ID_MASK) | can_id
 
 
 def cob_id_valid(cob_id: int) -> int:

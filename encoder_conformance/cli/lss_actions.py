@@ -18,10 +18,10 @@ from dataclasses import asdict, dataclass
 from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
 from encoder_conformance.cia.cia305 import ADDRESS_PARTS, BIT_TIMING_TABLE_0, UNCONFIGURED_NODE_ID, LssCommand, LssState
 from encoder_conformance.config.bus import BusConfig
-from encoder_conformance.dut import connection
-from encoder_conformance.dut.frames import FrameLog, Mark
-from encoder_conformance.dut.lss_find import FULL_RANGE, error_text, find_revision, scan_unconfigured
-from encoder_conformance.dut.lss_master import LssAddress, LssAnswer, LssMaster
+from encoder_conformance.dut.link import connection
+from encoder_conformance.dut.link.frames import FrameLog, Mark
+from encoder_conformance.dut.lss.lss_find import FULL_RANGE, error_text, find_revision, scan_unconfigured
+from encoder_conformance.dut.lss.lss_master import LssAddress, LssAnswer, LssMaster
 from encoder_conformance.errors import BusSetupError, DutLostError, LssStop
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.model import DeviceProfile

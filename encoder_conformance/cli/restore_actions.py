@@ -5,7 +5,7 @@ writes back and stores what differs from the stored snapshot, then the values th
 An encoder's preset objects are never written back as values (a snapshot of an older run may hold
 them): its reference point is given back by presetting, where the snapshot recorded it. A device with LSS that an
 LSS test had moved (the snapshot lists the node-IDs it gave it) or that does not answer at its node-ID is looked
-for and put back first (``dut/lss_custody.py``): at those node-IDs, by its LSS address, unconfigured, after reset
+for and put back first (``dut/lss/lss_custody.py``): at those node-IDs, by its LSS address, unconfigured, after reset
 communication, after a power cycle where power commands are given.
 """
 
@@ -17,18 +17,19 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from encoder_conformance.config.bus import BusConfig
-from encoder_conformance.dut import connection
-from encoder_conformance.dut.custody import Custody, RestoreRecord
-from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
-from encoder_conformance.dut.frames import FrameLog, Mark
-from encoder_conformance.dut.identity import read_identity
-from encoder_conformance.dut.lss_custody import Changes, LssCustody
-from encoder_conformance.dut.lss_master import LssAddress, LssMaster
-from encoder_conformance.dut.power import BenchPower, PowerSwitchError, ShellPowerSwitch
-from encoder_conformance.dut.power_on import power_cycler
-from encoder_conformance.dut.reference_point import preset_keys
-from encoder_conformance.dut.snapshot import Snapshot
-from encoder_conformance.dut.store_watch import StoreWatch
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.bench.power import BenchPower, PowerSwitchError, ShellPowerSwitch
+from encoder_conformance.dut.bench.power_on import power_cycler
+from encoder_conformance.dut.bench.reference_point import preset_keys
+from encoder_conformance.dut.custody.custody import Custody, RestoreRecord
+from encoder_conformance.dut.custody.snapshot import Snapshot
+from encoder_conformance.dut.link import connection
+from encoder_conformance.dut.link.device import wake_if_silent
+from encoder_conformance.dut.link.frames import FrameLog, Mark
+from encoder_conformance.dut.lss.lss_custody import Changes, LssCustody
+from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster
+from encoder_conformance.dut.sdo.identity import read_identity
+from encoder_conformance.dut.store.store_watch import StoreWatch
 from encoder_conformance.errors import BusSetupError, DutLostError
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
@@ -104,9 +105,9 @@ def _leave_out_presets(snapshot: Snapshot, profile: DeviceProfile) -> None:
 def _wrong_device(dut: DeviceUnderTest, snapshot: Snapshot, force: bool) -> str | None:
     """None if the node answers and is the snapshot's unit (same serial number); else why not."""
     try:
-        with dut.custody():
+        with dut.in_custody():
             wake_if_silent(dut)  # a device just switched on may wait for bus traffic
-            if not (dut.responds() or dut.responds() or dut.reset_and_reach()):
+            if not (dut.responds() or dut.responds() or dut.nmt.reset_and_reach()):
                 return f"no answer from node {dut.node_id}: check --node-id, the bit rate, termination and power"
             identity = read_identity(dut).as_report()
     except DutLostError as exc:
@@ -145,7 +146,7 @@ def _lss_recover(dut: DeviceUnderTest, snapshot: Snapshot, request: RestoreReque
             + ("" if power else " (or give --power-off-cmd CMD --power-on-cmd CMD)"))
     custody = LssCustody(dut, master, address, snapshot.node_id, None, power, candidates, hint)
     # what a test may have stored is unknown here: store the node-ID as found again where the device can
-    with dut.custody():
+    with dut.in_custody():
         problem = custody.put_back(Changes(node_id=True, bit_timing=False, stored=True))
     if problem is None:
         snapshot.lss_node_ids.clear()

@@ -1,6 +1,6 @@
 """``encoder-conformance store``: the store commands a factory sends, each confirmed, and what was done said.
 
-The commands are those the run's own restore uses (``dut/persist.py``): 1010h sub 1 'save' where the profile
+The commands are those the run's own restore uses (``dut/store/persist.py``): 1010h sub 1 'save' where the profile
 declares it (it covers every group), else the sub-index of each group the profile's entries are stored by, and
 a manufacturer's store object (a store that reboots is confirmed by its boot-up).
 """
@@ -14,11 +14,12 @@ from dataclasses import dataclass
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.config.bus import BusConfig
-from encoder_conformance.dut import connection
-from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
-from encoder_conformance.dut.identity import identity_mismatch, read_identity
-from encoder_conformance.dut.persist import CannotPersist, StoreCommand, store_commands_for
-from encoder_conformance.dut.sdo_frames import abort_name
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link import connection
+from encoder_conformance.dut.link.device import wake_if_silent
+from encoder_conformance.dut.sdo.identity import identity_mismatch, read_identity
+from encoder_conformance.dut.sdo.sdo_frames import abort_name
+from encoder_conformance.dut.store.persist import CannotPersist, StoreCommand, store_commands_for
 from encoder_conformance.errors import BusSetupError, DutLostError, UsageError
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.model import DeviceProfile

@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 from itertools import pairwise
 
 from encoder_conformance.cia.cia301 import SDO_ABORT, SdoClientCommand
-from encoder_conformance.dut import sdo_words
-from encoder_conformance.dut.sdo_frames import ABORT_SCS, ANSWER_SCS, answers, refused_as_invalid, reserved_bits_set
+from encoder_conformance.dut.sdo import sdo_words
+from encoder_conformance.dut.sdo.sdo_frames import ABORT_SCS, ANSWER_SCS, answers, refused_as_invalid, reserved_bits_set
 from encoder_conformance.fuzz.strategies import Request
 
 ABORT = SDO_ABORT

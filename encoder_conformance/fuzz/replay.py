@@ -10,7 +10,7 @@ from collections.abc import Sequence
 
 import can
 
-from encoder_conformance.dut.frames import format_frames
+from encoder_conformance.dut.link.frames import format_frames
 from encoder_conformance.fuzz.strategies import Request
 
 

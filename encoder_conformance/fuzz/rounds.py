@@ -17,7 +17,7 @@ from collections.abc import Callable
 
 from hypothesis import seed, settings
 
-from encoder_conformance.dut.time_budget import BUDGET
+from encoder_conformance.dut.link.time_budget import BUDGET
 
 ROUND_EXAMPLES = 50
 

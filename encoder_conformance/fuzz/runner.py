@@ -24,10 +24,10 @@ from dataclasses import dataclass, field
 import can
 
 from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE, SDO_RESPONSE_BASE, SdoAbortCode
-from encoder_conformance.dut import sdo_frames, sdo_words
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.frames import Mark
-from encoder_conformance.dut.sdo_words import Stamped
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link.frames import Mark
+from encoder_conformance.dut.sdo import sdo_frames, sdo_words
+from encoder_conformance.dut.sdo.sdo_words import Stamped
 from encoder_conformance.fuzz.attribution import attribute
 from encoder_conformance.fuzz.oracle import Exchange, Judge, reply_required
 from encoder_conformance.fuzz.strategies import Example, Request, client_abort

@@ -13,8 +13,9 @@ import itertools
 import can
 
 from encoder_conformance.cia.cia301 import NmtState
-from encoder_conformance.dut.device import TESTER_MARGIN_S, DeviceUnderTest
-from encoder_conformance.dut.frames import Mark, format_frames
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link.device import TESTER_MARGIN_S
+from encoder_conformance.dut.link.frames import Mark, format_frames
 
 #: heartbeat periods without a heartbeat that count as a stalled producer, and at least GAP_FLOOR_S (not a
 #: timing verdict: those are test_heartbeat's, with the tester's own lateness; this one survives a busy tester)

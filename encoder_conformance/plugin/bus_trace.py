@@ -21,7 +21,7 @@ from pathlib import Path
 import can
 import pytest
 
-from encoder_conformance.dut.frames import FrameLog, Mark
+from encoder_conformance.dut.link.frames import FrameLog, Mark
 
 _UNSETTLED = pytest.StashKey[dict[int, "BusTrace"]]()
 #: the run's frame log (set by the bus_trace fixture) and where each test's set-up starts in it

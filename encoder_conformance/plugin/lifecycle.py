@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import pytest
 
 from encoder_conformance.coverage import Kind
-from encoder_conformance.dut.custody import Custody, RestoreRecord
+from encoder_conformance.dut.custody.custody import Custody, RestoreRecord
 from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit
 from encoder_conformance.plugin.interrupt import InterruptGuard
 from encoder_conformance.plugin.outcomes import is_internal_error

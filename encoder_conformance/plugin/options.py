@@ -11,7 +11,7 @@ import pytest
 
 from encoder_conformance.config.bus import BusConfig, resolve_bus_config
 from encoder_conformance.config.station import Station, StationError, StationPower, load_station
-from encoder_conformance.dut.actuator import ShaftDrivePlugin
+from encoder_conformance.dut.bench.actuator import ShaftDrivePlugin
 from encoder_conformance.history.target import shown
 from encoder_conformance.paths import DEFAULT_PROFILE
 from encoder_conformance.plugin.option_table import PROFILE_ENV, TRACE_OPTION

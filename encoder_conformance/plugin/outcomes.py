@@ -3,8 +3,8 @@
 A **finding about the device** (the test fails; it counts in its area and its basis):
 
 - ``AssertionError``: a check's verdict. The dut layer raises these for what the device did wrong: an SDO
-  request left unanswered or answered with the wrong frame (``DeviceUnderTest._timeout``, ``expect_abort``,
-  ``reset_node_and_wait``), a boot-up that did not come;
+  request left unanswered or answered with the wrong frame (``DeviceLink._timeout``, ``expect_abort``,
+  ``dut.nmt.reset_node``), a boot-up that did not come;
 - ``pytest.fail()`` (pytest's ``Failed``): a fixture's or test's explicit verdict;
 - ``DutLostError``: the device stopped answering (not ``BusLostError``: below);
 - canopen's ``SdoError`` family: ``SdoAbortedError`` (the device refused a request the test expected it to

@@ -1,5 +1,5 @@
 """The time budget of a run: per test, the seconds owed to the device (booked by the DUT layer's waits,
-``dut/time_budget.py``) and the rest, the tester's; per area and in total; the tests that cost most, and why.
+``dut/link/time_budget.py``) and the rest, the tester's; per area and in total; the tests that cost most, and why.
 
 The run's wall time is the process's (interpreter start, imports and collection included, as a user waits
 for them), read from /proc on Linux, else from the session's start.
@@ -18,7 +18,7 @@ from typing import Any
 
 import pytest
 
-from encoder_conformance.dut.time_budget import BUDGET, difference
+from encoder_conformance.dut.link.time_budget import BUDGET, difference
 from encoder_conformance.run_summary import area_of
 
 TOP = 10

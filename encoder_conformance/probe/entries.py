@@ -7,7 +7,6 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
-from encoder_conformance.cia.cia301 import NmtCommand
 from encoder_conformance.probe.findings import Findings, Key
 from encoder_conformance.probe.link import ProbeLink
 from encoder_conformance.probe.put_back import PutBack
@@ -38,7 +37,7 @@ def reset_and_reread(link: ProbeLink, objects: dict[int, dict[str, Any]], findin
                      boot_timeout_s: float) -> None:
     """NMT reset node, the boot-up waited for, every entry read again. A writable value the reset changed was
     the owner's unsaved setting: it goes into the put-back ledger."""
-    mark = link.nmt(NmtCommand.RESET_NODE)
+    mark = link.nmt_command("reset-node")
     started = time.monotonic()
     if link.boot_up(mark, boot_timeout_s) is None:
         findings.notes.append(f"probe: no boot-up message within {boot_timeout_s:.1f} s of an NMT reset node; values "

@@ -14,10 +14,11 @@ import can
 import canopen
 from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
-from encoder_conformance.cia.cia301 import HEARTBEAT_BASE, NMT_COB_ID, NmtCommand
+from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
 from encoder_conformance.config.bus import BusConfig
-from encoder_conformance.dut import connection
-from encoder_conformance.dut.frames import FrameLog, Mark
+from encoder_conformance.dut.link import connection
+from encoder_conformance.dut.link.frames import FrameLog, Mark
+from encoder_conformance.dut.nmt.commands import send_on
 
 
 @dataclass(frozen=True)
@@ -106,9 +107,10 @@ class ProbeLink:
             return Answer()
 
     # -- NMT and error control ---------------------------------------------------------------------
-    def nmt(self, command: NmtCommand) -> Mark:
+    def nmt_command(self, command: str) -> Mark:
+        """NMT command ``command`` (start, reset-node, ...) to the device, through dut/nmt/; a mark before it."""
         mark = self.frames.mark()
-        self.network.send_message(NMT_COB_ID, bytes([command, self.node_id]))
+        send_on(self.network, command, self.node_id)
         return mark
 
     def is_error_control(self, msg: can.Message) -> bool:

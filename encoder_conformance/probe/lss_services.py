@@ -12,7 +12,7 @@ from __future__ import annotations
 import struct
 
 from encoder_conformance.cia.cia305 import ADDRESS_PARTS, LssState
-from encoder_conformance.dut.lss_master import LssAddress, LssMaster
+from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster
 from encoder_conformance.probe.findings import Findings
 from encoder_conformance.probe.link import ProbeLink
 

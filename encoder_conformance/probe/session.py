@@ -8,7 +8,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from encoder_conformance.cia.cia301 import NmtCommand, NmtState
+from encoder_conformance.cia.cia301 import NmtState
 from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.errors import DutLostError
 from encoder_conformance.probe import aborts, entries, lss_services, services
@@ -53,7 +53,7 @@ def _leave_as_found(link: ProbeLink, findings: Findings) -> None:
     if not findings.reset:
         return
     if findings.nmt_state_found == NmtState.OPERATIONAL:
-        link.nmt(NmtCommand.START)
+        link.nmt_command("start")
     elif findings.nmt_state_found is None:
         findings.notes.append("probe: the device was reset once and is in the state it boots into (its state before "
                               "was unknown: no heartbeat)")

@@ -8,8 +8,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from encoder_conformance.basis import Basis
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.encoder_bench import EncoderBench
+from encoder_conformance.dut.bench import EncoderBench
+from encoder_conformance.dut.link import DeviceLink
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.cam import Cam
 from encoder_conformance.models.encoder.reference import EncoderReference
@@ -70,7 +70,7 @@ class CamChannel:
     lowest: int  # the smallest position value
 
     @property
-    def dut(self) -> DeviceUnderTest:
+    def dut(self) -> DeviceLink:
         return self.encoder.access.dut
 
     # -- settings ------------------------------------------------------------------------------

@@ -4,11 +4,9 @@ from __future__ import annotations
 
 from encoder_conformance.cia.cia301 import ABORT_FOR_SITUATION
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut import sdo_words
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.frames import format_frames
-from encoder_conformance.dut.latency_probe import HostLatency
-from encoder_conformance.dut.sdo_frames import SdoResponse, abort_name
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.link import HostLatency, format_frames
+from encoder_conformance.dut.sdo import SdoResponse, abort_name, sdo_words
 from encoder_conformance.models.timing import interval_stats, schedule_fit
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable, not_judged

@@ -7,11 +7,11 @@ from __future__ import annotations
 import can
 
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.actuator import BenchActuator
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.emcy_trigger import EmcyCobId, EmcyTrigger, choose_trigger, emcy_code
-from encoder_conformance.dut.frames import Mark, format_frames
-from encoder_conformance.dut.settings_journal import SettingsJournal
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.bench import BenchActuator
+from encoder_conformance.dut.custody import SettingsJournal
+from encoder_conformance.dut.emcy import EmcyCobId, EmcyTrigger, emcy_code
+from encoder_conformance.dut.link import Mark, format_frames
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_equipped, not_judged
 
@@ -29,7 +29,7 @@ class EmcyAccess:
 
     def trigger(self, repeatable: bool = False, clears: bool = False) -> EmcyTrigger:
         """A trigger that can do what the test needs, noted in the evidence; skips where the bench has none."""
-        found = choose_trigger(self.dut, self._bench, self._journal.write, repeatable, clears)
+        found = self.dut.emcy.trigger(self._bench, self._journal.write, repeatable, clears)
         if isinstance(found, str):
             not_equipped(f"{found}")
         self.used_bench = self.used_bench or found.clears
@@ -38,7 +38,7 @@ class EmcyAccess:
         return found
 
     def cob_id(self) -> EmcyCobId:
-        return EmcyCobId.of(self.dut)
+        return self.dut.emcy.cob_id()
 
     def wait(self, mark: Mark, trigger: EmcyTrigger, what: str, code: int | None = None,
              judged: bool = False) -> can.Message:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut.lss_device import LssDevice
+from encoder_conformance.dut.lss import LssDevice
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.plugin.skips import not_applicable, not_selected
 

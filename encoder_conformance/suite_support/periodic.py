@@ -1,11 +1,11 @@
-"""The verdicts on the periodic capture (``dut/periodic_capture.py``): each stream judged by the test that asks
+"""The verdicts on the periodic capture (``dut/tpdo/periodic_capture.py``): each stream judged by the test that asks
 for it, with the capture's notes and documented deviations in its evidence."""
 
 from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut.periodic_capture import PeriodicCapture, PeriodicStream
+from encoder_conformance.dut.tpdo import PeriodicCapture, PeriodicStream
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import skip_text
 from encoder_conformance.profile.model import HeartbeatTolerance

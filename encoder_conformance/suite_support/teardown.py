@@ -6,7 +6,7 @@ from collections.abc import Callable
 
 import pytest
 
-from encoder_conformance.dut.device import DeviceUnderTest
+from encoder_conformance.dut import DeviceUnderTest
 
 
 def put_back(dut: DeviceUnderTest, restore: Callable[[], list[str]]) -> None:

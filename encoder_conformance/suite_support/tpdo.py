@@ -3,27 +3,19 @@ the test is skipped where the profile has none that qualifies."""
 
 from __future__ import annotations
 
-from encoder_conformance.dut.device import DeviceUnderTest
-from encoder_conformance.dut.settings_journal import SettingsJournal
-from encoder_conformance.dut.tpdo_choice import NoUsableTpdo, choose_tpdo
-from encoder_conformance.dut.tpdo_under_test import TpdoUnderTest
+from encoder_conformance.dut import DeviceUnderTest
+from encoder_conformance.dut.custody import SettingsJournal
+from encoder_conformance.dut.tpdo import NoUsableTpdo, TpdoUnderTest
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import skip_text
 
 
 def tpdo_under_test(dut: DeviceUnderTest, sub: int, evidence: Evidence, journal: SettingsJournal,
                     usable_types: list[int]) -> TpdoUnderTest:
-    """The TPDO to use (``choose_tpdo``: sub-index ``sub`` writable, a type of ``usable_types``), enabled for the
-    test where it is disabled; the choice's deviations and notes in the evidence. Skips where no TPDO qualifies."""
+    """The TPDO to use (``dut.tpdo.for_test``: sub-index ``sub`` writable, a type of ``usable_types``), enabled for
+    the test where it is disabled; the choice's deviations and notes in the evidence. Skips where no TPDO
+    qualifies."""
     try:
-        choice = choose_tpdo(dut, sub, usable_types)
+        return dut.tpdo.for_test(sub, usable_types, journal, evidence)
     except NoUsableTpdo as exc:
-        for quirk_id, text in exc.deviations:
-            evidence.deviation(quirk_id, text)
         skip_text(str(exc), exc.hold)
-    for quirk_id, text in choice.deviations:
-        evidence.deviation(quirk_id, text)
-    tpdo = TpdoUnderTest.chosen(dut, journal, choice)
-    for note in choice.notes:
-        evidence.note(note)
-    return tpdo

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from encoder_conformance.dut.encoder_bench import EncoderBench
+from encoder_conformance.dut.bench import EncoderBench
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.reference import EncoderReference
 from encoder_conformance.plugin.evidence import Evidence

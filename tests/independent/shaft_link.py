@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 from .link import ADDRESS_ENV, AUTHKEY, parse_address
 
 if TYPE_CHECKING:
-    from encoder_conformance.dut.actuator import ShaftDriveConfig
+    from encoder_conformance.dut.bench.actuator import ShaftDriveConfig
 
 
 class ShaftLink:

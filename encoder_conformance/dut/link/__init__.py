@@ -1,0 +1,27 @@
+"""The link to the device: the bus connection and its frame log (every test's trace), the device object with
+raw frames and its liveness, the windows a wait owes (answer, silence), the time budget the waits are booked in,
+the host's clock and lateness.
+Its face: the names below (``dut/face_exports.py``)."""
+
+# the face exports what it imports, one name a line so that it reads as a list
+# ruff: noqa: F401, I001
+
+from typing import TYPE_CHECKING
+
+from encoder_conformance.dut.face_exports import lazy_face
+
+if TYPE_CHECKING:
+    from encoder_conformance.dut.link.clock import frame_clock
+    from encoder_conformance.dut.link.device import DeviceLink
+    from encoder_conformance.dut.link.device import SdoAborted
+    from encoder_conformance.dut.link.device import answer_window
+    from encoder_conformance.dut.link.frames import FrameLog
+    from encoder_conformance.dut.link.frames import Mark
+    from encoder_conformance.dut.link.frames import Predicate
+    from encoder_conformance.dut.link.frames import format_frames
+    from encoder_conformance.dut.link.frames import received_on
+    from encoder_conformance.dut.link.latency_probe import HostLatency
+    from encoder_conformance.dut.link.latency_probe import LatencyProbe
+    from encoder_conformance.dut.link.latency_probe import TwinLateness
+
+__getattr__ = lazy_face(__name__, __file__)
