@@ -14,7 +14,6 @@ later test inherits it (a device may hold a communication error out of operation
 from __future__ import annotations
 
 import itertools
-import time
 
 import can
 import pytest
@@ -29,6 +28,7 @@ from encoder_conformance.cia.cia301 import (
     EmcyCode,
 )
 from encoder_conformance.coverage import Hold
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.emcy_trigger import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
 from encoder_conformance.dut.frames import format_frames
 from encoder_conformance.dut.latency_probe import LatencyProbe
@@ -111,14 +111,14 @@ def test_emcy_inhibit_time_spaces_emcys(dut, emcy, settings_journal, back_to_pre
     mark = dut.frames.mark()
     frames: list[can.Message] = []
     actions = itertools.cycle([trigger.fire, trigger.clear] if trigger.clears else [trigger.fire])
-    deadline = time.monotonic() + (INHIBIT_SAMPLES + 1) * 2 * (INHIBIT_MS / 1000 + trigger.answer_s())
+    deadline = Deadline((INHIBIT_SAMPLES + 1) * 2 * (INHIBIT_MS / 1000 + trigger.answer_s()))
     # events in a row without an EMCY that end the capture: one more than the cycle has steps, so that every kind
     # of event came once after the inhibit time (a device that dropped the clear inside it may ignore the next
     # fire, its error still active, but owes the error reset EMCY for the clear after that)
     give_up_after = 3 if trigger.clears else 2
     unanswered = 0
     with LatencyProbe(twin_lateness) as probe:
-        while len(frames) < INHIBIT_SAMPLES + 1 and time.monotonic() < deadline and unanswered < give_up_after:
+        while len(frames) < INHIBIT_SAMPLES + 1 and not deadline.expired() and unanswered < give_up_after:
             after = next(actions)()
             if dut.frames.wait_for(cob_id.matches, INHIBIT_MS / 1000 + trigger.answer_s(), after) is None:
                 unanswered += 1

@@ -38,6 +38,7 @@ from hypothesis.control import currently_in_test_context
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule, run_state_machine_as_test
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, STATE_NAMES, NmtCommand, NmtState
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.boot_state import settled_state
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.dut.frames import Mark, format_frames
@@ -344,10 +345,10 @@ class NmtMachine(RuleBasedStateMachine):
     def _confirm_by_services(self, why: str) -> None:
         """Without heartbeat: no SDO answer in stopped, an answer otherwise (polled within the settle time)."""
         dut = self.dut
-        deadline = time.monotonic() + dut.profile.timing.nmt_settle_ms / 1000 + dut.sdo_timeout + SLACK_S
+        deadline = Deadline(dut.profile.timing.nmt_settle_ms / 1000 + dut.sdo_timeout + SLACK_S)
         while True:
             answered = dut.sdo_request(upload_request(0x1000, 0), timeout=dut.sdo_silence_s) is not None
-            if answered == self.model.sdo_answered or time.monotonic() >= deadline:
+            if answered == self.model.sdo_answered or deadline.expired():
                 break
         assert answered == self.model.sdo_answered, (
             f"{why}: SDO {'answered' if answered else 'not answered'}, the model is "

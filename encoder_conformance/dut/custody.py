@@ -23,9 +23,9 @@ from pathlib import Path
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import COMMAND_FOR_STATE, STATE_NAMES, NmtState
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.aliased_values import AliasOutcome, AliasRepair, Key, label, no_reset_gives_back
 from encoder_conformance.dut.boot_memory import errors_after_boot, memory_note
-from encoder_conformance.dut.deadline import Deadline
 from encoder_conformance.dut.device import DeviceUnderTest, wake_if_silent
 from encoder_conformance.dut.frames import Mark
 from encoder_conformance.dut.identity import identity_mismatch, read_identity
@@ -163,7 +163,7 @@ class Custody:
         if self.record is not None:
             return self.record
         started = time.monotonic()
-        deadline = Deadline(seconds)
+        deadline = Deadline(seconds, "the restore")
         record = RestoreRecord(None if self.snapshot_path is None else str(self.snapshot_path))
         record.run_store_commands = dict(self.watch.counts)
         self.record = record

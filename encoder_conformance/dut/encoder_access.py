@@ -7,8 +7,7 @@ settings read here are the same inputs the reference model gets from the twin's 
 
 from __future__ import annotations
 
-import time
-
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.device import DeviceUnderTest
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.freeze import FreezeRule
@@ -114,8 +113,8 @@ class EncoderAccess:
     def position_when(self, wanted: int, timeout: float = 0.0) -> int:
         """The position once the device executed its writes, read again until it equals ``wanted`` or
         ``timeout`` is over (returns the last read)."""
-        deadline = time.monotonic() + timeout
+        deadline = Deadline(timeout)
         while True:
             value = self.position()
-            if value == wanted or time.monotonic() >= deadline:
+            if value == wanted or deadline.expired():
                 return value
