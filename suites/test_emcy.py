@@ -66,10 +66,10 @@ def test_error_register_generic_bit(dut, emcy, evidence):
     """While an error is present, the error register (EMCY byte 2 and 1001h) has bit 0 (generic error) set with
     any other bit."""
     evidence.rests_on("cia", "CiA 301 §7.5.2 object 1001h (bit 0 generic error: set whenever an error is present)")
-    found = dut.profile.quirk_of(fx.ErrorRegisterWithoutGenericBit)
+    found = dut.profile.quirk(fx.ErrorRegisterWithoutGenericBit)
     if found is not None:
-        evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
-        not_applicable(f"quirk {found[0]} documents 1001h without bit 0 (deviation recorded)")
+        evidence.deviation(found.id, found.quirk.title)
+        not_applicable(f"quirk {found.id} documents 1001h without bit 0 (deviation recorded)")
     trigger = emcy.trigger()
     frame = emcy.wait(trigger.fire(), trigger, f"after {trigger.name}")
     register = dut.read_uint(ERROR_REGISTER)
@@ -178,10 +178,10 @@ def test_no_emcy_in_stopped(dut, emcy, settings_journal, back_to_preoperational,
     reach(dut, settings_journal, evidence, "stopped")  # seen there (heartbeat 04h) before the error is caused
     mark = trigger.fire()
     sent = dut.frames.quiet_period(cob_id.matches, trigger.silence_s(), mark)
-    found = dut.profile.quirk_of(fx.EmcyInStopped)
+    found = dut.profile.quirk(fx.EmcyInStopped)
     return_to_preoperational(dut)
     if found is not None:
-        evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
+        evidence.deviation(found.id, found.quirk.title)
         evidence.note(f"in stopped, after {trigger.name}: " + ("EMCY sent" if sent else "no EMCY"))
         return
     assert not sent, f"EMCY in stopped after {trigger.name}\n{format_frames(sent)}"

@@ -159,7 +159,7 @@ class DeviceValues:
             self._add_values(value, [value.stored])
         self.boot_state = NmtState.PRE_OPERATIONAL
         if autostart is not None:
-            quirk_id = profile.quirk_of(fx.NmtAutostartObject)[0]
+            quirk_id = profile.quirk(fx.NmtAutostartObject).id  # there: autostart is not None
             if dut.read_uint(autostart.index, autostart.subindex) == autostart.operational_value:
                 self.boot_state = NmtState.OPERATIONAL
             evidence.deviation(quirk_id, f"after a reset the node enters {STATE_NAMES[int(self.boot_state)]} "
@@ -169,8 +169,8 @@ class DeviceValues:
         entry = self.dut.profile.entry(index, sub)
         size = datatypes.size_bytes(entry.type) or 4
         stored = int.from_bytes(self.dut.read(index, sub), "little")
-        forced = [q for _, q in self.dut.profile.quirks_of(fx.BitsForcedAtInit) if q.key == (index, sub)]
-        preop = any(q.covers(index, sub) for _, q in self.dut.profile.quirks_of(fx.WritesPreopOnly))
+        forced = [q.params for q in self.dut.profile.quirks_with(fx.BitsForcedAtInit) if q.params.key == (index, sub)]
+        preop = any(q.params.covers(index, sub) for q in self.dut.profile.quirks_with(fx.WritesPreopOnly))
         tracked = Tracked(index, sub, size, stored, stored, preop_only=preop, auto_stored=entry.persisted_by == "auto",
                           forced_bits=forced[0].forced_bits if forced else 0,
                           forced_at=frozenset(forced[0].at) if forced else frozenset())

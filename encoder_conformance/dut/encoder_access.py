@@ -104,8 +104,8 @@ class EncoderAccess:
 
     def scaling_bit_needed_for_preset(self) -> int | None:
         """The scaling bit mask where it is clear now and the preset needs it, else None."""
-        found = self.dut.profile.quirk_objects(fx.WritesNeedScalingBit)
-        if found is None or self.objects.preset not in found[1] or self.objects.scaling_bit is None:
+        found = self.dut.profile.params_of(fx.WritesNeedScalingBit)
+        if found is None or self.objects.preset not in found.indices or self.objects.scaling_bit is None:
             return None
         bit = 1 << self.objects.scaling_bit
         return None if (self.read_int(self.objects.operating, 0) or 0) & bit else bit
