@@ -74,9 +74,9 @@ def cam_channel(encoder: EncoderBench, evidence: Evidence) -> CamChannel:
     assert cam is not None  # requires("cam")
     high_first = dut.profile.params_of(fx.CamLowBelowHigh) is not None
     if high_first:
-        found = dut.profile.quirk_with_effect(fx.CamLowBelowHigh.effect)
+        found = dut.profile.quirk(fx.CamLowBelowHigh)
         assert found is not None
-        evidence.deviation(found[0], found[1].title + " (high limits written first)")
+        evidence.deviation(found.id, found.quirk.title + " (high limits written first)")
     settings = encoder.access.settings()
     return CamChannel(encoder, cam.cams_per_channel, high_first, settings.span, settings.limits()[0])
 
@@ -311,13 +311,11 @@ def test_low_limit_above_high_limit(cam_channel: CamChannel, evidence: Evidence)
     """Low limit at or above the high limit: refused where the manual says so (quirk cam_low_below_high, WDGA
     M §7.5.4); elsewhere CiA 406 leaves it open and the outcome (wrap-around, swap, refused) is only noted."""
     cams = cam_channel.windows()
-    found = cam_channel.dut.profile.quirk_with_effect(fx.CamLowBelowHigh.effect)
+    found = cam_channel.dut.profile.quirk(fx.CamLowBelowHigh)
     if found is None:
         _observe_low_above_high(cam_channel, cams[0], evidence)
         return
-    quirk_id, quirk = found
-    params = quirk.params
-    assert isinstance(params, fx.CamLowBelowHigh)
+    quirk_id, quirk, params = found.id, found.quirk, found.params
     evidence.deviation(quirk_id, quirk.title)
     cam_channel.configure(cams, enable=0)
     problems: list[str] = []
@@ -364,10 +362,10 @@ def _observe_low_above_high(cam_channel: CamChannel, cam: Cam, evidence: Evidenc
 def test_low_limit_before_high_limit_refused(cam_channel: CamChannel, evidence: Evidence) -> None:
     """Documented write order: a low limit written before its cam's high limit was raised above it is refused;
     high limit first, then low limit, is accepted (WDGA M §7.5.4, §8.11)."""
-    found = cam_channel.dut.profile.quirk_with_effect(fx.CamLowBelowHigh.effect)
+    found = cam_channel.dut.profile.quirk(fx.CamLowBelowHigh)
     if found is None:
         not_applicable("CiA 406 CAM limits are independent objects (no quirk cam_low_below_high)")
-    quirk_id, quirk = found
+    quirk_id, quirk = found.id, found.quirk
     evidence.deviation(quirk_id, quirk.title)
     cams = cam_channel.windows()
     cam_channel.configure(cams, enable=0)

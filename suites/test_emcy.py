@@ -14,7 +14,6 @@ later test inherits it (a device may hold a communication error out of operation
 from __future__ import annotations
 
 import itertools
-import time
 
 import can
 import pytest
@@ -29,6 +28,7 @@ from encoder_conformance.cia.cia301 import (
     EmcyCode,
 )
 from encoder_conformance.coverage import Hold
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.emcy import HeartbeatTimeout, SyncLengthError, emcy_code, is_any_emcy
 from encoder_conformance.dut.link import LatencyProbe, format_frames
 from encoder_conformance.dut.nmt import raise_if_held_by_error
@@ -64,10 +64,10 @@ def test_error_register_generic_bit(dut, emcy, evidence):
     """While an error is present, the error register (EMCY byte 2 and 1001h) has bit 0 (generic error) set with
     any other bit."""
     evidence.rests_on("cia", "CiA 301 §7.5.2 object 1001h (bit 0 generic error: set whenever an error is present)")
-    found = dut.profile.quirk_of(fx.ErrorRegisterWithoutGenericBit)
+    found = dut.profile.quirk(fx.ErrorRegisterWithoutGenericBit)
     if found is not None:
-        evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
-        not_applicable(f"quirk {found[0]} documents 1001h without bit 0 (deviation recorded)")
+        evidence.deviation(found.id, found.quirk.title)
+        not_applicable(f"quirk {found.id} documents 1001h without bit 0 (deviation recorded)")
     trigger = emcy.trigger()
     frame = emcy.wait(trigger.fire(), trigger, f"after {trigger.name}")
     register = dut.read_uint(ERROR_REGISTER)
@@ -109,14 +109,14 @@ def test_emcy_inhibit_time_spaces_emcys(dut, emcy, settings_journal, back_to_pre
     mark = dut.frames.mark()
     frames: list[can.Message] = []
     actions = itertools.cycle([trigger.fire, trigger.clear] if trigger.clears else [trigger.fire])
-    deadline = time.monotonic() + (INHIBIT_SAMPLES + 1) * 2 * (INHIBIT_MS / 1000 + trigger.answer_s())
+    deadline = Deadline((INHIBIT_SAMPLES + 1) * 2 * (INHIBIT_MS / 1000 + trigger.answer_s()))
     # events in a row without an EMCY that end the capture: one more than the cycle has steps, so that every kind
     # of event came once after the inhibit time (a device that dropped the clear inside it may ignore the next
     # fire, its error still active, but owes the error reset EMCY for the clear after that)
     give_up_after = 3 if trigger.clears else 2
     unanswered = 0
     with LatencyProbe(twin_lateness) as probe:
-        while len(frames) < INHIBIT_SAMPLES + 1 and time.monotonic() < deadline and unanswered < give_up_after:
+        while len(frames) < INHIBIT_SAMPLES + 1 and not deadline.expired() and unanswered < give_up_after:
             after = next(actions)()
             if dut.frames.wait_for(cob_id.matches, INHIBIT_MS / 1000 + trigger.answer_s(), after) is None:
                 unanswered += 1
@@ -176,10 +176,10 @@ def test_no_emcy_in_stopped(dut, emcy, settings_journal, back_to_preoperational,
     dut.nmt.transition("stopped", settings_journal, evidence)  # seen there (heartbeat 04h) before the error is caused
     mark = trigger.fire()
     sent = dut.frames.quiet_period(cob_id.matches, trigger.silence_s(), mark)
-    found = dut.profile.quirk_of(fx.EmcyInStopped)
+    found = dut.profile.quirk(fx.EmcyInStopped)
     dut.nmt.back_to_preoperational()
     if found is not None:
-        evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
+        evidence.deviation(found.id, found.quirk.title)
         evidence.note(f"in stopped, after {trigger.name}: " + ("EMCY sent" if sent else "no EMCY"))
         return
     assert not sent, f"EMCY in stopped after {trigger.name}\n{format_frames(sent)}"

@@ -61,10 +61,10 @@ def test_error_history_records_newest_first(dut, emcy, depth, evidence):
     moved on by two. Where the manual keeps the first errors (quirk), not applicable: its list has another order
     (test_error_history_limited_to_its_size still checks its count)."""
     evidence.rests_on("cia", CLAUSE)
-    found = dut.profile.quirk_of(fx.ErrorHistoryKeepsFirst)
+    found = dut.profile.quirk(fx.ErrorHistoryKeepsFirst)
     if found is not None:
-        evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
-        not_applicable(f"quirk {found[0]}: the manual's list keeps the first errors, not the newest")
+        evidence.deviation(found.id, found.quirk.title)
+        not_applicable(f"quirk {found.id}: the manual's list keeps the first errors, not the newest")
     before = _history(dut)
     codes = _errors(emcy, 2)
     after = _history(dut)

@@ -9,11 +9,10 @@ reference point (by presetting) and the shaft are put back after each test (fixt
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET, can_id_of, cob_id_valid
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.custody import ReferenceCustody
 from encoder_conformance.dut.link import format_frames
 from encoder_conformance.dut.store import AUTO_STORED
@@ -426,12 +425,12 @@ def test_speed_value_in_measuring_units_per_second(encoder, evidence):
     drive.set_speed(speed)
     try:
         expected = encoder.reference().speed(speed)
-        deadline = time.monotonic() + SPEED_SETTLE_S
+        deadline = Deadline(SPEED_SETTLE_S)
         tolerance = max(2, abs(expected) // 50)
         while True:
             observed = access.read_int(od.SPEED, 1)
             assert observed is not None
-            if abs(observed - expected) <= tolerance or time.monotonic() > deadline:
+            if abs(observed - expected) <= tolerance or deadline.expired():
                 break
     finally:
         drive.set_speed(0.0)

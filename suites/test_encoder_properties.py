@@ -10,13 +10,13 @@ must lie in the new range); every later step is checked relative to it. The whol
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, replace
 
 import pytest
 from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
 
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.cam import cam_state
 from encoder_conformance.models.encoder.position import units_per_rev, unsigned_in_span
@@ -172,7 +172,7 @@ def test_position_and_cams_follow_the_reference_model(encoder, evidence, pytestc
     if not writable_operating:
         strategy = strategy.map(lambda steps: [s for s in steps if s.kind != "ccw"] or [Step("preset", 500)])
     budget = pytestconfig.getoption("--ec-budget")
-    deadline = time.monotonic() + budget
+    deadline = Deadline(budget)
     examples = 0
 
     @PROPERTY_SETTINGS
@@ -188,7 +188,7 @@ def test_position_and_cams_follow_the_reference_model(encoder, evidence, pytestc
     while True:
         seed(round_number)(check)()
         round_number += 1
-        if time.monotonic() >= deadline:
+        if deadline.expired():
             break
     evidence.measure("generated sequences checked", examples, "sequences")
     evidence.note(f"{examples} sequences in {round_number} rounds within --budget {budget:g} s")

@@ -26,6 +26,7 @@ from encoder_conformance.cia.cia305 import (
     LssCommand,
     LssState,
 )
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.link import format_frames
 from encoder_conformance.dut.lss import (
@@ -300,8 +301,8 @@ def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
     # device was made unconfigured by a power cycle already); one boot-up window is enough
     power_on_check = lss.power_cycle is not None and lss.applies_on_reset and "node_id" in lss.auto_stored
     if not power_on_check:  # the boot-up it would owe comes within the boot-up time after the reset
-        rest = quiet.time + lss.dut.profile.timing.bootup_max_ms / 1000 - time.monotonic()
-        assert lss.wait_bootup_at(lss.node_id, quiet, max(rest, 0.0)) is None, \
+        rest = Deadline(lss.dut.profile.timing.bootup_max_ms / 1000, since=quiet.time).remaining()
+        assert lss.wait_bootup_at(lss.node_id, quiet, rest) is None, \
             "unconfigured, but a boot-up at the old node-ID"
     assert not lss.answers_at(lss.node_id, timeout=lss.dut.sdo_silence_s), "unconfigured, but answers SDO"
     if "identify_non_configured" in lss.services:

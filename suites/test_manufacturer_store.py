@@ -23,8 +23,8 @@ pytestmark = [pytest.mark.spec("manufacturer store commands (profile quirks stor
 
 @pytest.fixture
 def reboot_store(dut):
-    """The (id, params) of a device that stores through a manufacturer object and reboots instead of replying."""
-    found = dut.profile.quirk_of(fx.StoreRebootsWithoutReply)
+    """The quirk of a device that stores through a manufacturer object and reboots instead of replying."""
+    found = dut.profile.quirk(fx.StoreRebootsWithoutReply)
     if found is None:
         not_applicable("the device has no store-by-reboot command (quirk store_reboots_without_reply)")
     return found
@@ -48,8 +48,8 @@ def _store_by_reboot(dut, params: fx.StoreRebootsWithoutReply) -> None:
 def test_store_by_reboot_keeps_value(dut, reboot_store, evidence):
     """The manufacturer store command (no reply, reboot, boot-up) keeps a changed parameter: the device
     restarts from what it stored, so the value read after its boot-up is the stored one (no second reset)."""
-    quirk_id, params = reboot_store
-    evidence.deviation(quirk_id, dut.profile.quirks[quirk_id].title)
+    params = reboot_store.params
+    evidence.deviation(reboot_store.id, reboot_store.quirk.title)
     found = changeable_parameter(dut.profile, lambda i, e: e.persisted_by == "manufacturer_store")
     if found is None:
         not_applicable("no parameter is declared persisted_by: manufacturer_store")

@@ -130,8 +130,8 @@ def sync_tpdo(dut, settings_journal, evidence):
 def _complete_tpdos(profile) -> list[int]:
     """TPDOs the profile gives a transmission type (18xxh sub 2) and a mapping (1Axxh sub 0) to, or whose
     behaviour a fixed-layout quirk declares (e.g. POSITAL: cyclic by 2200h)."""
-    found = profile.quirk_of(fx.FixedTpdoMapping)
-    fixed = set(found[1].mapping) if found is not None else set()
+    found = profile.params_of(fx.FixedTpdoMapping)
+    fixed = set(found.mapping) if found is not None else set()
     return [comm for comm in sorted(i for i in profile.objects if 0x1800 <= i <= 0x19FF)
             if comm in fixed or (profile.entry(comm, 2) is not None
                                  and profile.entry(comm + PDO_MAPPING_OFFSET, 0) is not None)]

@@ -45,6 +45,7 @@ from encoder_conformance.cia.cia301 import (
     NmtState,
     can_id_of,
 )
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.custody import SettingsJournal
 from encoder_conformance.dut.link import Mark, format_frames
@@ -162,7 +163,7 @@ class DeviceValues:
             self._add_values(value, [value.stored])
         self.boot_state = NmtState.PRE_OPERATIONAL
         if autostart is not None:
-            quirk_id = profile.quirk_of(fx.NmtAutostartObject)[0]
+            quirk_id = profile.quirk(fx.NmtAutostartObject).id  # there: autostart is not None
             if dut.read_uint(autostart.index, autostart.subindex) == autostart.operational_value:
                 self.boot_state = NmtState.OPERATIONAL
             evidence.deviation(quirk_id, f"after a reset the node enters {STATE_NAMES[int(self.boot_state)]} "
@@ -172,8 +173,8 @@ class DeviceValues:
         entry = self.dut.profile.entry(index, sub)
         size = datatypes.size_bytes(entry.type) or 4
         stored = int.from_bytes(self.dut.read(index, sub), "little")
-        forced = [q for _, q in self.dut.profile.quirks_of(fx.BitsForcedAtInit) if q.key == (index, sub)]
-        preop = any(q.covers(index, sub) for _, q in self.dut.profile.quirks_of(fx.WritesPreopOnly))
+        forced = [q.params for q in self.dut.profile.quirks_with(fx.BitsForcedAtInit) if q.params.key == (index, sub)]
+        preop = any(q.params.covers(index, sub) for q in self.dut.profile.quirks_with(fx.WritesPreopOnly))
         tracked = Tracked(index, sub, size, stored, stored, preop_only=preop, auto_stored=entry.persisted_by == "auto",
                           forced_bits=forced[0].forced_bits if forced else 0,
                           forced_at=frozenset(forced[0].at) if forced else frozenset())
@@ -348,10 +349,10 @@ class NmtMachine(RuleBasedStateMachine):
     def _confirm_by_services(self, why: str) -> None:
         """Without heartbeat: no SDO answer in stopped, an answer otherwise (polled within the settle time)."""
         dut = self.dut
-        deadline = time.monotonic() + dut.profile.timing.nmt_settle_ms / 1000 + dut.sdo_timeout + SLACK_S
+        deadline = Deadline(dut.profile.timing.nmt_settle_ms / 1000 + dut.sdo_timeout + SLACK_S)
         while True:
             answered = dut.sdo_request(upload_request(0x1000, 0), timeout=dut.sdo_silence_s) is not None
-            if answered == self.model.sdo_answered or time.monotonic() >= deadline:
+            if answered == self.model.sdo_answered or deadline.expired():
                 break
         assert answered == self.model.sdo_answered, (
             f"{why}: SDO {'answered' if answered else 'not answered'}, the model is "

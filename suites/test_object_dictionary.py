@@ -142,9 +142,9 @@ def test_factory_default(dut, default_entry, factory_state, evidence):
     index, sub, _, entry = default_entry
     source = entry.manual or f"profile {dut.profile.id}"
     evidence.rests_on("cia" if source.startswith("CiA") else "manual", source)
-    excluded = dut.profile.quirk_objects(fx.RestoreExcludes)
-    if excluded is not None and index in excluded[1]:
-        not_applicable(f"restore-defaults leaves {index:04X}h as it was (quirk {excluded[0]})")
+    excluded = dut.profile.quirk(fx.RestoreExcludes)
+    if excluded is not None and index in excluded.params.indices:
+        not_applicable(f"restore-defaults leaves {index:04X}h as it was (quirk {excluded.id})")
     expected = _expected(entry, dut.node_id)
     observed = _decode(entry, _read_or_fail(dut, index, sub))
     if _zero_padded(observed, expected):

@@ -85,18 +85,18 @@ def _event_tpdo(dut, evidence, settings_journal, shaft) -> TpdoUnderTest:
     _need_shaft(shaft, "a change of state")
     if not dut.profile.capabilities.encoder:
         not_applicable("not an encoder; a change of its mapped values is not the bench's to cause")
-    found = dut.profile.quirk_with_effect(fx.TransmissionType255Timer0Disables.effect)
+    found = dut.profile.quirk(fx.TransmissionType255Timer0Disables)
     types = EVENT_TYPES
     if found is not None:
-        evidence.deviation(found[0], found[1].title)
+        evidence.deviation(found.id, found.quirk.title)
         types = [254]
     tpdo = tpdo_under_test(dut, 5, evidence, settings_journal, types)
     comm = tpdo.comm
-    repeat = dut.profile.quirk_of(fx.PdoSendRepeatCounters)
-    if repeat is not None and comm in repeat[1].per_change:
-        evidence.deviation(repeat[0], dut.profile.quirks[repeat[0]].title)
+    repeat = dut.profile.quirk(fx.PdoSendRepeatCounters)
+    if repeat is not None and comm in repeat.params.per_change:
+        evidence.deviation(repeat.id, repeat.quirk.title)
         not_applicable(f"{comm:04X}h's change-driven sending is set by a send-repeat counter "
-                    f"(quirk {repeat[0]}; test_pdo_repeat checks it)")
+                    f"(quirk {repeat.id}; test_pdo_repeat checks it)")
     if not tpdo.maps_position():
         not_applicable(f"{comm:04X}h maps no position value the shaft could change")
     tpdo.configure(trans_type=tpdo.trans_type, event_timer=0)
@@ -267,11 +267,11 @@ def _sent_by_itself(dut, comm: int) -> bool:
 def _rtr_tpdo(dut, evidence, settings_journal) -> tuple[int, str]:
     """A TPDO that answers RTR per profile: a polled fixed-layout TPDO (manual), else one that accepts type 253
     (CiA 301), set to 253; skips where the profile declares none."""
-    found = dut.profile.quirk_of(fx.FixedTpdoMapping)
-    if found is not None and found[1].polled_tpdos:
-        evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
-        evidence.rests_on("manual", dut.profile.quirks[found[0]].manual)
-        return found[1].polled_tpdos[0].tpdo, "polled"
+    found = dut.profile.quirk(fx.FixedTpdoMapping)
+    if found is not None and found.params.polled_tpdos:
+        evidence.deviation(found.id, found.quirk.title)
+        evidence.rests_on("manual", found.quirk.manual)
+        return found.params.polled_tpdos[0].tpdo, "polled"
     tpdo = tpdo_under_test(dut, 2, evidence, settings_journal, [253])
     comm = tpdo.comm
     if not tpdo.writable(2):
@@ -465,15 +465,15 @@ def test_tpdo_parameters_writable_in_preoperational_only(dut, settings_journal, 
     value stays) and accepted in pre-operational (then put back). Every quirk with that effect counts (a
     manual may say it in several sections)."""
     changes = []  # (comm, sub, size, value, codes wanted)
-    for quirk_id, params in dut.profile.quirks_of(fx.WritesPreopOnly):
+    for each in dut.profile.quirks_with(fx.WritesPreopOnly):
+        params = each.params
         comms = sorted(i for i in dut.profile.objects if 0x1800 <= i <= 0x19FF
                        and any(params.covers(i, sub) for sub in (1, 2, 5)))
         found = [(comm, *other) for comm in comms if (other := _other_value(dut, comm, params.covers)) is not None]
         if not found:
             continue
-        quirk = dut.profile.quirks[quirk_id]
-        evidence.deviation(quirk_id, quirk.title)
-        evidence.rests_on("manual", quirk.manual)
+        evidence.deviation(each.id, each.quirk.title)
+        evidence.rests_on("manual", each.quirk.manual)
         wanted = ({params.abort_code} if params.abort_code is not None
                   else expected_aborts(dut, "wrong_state", evidence))
         changes += [(*change, wanted) for change in found]

@@ -146,10 +146,10 @@ def test_default_mapping_names_mappable_objects(dut: DeviceUnderTest, evidence: 
     in all (CiA 301 §7.5.2.38; CTT PDO 21)."""
     objects = _mapping_objects(dut)
     if not objects:
-        found = dut.profile.quirk_of(fx.FixedTpdoMapping)
-        reason = f" (fixed payload, quirk {found[0]})" if found else ""
+        found = dut.profile.quirk(fx.FixedTpdoMapping)
+        reason = f" (fixed payload, quirk {found.id})" if found else ""
         not_applicable(f"the profile has no TPDO mapping objects{reason}")
-    lengths = dut.profile.quirk_of(fx.MappingLengthDiffers)
+    lengths = dut.profile.quirk(fx.MappingLengthDiffers)
     problems = []
     for mapping in objects:
         entries = read_mapping(dut, mapping - 0x200)
@@ -164,10 +164,10 @@ def test_default_mapping_names_mappable_objects(dut: DeviceUnderTest, evidence: 
                 problems.append(f"{label}: {index:04X}h.{obj_sub:02X} is not PDO-mappable in the profile")
             size = _object_bits(dut, index, obj_sub)
             if size != bits:
-                documented = lengths is not None and lengths[1].entry == (mapping, sub) and (
-                    lengths[1].mapping == mapping_word(index, obj_sub, bits))
+                documented = lengths is not None and lengths.params.entry == (mapping, sub) and (
+                    lengths.params.mapping == mapping_word(index, obj_sub, bits))
                 if documented and lengths is not None:
-                    evidence.deviation(lengths[0], dut.profile.quirks[lengths[0]].title)
+                    evidence.deviation(lengths.id, lengths.quirk.title)
                 else:
                     problems.append(f"{label}: maps {bits} bits, {index:04X}h.{obj_sub:02X} is {entry.type} "
                                     f"({size} bits)")
@@ -331,11 +331,11 @@ def test_mapping_entry_refused_while_sub0_not_zero(dut: DeviceUnderTest, variabl
 def test_mapping_refused_while_pdo_valid(dut: DeviceUnderTest, variable_tpdo, evidence: Evidence) -> None:
     """With the PDO valid (COB-ID bit 31 clear), sub 0 = 0 is refused and the mapping stays (CiA 301 §7.5.2.38
     step 1; CTT PDO 23/24). CiA 301 names no code: the code is recorded, not judged."""
-    found = dut.profile.quirk_with_effect(fx.MappingChangeWhileValid.effect)
+    found = dut.profile.quirk(fx.MappingChangeWhileValid)
     if found is not None:
-        evidence.deviation(found[0], found[1].title)
+        evidence.deviation(found.id, found.quirk.title)
         not_applicable(f"the manual's procedure changes the mapping with the PDO valid (quirk "
-                    f"{found[0]}; test_documented_procedure_with_pdo_valid checks it)")
+                    f"{found.id}; test_documented_procedure_with_pdo_valid checks it)")
     tpdo, _ = variable_tpdo
     before = read_mapping(dut, tpdo.comm)
     _make_valid(dut, tpdo, before, evidence)
@@ -434,11 +434,11 @@ def test_fixed_mapping_refuses_changes(dut: DeviceUnderTest, evidence: Evidence)
     mapping objects 06020000h; the mapping stays (CiA 301 §7.2.4.3.17, §7.5.2.38; the manual's object table)."""
     objects = _mapping_objects(dut)
     if not objects:
-        found = dut.profile.quirk_of(fx.FixedTpdoMapping)
+        found = dut.profile.quirk(fx.FixedTpdoMapping)
         if found is None:
             not_applicable("the profile has no mapping objects and documents no fixed payload")
-        evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
-        evidence.rests_on("manual", f"{dut.profile.quirks[found[0]].manual} (quirk {found[0]}: no 1A00h)")
+        evidence.deviation(found.id, found.quirk.title)
+        evidence.rests_on("manual", f"{found.quirk.manual} (quirk {found.id}: no 1A00h)")
         response = _write(dut, 0x1A00, 0, 0, 1)
         assert_abort(dut, response, expected_aborts(dut, "no_object", evidence), "1A00h.00 = 0 (no mapping object)")
         return

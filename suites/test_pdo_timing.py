@@ -18,6 +18,7 @@ import pytest
 
 from encoder_conformance.cia.cia301 import SYNC_COB_ID
 from encoder_conformance.coverage import Hold
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.link import LatencyProbe, format_frames
 from encoder_conformance.dut.tpdo import NoUsableTpdo, TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
@@ -128,9 +129,9 @@ def test_inhibit_time_spaces_tpdos(dut, settings_journal, tpdo_while_invalid, ba
     frames: list[can.Message] = []
     reactions: list[float] = []  # ms from a frame to the tester's next position change (inside the inhibit time?)
     wait = (INHIBIT_MS + dut.profile.timing.pdo_response_max_ms) / 1000 + dut.pdo_silence_s
-    deadline = time.monotonic() + (SYNCS + 1) * 2 * wait + dut.profile.timing.nmt_settle_ms / 1000
+    deadline = Deadline((SYNCS + 1) * 2 * wait + dut.profile.timing.nmt_settle_ms / 1000)
     with LatencyProbe(twin_lateness) as probe:
-        while len(frames) < SYNCS + 1 and time.monotonic() < deadline:
+        while len(frames) < SYNCS + 1 and not deadline.expired():
             after = dut.frames.mark()
             shaft.turn_by(STEP_REV)
             if frames:
@@ -214,10 +215,10 @@ def test_inhibit_time_delays_events_not_drops(dut, settings_journal, tpdo_while_
 def _tpdo_on_change(dut, shaft, is_tpdo, window: float, timeout: float) -> can.Message | None:
     """Turn the shaft a step and wait ``window`` for the TPDO, again until ``timeout``: a change the device made
     before it entered operational (the NMT command and the shaft take different paths) sends nothing."""
-    deadline = time.monotonic() + timeout
+    deadline = Deadline(timeout)
     while True:
         mark = dut.frames.mark()
         shaft.turn_by(STEP_REV)
         frame = dut.frames.wait_for(is_tpdo, window, mark)
-        if frame is not None or time.monotonic() >= deadline:
+        if frame is not None or deadline.expired():
             return frame

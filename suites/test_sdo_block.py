@@ -208,9 +208,9 @@ def test_block_initiate_refused_without_block_transfer(dut, sdo, evidence):
     if dut.profile.capabilities.block_sdo:
         not_applicable("the profile declares block transfer (test_block_upload and others check it)")
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 05040001h (client/server command specifier not valid or unknown)")
-    unconfirmed = dut.profile.quirk_with_effect(fx.BlockTransferUnconfirmed.effect)
+    unconfirmed = dut.profile.quirk(fx.BlockTransferUnconfirmed)
     if unconfirmed is not None:
-        evidence.deviation(unconfirmed[0], unconfirmed[1].title)
+        evidence.deviation(unconfirmed.id, unconfirmed.quirk.title)
     key = (0x1000, 0)
     initiates = {"block upload": lambda: sdo.block_upload_initiate(*key, 127),
                  "block download": lambda: sdo.block_download_initiate(*key, 4)}
@@ -224,7 +224,7 @@ def test_block_initiate_refused_without_block_transfer(dut, sdo, evidence):
             sdo.abort(*key, SdoAbortCode.GENERAL_ERROR)
             if unconfirmed is not None:
                 evidence.note(f"{what} initiate served ({response.describe()}): block transfer works although the "
-                              f"profile declares block_sdo false (quirk {unconfirmed[0]})")
+                              f"profile declares block_sdo false (quirk {unconfirmed.id})")
                 continue
         judge_refusal(dut, response, {SdoAbortCode.COMMAND_SPECIFIER}, set(), f"{what} initiate", evidence)
         assert response is not None

@@ -71,9 +71,9 @@ def test_stored_value_survives_power_cycle(dut, stored_change, power_cycle):
 def test_restore_defaults_effective_after_reset(dut, stored_change):
     """After 1011h sub 1 'load' and reset node, the stored value is replaced by the factory default."""
     index, sub, entry, _ = stored_change
-    excluded = dut.profile.quirk_objects(fx.RestoreExcludes)
-    if excluded is not None and index in excluded[1]:
-        not_applicable(f"restore leaves {index:04X}h unchanged (quirk {excluded[0]})")
+    excluded = dut.profile.quirk(fx.RestoreExcludes)
+    if excluded is not None and index in excluded.params.indices:
+        not_applicable(f"restore leaves {index:04X}h unchanged (quirk {excluded.id})")
     dut.write(0x1011, 1, LOAD)
     dut.nmt.reset_node()
     observed = dut.read_uint(index, sub)

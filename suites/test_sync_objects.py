@@ -135,7 +135,7 @@ def test_sync_restricted_can_id_refused(dut, sync_cob_id, evidence):
     refused and keeps its value; where the manual lets 1005h take any CAN-ID of a range (quirk), the answers are
     recorded."""
     evidence.rests_on("cia", "CiA 301 §7.3.5 (restricted CAN-IDs); CTT Other 10")
-    found = dut.profile.quirk_of(fx.SyncCobIdAnyCanId)
+    found = dut.profile.quirk(fx.SyncCobIdAnyCanId)
     accepted = []
     for can_id in RESTRICTED_PROBES:
         value = with_can_id(sync_cob_id, can_id)
@@ -148,8 +148,8 @@ def test_sync_restricted_can_id_refused(dut, sync_cob_id, evidence):
         else:
             _judge_code(dut, response, value, what, evidence)
     if found is not None:
-        evidence.deviation(found[0], dut.profile.quirks[found[0]].title)
-        evidence.note(f"quirk {found[0]}: {len(accepted)} of {len(RESTRICTED_PROBES)} restricted CAN-IDs accepted "
+        evidence.deviation(found.id, found.quirk.title)
+        evidence.note(f"quirk {found.id}: {len(accepted)} of {len(RESTRICTED_PROBES)} restricted CAN-IDs accepted "
                       "(recorded, not judged)")
         return
     evidence.measure("restricted CAN-IDs refused", len(RESTRICTED_PROBES) - len(accepted), "",

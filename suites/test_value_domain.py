@@ -37,13 +37,13 @@ def _skip_reason(profile, index: int, entry) -> str | None:
         # the suite's own limit, not the device's state: out of scope, and said so (a segmented probe is still to do)
         return (f"not applicable: {entry.type} does not fit an expedited download (this suite probes value domains "
                 "by expedited download only)")
-    found = profile.quirk_objects(fx.WritesNeedScalingBit)
-    if found and index in found[1]:
+    found = profile.quirk(fx.WritesNeedScalingBit)
+    if found and index in found.params.indices:
         return (f"not applicable: writes to {index:04X}h are refused unless 6000h bit 2 (scaling) is set "
-                f"(quirk {found[0]}); this test does not switch scaling on")
-    found = profile.quirk_of(fx.StoreRebootsWithoutReply)
-    if found and index == found[1].index:
-        return f"not applicable: a write to {index:04X}h makes the device store and reboot (quirk {found[0]})"
+                f"(quirk {found.id}); this test does not switch scaling on")
+    reboots = profile.quirk(fx.StoreRebootsWithoutReply)
+    if reboots and index == reboots.params.index:
+        return f"not applicable: a write to {index:04X}h makes the device store and reboot (quirk {reboots.id})"
     return None
 
 

@@ -42,11 +42,10 @@ def goods_in(pytestconfig: pytest.Config) -> None:
 
 def _documented(dut) -> tuple[set[int], str | None]:
     """The EMCY codes the manual documents at start-up, and the quirk's id (none: empty, None)."""
-    found = dut.profile.quirk_of(fx.ErrorAtStartUpDocumented)
+    found = dut.profile.quirk(fx.ErrorAtStartUpDocumented)
     if found is None:
         return set(), None
-    params = dut.profile.params_of(fx.ErrorAtStartUpDocumented)
-    return set(params.codes) if params else set(), found[0]
+    return set(found.params.codes), found.id
 
 
 def _newest_history_code(dut) -> int | None:

@@ -21,6 +21,7 @@ from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.dut.link.frames import FrameLog, Mark
 from encoder_conformance.dut.link.tracing_bus import TracingBus
 from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.quirk_effects import SilentUntilBusTraffic
 from encoder_conformance.sim.faults import FaultSet
 from encoder_conformance.sim.host import SimulatorHost
 from encoder_conformance.sim.node import SimulatedNode
@@ -55,7 +56,7 @@ class Rig:
         node = self.host.add_node(profile, node_id, nvm, FaultSet(faults), power_on=False)
         mark = self.log.mark()
         node.power_on()
-        if profile.quirk_with_effect("silent_until_bus_traffic"):
+        if profile.has_effect(SilentUntilBusTraffic):
             self.send(0x80)
         assert self.wait_bootup(node.node_id, mark) is not None, "no boot-up"
         return node, self.client(node.node_id)

@@ -120,7 +120,8 @@ def test_only_the_simulator_fixture_imports_the_simulator(folder):
 
 #: the library's packages, bottom to top: a package imports from its own folder and lower layers only, never from
 #: a neighbour in its own layer (the simulator stands behind the bus: sim/ and dut/ share no code but the layers
-#: below them). "(root)" is the package's own top-level modules (errors, exit codes, paths, basis, run summary).
+#: below them). "(root)" is the package's own top-level modules (errors, exit codes, paths, basis, run summary,
+#: deadline).
 LAYERS: list[set[str]] = [
     {"(root)"},
     {"cia", "config", "vcan"},
@@ -152,7 +153,8 @@ def test_every_package_has_a_layer_and_says_what_it_holds():
 def test_root_holds_only_the_bottom_layer():
     """The package root keeps the modules every layer may use; each concern has a folder."""
     root_modules = sorted(p.stem for p in LIBRARY.glob("*.py"))
-    assert root_modules == ["__init__", "__main__", "basis", "coverage", "errors", "exit_codes", "paths", "run_summary"]
+    assert root_modules == ["__init__", "__main__", "basis", "coverage", "deadline", "errors", "exit_codes", "paths",
+                            "run_summary"]
 
 
 def test_packages_import_only_lower_layers():

@@ -18,6 +18,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile, resolve_node_id_expression
+from encoder_conformance.profile.quirk_effects import WritesPreopOnly
 from encoder_conformance.sim.faults import FaultSet
 from encoder_conformance.sim.nmt import NmtState
 from encoder_conformance.sim.node import SimulatedNode
@@ -183,13 +184,14 @@ def test_wrong_signature_aborts_08000020(rig, minimal_profile, index, signature)
 
 def test_writes_preop_only_quirk(rig, wdga_profile):
     """WDGA: 2101h (node-id) is writable in pre-operational, refused in operational with the quirk's code."""
-    _, params = wdga_profile.quirk_with_effect("writes_preop_only")
+    params = wdga_profile.params_of(WritesPreopOnly)
+    assert params is not None
     node, client = booted(rig, wdga_profile)
     client.sdo.download(0x2101, 0, bytes([node.node_id]))  # same value: allowed in pre-operational
     rig.nmt(0x01, node.node_id)
     u32(client, 0x1000)
     assert node.state is NmtState.OPERATIONAL
-    assert abort_code(client, 0x2101, 0, bytes([node.node_id])) == params.params.abort_code
+    assert abort_code(client, 0x2101, 0, bytes([node.node_id])) == params.abort_code
 
 
 def test_node_id_object_quirk_takes_effect_at_reset(rig, wdga_profile):

@@ -12,7 +12,7 @@ from hypothesis import example, given
 from hypothesis import strategies as st
 
 from encoder_conformance.dut.link.latency_probe import HostLatency, LatencyProbe
-from encoder_conformance.models.timing import schedule_fit
+from encoder_conformance.models.timing import percentile, schedule_fit
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.profile.model import HeartbeatTolerance
 from encoder_conformance.suite_support.checks import check_periodic
@@ -66,8 +66,7 @@ def host(late_at: dict[int, float] | None = None, everywhere_ms: float = 0.1) ->
     ticks = [(1000.0 + t / 1000, everywhere_ms) for t in range(0, 1050, 5)]
     ticks += [(1000.0 + n * PERIOD_MS / 1000, ms) for n, ms in (late_at or {}).items()]
     worst = max(ms for _, ms in ticks)
-    p95 = sorted(ms for _, ms in ticks)[int(0.95 * len(ticks))]
-    return HostLatency(len(ticks), worst, p95, tuple(ticks))
+    return HostLatency(len(ticks), worst, percentile([ms for _, ms in ticks], 0.95), tuple(ticks))
 
 
 def test_late_frames_while_the_host_ran_late_are_inconclusive():
@@ -128,6 +127,18 @@ def test_timing_summary_percentiles_and_error():
     assert summary.p99 == pytest.approx(99.01)
     assert summary.p99_error == pytest.approx(49.01)
     assert summary.worst_error == 50.0
+
+
+def test_one_percentile_for_device_and_host():
+    """statistics.quantiles, method "inclusive" (numpy's default), for the device's figures and the host's p95."""
+    samples = [float(n) for n in range(1, 101)]
+    assert percentile(samples, 0.95) == pytest.approx(95.05)
+    assert (percentile([7.0], 0.95), percentile(samples, 1.0), percentile(samples, 0.0)) == (7.0, 100.0, 1.0)
+    with pytest.raises(ValueError, match="whole percents"):
+        percentile(samples, 0.955)
+    probe = LatencyProbe()
+    probe._wakeups = [(1000.0 + n / 200, float(n % 40)) for n in range(200)]  # as if it had run 1 s
+    assert probe.result().p95_ms == percentile([ms for _, ms in probe._wakeups], 0.95) == pytest.approx(37.05)
 
 
 def test_timing_measurement_gives_junit_figures_csv_and_a_small_svg():

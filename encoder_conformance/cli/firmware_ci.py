@@ -36,6 +36,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from encoder_conformance.cli import firmware_probe
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.errors import UsageError
 from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit, interrupted_by
 
@@ -314,9 +315,9 @@ def _stop_simulator(state: Path) -> int:
 def _group_ends(group: int, timeout: float) -> bool:
     """Whether every process of process group ``group`` has ended within ``timeout`` s (looked at every
     ``GROUP_POLL_S``)."""
-    deadline = time.monotonic() + timeout
+    deadline = Deadline(timeout)
     while _group_running(group):
-        if time.monotonic() >= deadline:
+        if deadline.expired():
             return False
         time.sleep(GROUP_POLL_S)
     return True
@@ -355,14 +356,14 @@ def _wait_boot(channel: str, node_id: int, timeout: float, state: Path) -> int:
     from encoder_conformance.cia.cia301 import SDO_REQUEST_BASE, SDO_RESPONSE_BASE
 
     request = bytes([0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0])  # initiate upload 1000h sub 0
-    deadline = time.monotonic() + timeout
+    deadline = Deadline(timeout)
     with can.Bus(interface="socketcan", channel=channel) as bus:
         bus.set_filters([{"can_id": SDO_RESPONSE_BASE + node_id, "can_mask": 0x7FF}])
-        while time.monotonic() < deadline:
+        while not deadline.expired():
             if (state / STATE_EXIT).exists():
                 return BOOT_SIMULATOR_EXITED
             bus.send(can.Message(arbitration_id=SDO_REQUEST_BASE + node_id, data=request, is_extended_id=False))
-            if bus.recv(timeout=min(PROBE_EVERY_S, max(0.0, deadline - time.monotonic()))) is not None:
+            if bus.recv(timeout=min(PROBE_EVERY_S, deadline.remaining())) is not None:
                 return 0
     return BOOT_SIMULATOR_EXITED if (state / STATE_EXIT).exists() else BOOT_NO_ANSWER
 

@@ -31,8 +31,8 @@ def never_write(profile: DeviceProfile) -> dict[int, str]:
                                     "(CiA 301 §7.5.2.14)",
     }
     for effect, why in _QUIRK_OBJECTS:
-        for quirk_id, params in profile.quirks_of(effect):
-            excluded.setdefault(params.index, f"{why} (quirk {quirk_id})")
+        for found in profile.quirks_with(effect):
+            excluded.setdefault(found.params.index, f"{why} (quirk {found.id})")
     if profile.capabilities.preset:
         preset = EncoderObjects.of(profile).preset
         excluded.setdefault(preset, "preset: moves the machine's reference point (CiA 406)")

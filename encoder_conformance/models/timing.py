@@ -6,19 +6,23 @@ from __future__ import annotations
 import itertools
 import math
 import statistics
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 
-def percentile(values: list[float] | tuple[float, ...], share: float) -> float:
-    """The ``share`` (0..1) percentile by linear interpolation between the closest ranks (numpy's default),
-    so that p50 is the median and p100 the maximum for any count."""
-    ordered = sorted(values)
-    if not ordered:
+def percentile(values: Sequence[float], share: float) -> float:
+    """The ``share`` (0..1, in whole percents) percentile: ``statistics.quantiles`` with ``method="inclusive"``,
+    linear interpolation between the closest ranks (numpy's default), so that p50 is the median and p100 the
+    maximum for any count. The project's one percentile: the device's timing figures and the tester host's
+    lateness (dut/latency_probe.py) are both computed with it."""
+    percent = round(share * 100)
+    if not 0 <= percent <= 100 or abs(share * 100 - percent) > 1e-9:
+        raise ValueError(f"a percentile in whole percents from 0 to 1, not {share}")
+    if not values:
         return math.nan
-    rank = share * (len(ordered) - 1)
-    low = math.floor(rank)
-    high = min(low + 1, len(ordered) - 1)
-    return ordered[low] + (ordered[high] - ordered[low]) * (rank - low)
+    if len(values) == 1 or percent in (0, 100):
+        return max(values) if percent else min(values)
+    return statistics.quantiles(values, n=100, method="inclusive")[percent - 1]
 
 
 @dataclass(frozen=True)

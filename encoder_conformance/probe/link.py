@@ -6,7 +6,6 @@ values, because for the probe an abort is an answer, not an error.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -16,6 +15,7 @@ from canopen.sdo.exceptions import SdoAbortedError, SdoCommunicationError
 
 from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
 from encoder_conformance.config.bus import BusConfig
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.link import connection
 from encoder_conformance.dut.link.frames import FrameLog, Mark
 from encoder_conformance.dut.nmt.commands import send_on
@@ -79,10 +79,10 @@ class ProbeLink:
 
     def first_answer(self, timeout_s: float) -> Answer:
         """1000h read until the device answers (it may still be booting) or ``timeout_s`` has passed."""
-        deadline = time.monotonic() + timeout_s
+        deadline = Deadline(timeout_s)
         while True:
             answer = self.read(0x1000, 0)
-            if not answer.silent or time.monotonic() >= deadline:
+            if not answer.silent or deadline.expired():
                 return answer
 
     def write(self, index: int, sub: int, data: bytes, force_segment: bool = False) -> Answer:

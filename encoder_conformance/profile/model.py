@@ -11,15 +11,16 @@ This module is over 400 lines because it is the one schema of a profile file: it
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 from functools import cached_property
-from typing import Annotated, Any, Literal, overload
+from typing import Annotated, Any, Generic, Literal, overload
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from encoder_conformance.basis import Basis
 from encoder_conformance.cia.cia305 import AUTO_BIT_RATE_INDEX, BIT_TIMING_TABLE_0
 from encoder_conformance.profile import datatypes
-from encoder_conformance.profile.quirk_effects import EffectParams, ObjectList, P
+from encoder_conformance.profile.quirk_effects import EffectParams, P
 from encoder_conformance.profile.quirks import Quirk, QuirkBase
 from encoder_conformance.profile.value_set import ValueSet
 
@@ -473,6 +474,16 @@ class SimulatorSpec(StrictModel):
     )
 
 
+@dataclass(frozen=True)
+class FoundQuirk(Generic[P]):
+    """A quirk the profile declares for an effect: its id (the deviation a verdict relies on), the quirk as written
+    (title, manual section) and its typed params."""
+
+    id: str
+    quirk: QuirkBase
+    params: P
+
+
 class DeviceProfile(StrictModel):
     schema_version: Literal[1]
     id: str = Field(pattern=r"^[a-z0-9][a-z0-9._-]*$")
@@ -509,35 +520,23 @@ class DeviceProfile(StrictModel):
         obj = self.objects.get(index)
         return None if obj is None else obj.entries().get(sub)
 
-    def quirk_with_effect(self, effect: str) -> tuple[str, QuirkBase] | None:
-        """The (id, quirk) that declares ``effect``, if any."""
-        for quirk_id, quirk in self.quirks.items():
-            if quirk.effect == effect:
-                return quirk_id, quirk
-        return None
+    def quirks_with(self, params: type[P]) -> list[FoundQuirk[P]]:
+        """The quirk lookup: every quirk with the effect of the ``params`` model, in the profile's order (most
+        effects are declared once; ``writes_preop_only`` may come from several manual sections)."""
+        return [FoundQuirk(quirk_id, quirk, quirk.params) for quirk_id, quirk in self.quirks.items()
+                if quirk.effect == params.effect]
 
-    def quirks_of(self, params: type[P]) -> list[tuple[str, P]]:
-        """(quirk id, typed params) of every quirk with the effect of the ``params`` model (most effects are
-        declared once; ``writes_preop_only`` may come from several manual sections)."""
-        return [(quirk_id, quirk.params) for quirk_id, quirk in self.quirks.items() if quirk.effect == params.effect]
-
-    def quirk_of(self, params: type[P]) -> tuple[str, P] | None:
-        """(quirk id, its typed params) of the quirk with the effect of the ``params`` model, if any."""
-        found = self.quirk_with_effect(params.effect)
-        return None if found is None else (found[0], found[1].params)
+    def quirk(self, params: type[P]) -> FoundQuirk[P] | None:
+        """The quirk with the effect of the ``params`` model (the first where several are), if any."""
+        return next(iter(self.quirks_with(params)), None)
 
     def params_of(self, params: type[P]) -> P | None:
-        """The typed params of the quirk with the effect of the ``params`` model, if any."""
-        found = self.quirk_of(params)
-        return None if found is None else found[1]
+        """Only the typed params of ``quirk(params)``."""
+        found = self.quirk(params)
+        return None if found is None else found.params
 
     def has_effect(self, params: type[EffectParams]) -> bool:
         return params.effect in self.effects
-
-    def quirk_objects(self, params: type[ObjectList]) -> tuple[str, frozenset[int]] | None:
-        """(quirk id, the indices its ``objects`` param lists) of the quirk with that effect, if any."""
-        found = self.quirk_of(params)
-        return None if found is None else (found[0], found[1].indices)
 
     @property
     def effects(self) -> frozenset[str]:

@@ -7,8 +7,9 @@ deviation. Keys a manual documents but no code acts on are declared as documenta
 (``documentation only`` in their description), so that a typo is still caught.
 
 Adding an effect: write its model here (the docstring says what the device does, each field
-what it means), register it in EFFECT_MODELS, then teach the simulator and the suites.
-This module is over 400 lines because it is the catalogue of the 42 effects, one small model
+what it means, its ``effect`` name: defining it registers it in EFFECT_MODELS), then teach the simulator and the
+suites.
+This module is over 400 lines because it is the catalogue of the effects (44), one small model
 each: split, a reader would have to look in several places for one table.
 """
 
@@ -40,11 +41,25 @@ def _doc(what: str) -> Any:
     return Field(default=None, description=f"documentation only: {what}")
 
 
+#: effect name -> its params model; every model that names an ``effect`` registers itself when it is defined
+EFFECT_MODELS: dict[str, type[EffectParams]] = {}
+
+
 class EffectParams(BaseModel):
-    """Base of the parameter models: strict keys, immutable."""
+    """Base of the parameter models: strict keys, immutable. A subclass that sets ``effect`` is an effect's model
+    (registered in EFFECT_MODELS); one that does not is a shared base (NoParams, ObjectList, ObjectAt)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
     effect: ClassVar[str]
+
+    @classmethod
+    def __pydantic_init_subclass__(cls, **kwargs: Any) -> None:
+        super().__pydantic_init_subclass__(**kwargs)
+        if "effect" in vars(cls):
+            if cls.effect in EFFECT_MODELS:
+                raise TypeError(f"effect {cls.effect!r} has two models: {EFFECT_MODELS[cls.effect].__name__} "
+                                f"and {cls.__name__}")
+            EFFECT_MODELS[cls.effect] = cls
 
 
 class NoParams(EffectParams):
@@ -597,21 +612,3 @@ class CyclicTimerRelationUnstated(EffectParams):
     effect = "cyclic_timer_relation_unstated"
     cyclic_timer: ObjectKeyField = Field(description="the cyclic timer entry (ms)")
     event_timer: ObjectKeyField = Field(description="the TPDO event timer entry (ms)")
-
-
-EFFECT_MODELS: dict[str, type[EffectParams]] = {
-    model.effect: model
-    for model in (
-        SilentUntilBusTraffic, CobIdsFollowNodeIdUntilStore, WritesPreopOnly, NodeIdObject, BitrateObject,
-        ErrorRegisterWithoutGenericBit, ErrorAtStartUpDocumented, TransmissionType255Timer0Disables,
-        PdoSendRepeatCounters,
-        BitsForcedAtInit, StoreRebootsWithoutReply, WritesNeedScalingBit, AbortCode, StoreObjectReadsBack,
-        StoreAutomatic, PositionFrozenDuringExecution, SecondNode, ManufacturerEncoderObjects,
-        LimitSwitchFlags, FixedTpdoMapping, GuardingHeartbeatExclusive, RestoreExcludes, NmtAutostartObject,
-        ReloadImmediate, ManufacturerStoreObject, SignedPositionRange, LssOnlyInStates, LssConfigAutoStored,
-        UnconfiguredNodeId, LssNodeIdRange, CamLowBelowHigh, SpeedScalingObject,
-        OffsetIsZeroingPoint, PhysicalRevolutions, ModuleMaxIsRange, ZeroingObject, MappingLengthDiffers,
-        MappingChangeWhileValid, ErrorHistoryKeepsFirst, EmcyInStopped, HeartbeatConsumerEmcy, SyncCobIdAnyCanId,
-        BlockTransferUnconfirmed, CyclicTimerRelationUnstated,
-    )
-}

@@ -29,6 +29,7 @@ from types import FrameType
 from typing import Any, TypeAlias
 
 from encoder_conformance.config.station import load_station
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.errors import UsageError
 from encoder_conformance.exit_codes import DESCRIPTIONS, RunExit, interrupted_by
 from encoder_conformance.paths import default_reports_dir
@@ -212,11 +213,11 @@ def _wait_all(runs: list[StationRun], ended: queue.Queue[StationRun], forward: _
         if live:
             print(f"{CLEAR}{status_line(runs, time.monotonic())}", end="", flush=True)
         # wakes once a second: a signal handler cannot interrupt the wait, and its deadline must be seen
-        timeout = 1.0 if forward.deadline is None else min(max(forward.deadline - time.monotonic(), 0.0), 1.0)
+        timeout = 1.0 if forward.deadline is None else min(forward.deadline.remaining(), 1.0)
         try:
             run = ended.get(timeout=timeout)
         except queue.Empty:
-            if forward.deadline is None or time.monotonic() < forward.deadline:
+            if forward.deadline is None or not forward.deadline.expired():
                 continue
             print(CLEAR if live else "", end="", flush=True)
             for run in runs:
@@ -242,7 +243,7 @@ class _ForwardSignals:
     def __init__(self, runs: list[StationRun]) -> None:
         self._runs = runs
         self._previous: dict[int, SignalHandler] = {}
-        self.deadline: float | None = None
+        self.deadline: Deadline | None = None
 
     def __enter__(self) -> _ForwardSignals:
         if threading.current_thread() is threading.main_thread():
@@ -260,7 +261,7 @@ class _ForwardSignals:
         for _, process in running:
             process.send_signal(signum)
         if self.deadline is None:
-            self.deadline = time.monotonic() + STOP_BOUND_S
+            self.deadline = Deadline(STOP_BOUND_S)
         names = ", ".join(name for name, _ in running) or "none"
         print(f"\n{signal.Signals(signum).name} passed on to the stations still running ({names}); each gives its "
               f"device back first", file=sys.stderr, flush=True)

@@ -151,8 +151,8 @@ class SimulatedNode:
         optional: list[Behaviour | None] = [
             self._built(fx.GuardingHeartbeatExclusive, lambda p: assemble(GuardingHeartbeatExclusion, faults)
                         .from_params(p, self.read_int, self.store.set)),
-            *(preop_only(p, lambda: self.state, wrong_state, faults)
-              for _, p in self.profile.quirks_of(fx.WritesPreopOnly)),
+            *(preop_only(q.params, lambda: self.state, wrong_state, faults)
+              for q in self.profile.quirks_with(fx.WritesPreopOnly)),
             self._built(fx.WritesNeedScalingBit, lambda p: scaling_bit_needed(p, self.read_int, wrong_state)),
             self._built(fx.CamLowBelowHigh, self._cam_low_limit_gate),
             assemble(PdoCobIdRules, faults)(self.read_int, lambda: self.state),

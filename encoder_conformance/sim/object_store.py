@@ -33,8 +33,8 @@ class ObjectStore:
             (index, sub): entry for index, sub, _, entry in profile.iter_entries()
         }
         self.values: dict[Key, int | float | str | bytes] = {}
-        excluded = profile.quirk_objects(RestoreExcludes)
-        self.restore_excluded = excluded[1] if excluded else frozenset()
+        excluded = profile.params_of(RestoreExcludes)
+        self.restore_excluded = excluded.indices if excluded else frozenset()
         self.reload(lambda index: True, node_id)
 
     # -- lookup --------------------------------------------------------------------------

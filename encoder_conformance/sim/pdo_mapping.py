@@ -47,7 +47,7 @@ class MappingRules:
         self._no_object = codes["no_object"]
         self._dummies = frozenset(profile.capabilities.pdo_dummy_mapping)
         # quirk mapping_change_while_valid: the manual's procedure never makes the PDO invalid
-        self._valid_pdo_open = profile.quirk_of(MappingChangeWhileValid) is not None
+        self._valid_pdo_open = profile.has_effect(MappingChangeWhileValid)
 
     def register(self, hooks: NodeHooks) -> None:
         hooks.gates.append(self.gate)

@@ -174,12 +174,11 @@ def documented_quirk(dut: DeviceUnderTest, effect: type[P], evidence: Evidence, 
     ``otherwise`` says what the device does without the quirk (the skip reason); ``needs`` lists
     params the test cannot do without (e.g. the test_object it may change).
     """
-    found = dut.profile.quirk_with_effect(effect.effect)
+    found = dut.profile.quirk(effect)
     if found is None:
         not_applicable(f"{otherwise} (no quirk {effect.effect})")
-    quirk_id, quirk = found
-    missing = [name for name in needs if getattr(quirk.params, name, None) is None]
+    missing = [name for name in needs if getattr(found.params, name, None) is None]
     if missing:
-        not_applicable(f"quirk {quirk_id} names no {', '.join(missing)} the suite may use")
-    evidence.deviation(quirk_id, quirk.title)
-    return quirk.params
+        not_applicable(f"quirk {found.id} names no {', '.join(missing)} the suite may use")
+    evidence.deviation(found.id, found.quirk.title)
+    return found.params

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO
 
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.errors import HubError
 from encoder_conformance.vcan.build import library
 from encoder_conformance.vcan.hub import HUB_SOCKET, PID_FILE
@@ -224,9 +225,9 @@ def stop_hub(directory: Path, *, timeout: float = 5.0) -> bool:
             child.kill()
             child.wait()
         return True
-    deadline = time.monotonic() + timeout
+    deadline = Deadline(timeout)
     while not _gone(pid):
-        if time.monotonic() > deadline:
+        if deadline.expired():
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, signal.SIGKILL)
             break

@@ -7,8 +7,7 @@ settings read here are the same inputs the reference model gets from the twin's 
 
 from __future__ import annotations
 
-import time
-
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.freeze import FreezeRule
@@ -105,8 +104,8 @@ class EncoderAccess:
 
     def scaling_bit_needed_for_preset(self) -> int | None:
         """The scaling bit mask where it is clear now and the preset needs it, else None."""
-        found = self.dut.profile.quirk_objects(fx.WritesNeedScalingBit)
-        if found is None or self.objects.preset not in found[1] or self.objects.scaling_bit is None:
+        found = self.dut.profile.params_of(fx.WritesNeedScalingBit)
+        if found is None or self.objects.preset not in found.indices or self.objects.scaling_bit is None:
             return None
         bit = 1 << self.objects.scaling_bit
         return None if (self.read_int(self.objects.operating, 0) or 0) & bit else bit
@@ -114,8 +113,8 @@ class EncoderAccess:
     def position_when(self, wanted: int, timeout: float = 0.0) -> int:
         """The position once the device executed its writes, read again until it equals ``wanted`` or
         ``timeout`` is over (returns the last read)."""
-        deadline = time.monotonic() + timeout
+        deadline = Deadline(timeout)
         while True:
             value = self.position()
-            if value == wanted or time.monotonic() >= deadline:
+            if value == wanted or deadline.expired():
                 return value

@@ -14,6 +14,7 @@ from __future__ import annotations
 import time
 from dataclasses import asdict, dataclass
 
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.bench.encoder_access import EncoderAccess
 from encoder_conformance.dut.link.device import TESTER_MARGIN_S
 from encoder_conformance.models.encoder import objects as od
@@ -164,9 +165,9 @@ def _offset_when(access: EncoderAccess, wanted: int, span: int) -> int | None:
     """6509h once the device executed the preset, read again until it is ``wanted`` or a late device had time
     enough (the last read)."""
     access.wait_until_executed()
-    deadline = time.monotonic() + _late_s(access)
+    deadline = Deadline(_late_s(access))
     while True:
         value = access.offset()
-        if same_offset(value, wanted, span) or time.monotonic() >= deadline:
+        if same_offset(value, wanted, span) or deadline.expired():
             return value
 

@@ -23,6 +23,7 @@ from pathlib import Path
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import COMMAND_FOR_STATE, STATE_NAMES, NmtState
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.bench.power import BenchPower
 from encoder_conformance.dut.bench.reference_point import ReferencePoint
 from encoder_conformance.dut.custody.aliased_values import AliasOutcome, AliasRepair, Key, label, no_reset_gives_back
@@ -37,7 +38,6 @@ from encoder_conformance.dut.custody.snapshot import (
     read_values,
 )
 from encoder_conformance.dut.custody.write_plan import plan_writes
-from encoder_conformance.dut.link.deadline import Deadline
 from encoder_conformance.dut.link.device import DeviceLink, wake_if_silent
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.nmt.commands import reset_and_reach, reset_node_and_wait, send_command
@@ -171,7 +171,7 @@ class Custody:
         if self.record is not None:
             return self.record
         started = time.monotonic()
-        deadline = Deadline(seconds)
+        deadline = Deadline(seconds, "the restore")
         record = RestoreRecord(None if self.snapshot_path is None else str(self.snapshot_path))
         record.run_store_commands = dict(self.watch.counts)
         self.record = record

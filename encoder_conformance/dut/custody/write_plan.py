@@ -92,10 +92,10 @@ def _pdo_communication_indices(keys: list[Key]) -> list[int]:
 def _gated_steps(profile: DeviceProfile, remaining: dict[Key, bytes], current: dict[Key, bytes | None]
                  ) -> list[Step]:
     """Writes a device refuses unless 6000h bit 2 is set: set it, write them, then 6000h's own value."""
-    found = profile.quirk_objects(WritesNeedScalingBit)
+    found = profile.params_of(WritesNeedScalingBit)
     if found is None:
         return []
-    gated_indices = found[1]
+    gated_indices = found.indices
     gated = sorted(k for k in remaining if k[0] in gated_indices)
     gate_now = current.get(SCALING_GATE)
     if not gated or gate_now is None:

@@ -163,10 +163,10 @@ class HeartbeatTimeout(EmcyTrigger):
         self.timeout_ms = HEARTBEAT_TIMEOUT_MS
         self.name = (f"a heartbeat-consumer time-out: 1016h.01 watches node {self.producer} for "
                      f"{HEARTBEAT_TIMEOUT_MS} ms, the tester sends one heartbeat of it")
-        found = dut.profile.quirk_of(fx.HeartbeatConsumerEmcy)
+        found = dut.profile.quirk(fx.HeartbeatConsumerEmcy)
         if found is not None:
-            self.code = found[1].code
-            self.basis = ("manual", f"{dut.profile.quirks[found[0]].manual} (quirk {found[0]}: time-out EMCY "
+            self.code = found.params.code
+            self.basis = ("manual", f"{found.quirk.manual} (quirk {found.id}: time-out EMCY "
                                     f"{self.code:04X}h)")
         else:
             self.code = EmcyCode.HEARTBEAT

@@ -365,8 +365,8 @@ class DeviceLink:
 def wake_if_silent(dut: DeviceLink) -> str | None:
     """Devices with automatic bit-rate detection stay silent after power-on until they see a
     frame; send one SYNC as the manual prescribes. Returns the quirk id relied on, if any."""
-    found = dut.profile.quirk_of(SilentUntilBusTraffic)
+    found = dut.profile.quirk(SilentUntilBusTraffic)
     if found is None:
         return None
     dut.send(SYNC_COB_ID, b"")
-    return found[0]
+    return found.id

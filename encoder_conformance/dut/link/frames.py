@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import can
 
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.link.clock import FrameClock
 from encoder_conformance.dut.link.time_budget import BUDGET
 from encoder_conformance.errors import BusLostError
@@ -140,7 +141,7 @@ class FrameLog(can.Listener):
     ) -> list[can.Message]:
         """Up to ``count`` matching frames after ``after``; returns early once ``count`` are seen."""
         start = after or self.mark()
-        deadline = time.monotonic() + timeout
+        deadline = Deadline(timeout)
         hits: list[can.Message] = []
         with BUDGET.booking("periodic" if count > 1 else "answer") as booking, self._cond:
             seen = start.seq
@@ -148,21 +149,20 @@ class FrameLog(can.Listener):
                 self._raise_if_closed()
                 hits += [m for m in self._after(seen) if predicate(m)]
                 seen = self._seq
-                remaining = deadline - time.monotonic()
-                if len(hits) >= count or remaining <= 0:
+                if len(hits) >= count or deadline.expired():
                     if len(hits) < count and count == 1:
                         booking.category = "silence"  # nothing came: the whole window was owed
                     return hits[:count]
-                self._cond.wait(remaining)
+                self._cond.wait(deadline.remaining())
 
     def quiet_period(self, predicate: Predicate, duration: float, after: Mark | None = None) -> list[can.Message]:
         """Frames matching ``predicate`` within ``duration`` s (an observation window, not a sleep)."""
         start = after or self.mark()
-        end = time.monotonic() + duration
+        deadline = Deadline(duration)
         with BUDGET.booking("silence"), self._cond:
-            while (remaining := end - time.monotonic()) > 0:
+            while not deadline.expired():
                 self._raise_if_closed()
-                self._cond.wait(remaining)
+                self._cond.wait(deadline.remaining())
             self._raise_if_closed()
             return [m for m in self._after(start.seq) if predicate(m)]
 

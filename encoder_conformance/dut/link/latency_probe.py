@@ -9,11 +9,12 @@ while the probe saw lateness beyond the tolerance is inconclusive, not a device 
 
 from __future__ import annotations
 
-import statistics
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+
+from encoder_conformance.models.timing import percentile
 
 TICK_S = 0.005
 #: the simulated twin's own lateness since a time.time(): (when, ms late) of each job its timing thread ran
@@ -23,7 +24,8 @@ TwinLateness = Callable[[float], list[tuple[float, float]]]
 @dataclass(frozen=True)
 class HostLatency:
     """The probe's wake-up lateness over a capture window (milliseconds), and when each came (wall clock,
-    the clock of frame timestamps)."""
+    the clock of frame timestamps). ``p95_ms`` is the one percentile of the device's figures too
+    (``models.timing.percentile``)."""
 
     samples: int
     worst_ms: float
@@ -86,5 +88,4 @@ class LatencyProbe:
         twin_worst = max((ms for _, ms in twin), default=0.0) if twin is not None else None
         if not late:
             return HostLatency(0, 0.0, 0.0, wakeups, twin_worst)
-        p95 = statistics.quantiles(late, n=20)[-1] if len(late) >= 20 else max(late)
-        return HostLatency(len(late), max(late), p95, wakeups, twin_worst)
+        return HostLatency(len(late), max(late), percentile(late, 0.95), wakeups, twin_worst)

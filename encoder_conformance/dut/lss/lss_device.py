@@ -8,7 +8,6 @@ wherever the test left it and brings it back (``dut/lss/lss_custody.py``).
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -23,6 +22,7 @@ from encoder_conformance.cia.cia305 import (
     LssCommand,
     LssState,
 )
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.lss.lss_custody import Changes, LssCustody, failure
@@ -186,8 +186,8 @@ class LssDevice:
         it is unconfigured: it answers identify non-configured, a fastscan reset, or inquire node-ID with FFh.
         Returns how it showed it; None where it did not (a device with none of these services: None once the
         boot-up time passed without a boot-up at its old node-ID)."""
-        deadline = since.time + self.dut.profile.timing.bootup_max_ms / 1000
-        while time.monotonic() < deadline:
+        deadline = Deadline(self.dut.profile.timing.bootup_max_ms / 1000, since=since.time)
+        while not deadline.expired():
             with self.master.no_answer_expected():  # each look waits the LSS silence window, not the answer window
                 if "identify_non_configured" in self.services:
                     if self.master.identify_non_configured():
@@ -203,7 +203,7 @@ class LssDevice:
                         if active == UNCONFIGURED_NODE_ID:
                             return "inquire node-ID answered FFh"
                 else:
-                    booted = self.wait_bootup_at(self.node_id, since, deadline - time.monotonic())
+                    booted = self.wait_bootup_at(self.node_id, since, deadline.remaining())
                     return None if booted is not None else "no boot-up within the boot-up time"
         return None
 

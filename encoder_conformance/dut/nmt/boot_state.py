@@ -35,11 +35,10 @@ class Expected:
 def expected_after_reset(dut: DeviceLink) -> Expected:
     """Pre-operational, or operational where the documented autostart object or 1F80h bit 3 says so (read by SDO
     now, before the reset: the value a reset reloads is the one the device holds between tests)."""
-    found = dut.profile.quirk_of(fx.NmtAutostartObject)
+    found = dut.profile.quirk(fx.NmtAutostartObject)
     if found is not None:
-        quirk_id, params = found
+        quirk_id, quirk, params = found.id, found.quirk, found.params
         value = dut.read_uint(params.index, params.subindex)
-        quirk = dut.profile.quirks[quirk_id]
         where = f"{params.index:04X}h.{params.subindex:02X} = {value:02X}h"
         if value == params.operational_value:
             return Expected(NmtState.OPERATIONAL, f"documented (manual {quirk.manual}, quirk {quirk_id}): {where} "

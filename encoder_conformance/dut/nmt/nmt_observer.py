@@ -7,11 +7,11 @@ stopped, SDO but no PDO in pre-operational, SYNC-driven PDOs in operational (§7
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from typing import Protocol
 
 from encoder_conformance.cia.cia301 import NMT_COMMAND_NAMES, NMT_COMMAND_TARGET, STATE_NAMES
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.nmt.commands import send_command
@@ -110,10 +110,10 @@ class ServiceObserver(_Commands):
         return 0x05 if pdo is not None else 0x7F
 
     def _observe_until(self, state: int) -> int:
-        deadline = time.monotonic() + self.window_s
+        deadline = Deadline(self.window_s)
         while True:
             observed = self.observe()
-            if observed == state or time.monotonic() >= deadline:
+            if observed == state or deadline.expired():
                 return observed
 
     def expect_state(self, after: Mark, state: int, why: str) -> None:

@@ -54,21 +54,21 @@ class StoreCommand:
 
 
 def _reboot_store(profile: DeviceProfile) -> StoreCommand | None:
-    found = profile.quirk_of(fx.StoreRebootsWithoutReply)
+    found = profile.quirk(fx.StoreRebootsWithoutReply)
     if found is None:
         return None
-    quirk_id, params = found
-    return StoreCommand(params.index, params.subindex, params.signature_bytes, True, quirk_id)
+    params = found.params
+    return StoreCommand(params.index, params.subindex, params.signature_bytes, True, found.id)
 
 
 def _manufacturer_store(profile: DeviceProfile, index: int, sub: int) -> StoreCommand | None:
-    found = profile.quirk_of(fx.ManufacturerStoreObject)
+    found = profile.quirk(fx.ManufacturerStoreObject)
     if found is None:
         return None
-    quirk_id, params = found
+    params = found.params
     if (index, sub) not in params.saves:
         return None
-    return StoreCommand(params.index, params.subindex, params.signature_bytes, quirk=quirk_id)
+    return StoreCommand(params.index, params.subindex, params.signature_bytes, quirk=found.id)
 
 
 def _store_command(profile: DeviceProfile, index: int, sub: int) -> StoreCommand | None:

@@ -11,7 +11,6 @@ that holds an error stays in pre-operational: the TPDO stream then fails naming 
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -19,6 +18,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import NmtState
 from encoder_conformance.coverage import Hold
+from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.custody.settings_journal import SettingsJournal
 from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
@@ -121,15 +121,15 @@ class PeriodicCapture:
                 streams.remove(timer)
         mark = dut.frames.mark()
         # both streams run at once: one window for the two (a silent device costs it once, not twice)
-        deadline = time.monotonic() + beat.wanted * beat.period_ms * 1.5 / 1000 + 0.5
+        deadline = Deadline(beat.wanted * beat.period_ms * 1.5 / 1000 + 0.5)
         with LatencyProbe(twin) as probe:
             if beat in streams:
                 hits = dut.frames.wait_count(lambda m: dut.is_heartbeat(m) and bool(m.data), beat.wanted,
-                                             max(0.0, deadline - time.monotonic()), mark)
+                                             deadline.remaining(), mark)
                 beat.timestamps = [m.timestamp for m in hits]
             if timer in streams:
                 hits = dut.frames.wait_count(lambda m: m.is_rx and m.arbitration_id == timer.cob_id, timer.wanted,
-                                             max(0.0, deadline - time.monotonic()), mark)
+                                             deadline.remaining(), mark)
                 timer.timestamps = [m.timestamp for m in hits]
         self.host = probe.result()
 

@@ -31,16 +31,14 @@ class TpdoChoice:
 def fixed_behaviour_tpdos(dut: DeviceLink) -> tuple[set[int], tuple[str, str] | None]:
     """TPDOs whose behaviour a fixed-layout quirk decides (e.g. POSITAL 1800h: cyclic by 2200h, sub 2
     ignored), and the deviation to report for skipping them."""
-    found = dut.profile.quirk_of(fx.FixedTpdoMapping)
+    found = dut.profile.quirk(fx.FixedTpdoMapping)
     if found is None:
         return set(), None
-    quirk_id, params = found
-    specs: list[fx.CyclicTpdo | fx.PolledTpdo] = [*params.cyclic_tpdos, *params.polled_tpdos]
+    specs: list[fx.CyclicTpdo | fx.PolledTpdo] = [*found.params.cyclic_tpdos, *found.params.polled_tpdos]
     fixed = {spec.tpdo for spec in specs}
     if not fixed:
         return set(), None
-    title = dut.profile.quirks[quirk_id].title
-    return fixed, (quirk_id, f"{title}: {', '.join(f'{c:04X}h' for c in sorted(fixed))} not used here")
+    return fixed, (found.id, f"{found.quirk.title}: {', '.join(f'{c:04X}h' for c in sorted(fixed))} not used here")
 
 
 def choose_tpdo(dut: DeviceLink, sub: int, usable_types: list[int],
