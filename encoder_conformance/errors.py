@@ -31,8 +31,8 @@ The exit code a class leads to is set where it is caught (``exit_codes.py`` name
           |    +-- HeldByPersistentError  an error no reset clears keeps the device out of the state a test needs
           |                             (dut/nmt/persistent_error.py)
           |   the simulator (control flow of its SDO server, never seen by a test)
-          +-- SdoAbort                  makes the twin's SDO server answer with an abort (sim/sdo_server.py)
-          +-- SdoNoReply                makes the twin's SDO server send nothing (sim/sdo_server.py)
+          +-- SdoAbort                  makes the twin's SDO server answer with an abort (sim/engine/sdo_server.py)
+          +-- SdoNoReply                makes the twin's SDO server send nothing (sim/engine/sdo_server.py)
           |   the run's history
           +-- HistoryError              the history database cannot be used (history/db.py)
           |   the user-space SocketCAN bus

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import struct
 
-from encoder_conformance.sim.sdo_server import SdoAbort
+from encoder_conformance.sim.engine.sdo_server import SdoAbort
 
 NO_OBJECT = 0x06020000
 WRITE_RO = 0x06010002

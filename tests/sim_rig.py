@@ -22,9 +22,9 @@ from encoder_conformance.dut.link.frames import FrameLog, Mark
 from encoder_conformance.dut.link.tracing_bus import TracingBus
 from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import SilentUntilBusTraffic
-from encoder_conformance.sim.faults import FaultSet
-from encoder_conformance.sim.host import SimulatorHost
-from encoder_conformance.sim.node import SimulatedNode
+from encoder_conformance.sim.engine.faults import FaultSet
+from encoder_conformance.sim.engine.host import SimulatorHost
+from encoder_conformance.sim.engine.node import SimulatedNode
 
 REPO = Path(__file__).resolve().parents[1]
 MINIMAL = REPO / "tests" / "data" / "profiles" / "minimal-encoder.yaml"

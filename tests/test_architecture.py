@@ -14,8 +14,6 @@ import tokenize
 from pathlib import Path
 from types import ModuleType
 
-import pytest
-
 REPO = Path(__file__).resolve().parents[1]
 LIBRARY = REPO / "encoder_conformance"
 MAX_LINES = 400
@@ -26,12 +24,14 @@ def _module_name(path: Path, root: Path = REPO) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _imports(path: Path, root: Path = REPO) -> set[str]:
-    """Every module ``path`` imports, also inside functions and under TYPE_CHECKING."""
+def _imports(path: Path, root: Path = REPO, at_import: bool = False) -> set[str]:
+    """Every module ``path`` imports, also inside functions and under TYPE_CHECKING; ``at_import``: only those
+    importing ``path`` imports (not inside a function, not under TYPE_CHECKING)."""
     name = _module_name(path, root)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in (_nodes_run_at_import(tree) if at_import else ast.walk(tree)):
         if isinstance(node, ast.Import):
             found.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -42,6 +42,19 @@ def _imports(path: Path, root: Path = REPO) -> set[str]:
                 target = node.module or ""
             found.add(target)
             found.update(f"{target}.{alias.name}" for alias in node.names)
+    return found
+
+
+def _nodes_run_at_import(node: ast.AST) -> list[ast.AST]:
+    """The nodes executed when the module is imported: not a function's body, not an ``if TYPE_CHECKING:`` block."""
+    found: list[ast.AST] = []
+    for child in ast.iter_child_nodes(node):
+        if isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda):
+            continue
+        if isinstance(child, ast.If) and ast.unparse(child.test) in ("TYPE_CHECKING", "typing.TYPE_CHECKING"):
+            found += _nodes_run_at_import(ast.Module(body=child.orelse, type_ignores=[]))
+            continue
+        found += [child, *_nodes_run_at_import(child)]
     return found
 
 
@@ -107,15 +120,81 @@ def test_no_import_loop_in_the_library():
     assert _loops(_library_graph()) == []
 
 
-@pytest.mark.parametrize("folder", ["suites", "fixtures"])
-def test_only_the_simulator_fixture_imports_the_simulator(folder):
-    """Suites and fixtures reach the device through the DUT layer; only fixtures/simulator.py starts a twin."""
-    offenders = [
-        str(path.relative_to(REPO)) for path in (REPO / folder).rglob("*.py")
-        if path.name != "simulator.py" or folder != "fixtures"
-        if any(i == "encoder_conformance.sim" or i.startswith("encoder_conformance.sim.") for i in _imports(path))
-    ]
+def test_the_import_reader_tells_what_runs_at_import(tmp_path):
+    """``at_import``: a module-level import counts, one in a function or under TYPE_CHECKING does not."""
+    module = tmp_path / "m.py"
+    module.write_text("import a\nfrom typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import b\n"
+                      "else:\n    import c\ndef f():\n    import d\nclass K:\n    import e\n", encoding="utf-8")
+    assert _imports(module, root=tmp_path, at_import=True) == {"a", "typing", "typing.TYPE_CHECKING", "c", "e"}
+
+
+#: the simulator's two faces (DESIGN.md §2): its top level is the tester-side API, the only part of sim/ imported
+#: outside it; sim/engine/ is what the twin's process runs. The project's own tests (tests/) may import the engine too,
+#: to test its parts; suites/ and fixtures/ import nothing of sim/ (the run's twin is started by
+#: plugin/twin_launch.py).
+SIM = "encoder_conformance.sim"
+SIM_API = {"control", "fault_catalogue", "forked", "hold_faults", "process", "twin"}
+#: where a twin is started (sim.process's launch_simulator / start_simulator, sim.twin's start_in_process) outside sim/
+TWIN_STARTED_IN = {
+    "encoder_conformance/plugin/twin_launch.py": "the run's twin: the one place its log and memory files are made",
+    "encoder_conformance/runs/false_pass_matrix.py": "a twin as a bench device, on a bus of its own",
+}
+_STARTS_A_TWIN = re.compile(r"\b(launch_simulator|start_simulator|start_in_process)\(")
+
+
+def _outside_sim() -> list[Path]:
+    """Every Python file of the project outside sim/ but tests/: the library's other packages, suites/, fixtures/
+    and the top-level modules (conftest.py, setup.py)."""
+    library = [p for p in LIBRARY.rglob("*.py") if not p.relative_to(LIBRARY).as_posix().startswith("sim/")]
+    return sorted([*library, *(REPO / "suites").rglob("*.py"), *(REPO / "fixtures").rglob("*.py"), *REPO.glob("*.py")])
+
+
+def test_the_simulator_has_two_faces():
+    """sim/'s top level holds the tester-side API and nothing else; every other module is in sim/engine/."""
+    folder = LIBRARY / "sim"
+    assert {p.stem for p in folder.glob("*.py")} - {"__init__"} == SIM_API
+    assert {p.name for p in folder.iterdir() if p.is_dir() and p.name != "__pycache__"} == {"engine"}
+
+
+def test_outside_sim_only_the_tester_side_api_is_imported():
+    """No module outside sim/ (tests/ aside) imports or names the engine, and suites/ and fixtures/ import nothing
+    of sim/: they reach the twin through the DUT layer and the ``simulator`` fixture (plugin/twin_launch.py)."""
+    offenders = []
+    for path in _outside_sim():
+        where = path.relative_to(REPO).as_posix()
+        for target in sorted(_imports(path)):
+            parts = target.split(".")
+            if parts[:2] != SIM.split("."):
+                continue
+            if where.startswith(("suites/", "fixtures/")) or (len(parts) > 2 and parts[2] not in SIM_API):
+                offenders.append(f"{where} -> {target}")
+        if f"{SIM}.engine" in path.read_text(encoding="utf-8"):
+            offenders.append(f"{where} names {SIM}.engine")
     assert offenders == []
+
+
+def test_the_tester_side_api_loads_no_engine():
+    """The API imports the engine only inside its functions (or for type checking): the plugin, the command line and
+    a bench's power command import it without the twin."""
+    loading = [f"{path.relative_to(REPO)} -> {target}" for path in (LIBRARY / "sim").glob("*.py")
+               for target in sorted(_imports(path, at_import=True)) if target.startswith(f"{SIM}.engine")]
+    assert loading == []
+
+
+def test_the_twin_is_started_in_one_place():
+    """Outside sim/ a twin is started only where TWIN_STARTED_IN says why (a run's twin by plugin/twin_launch.py)."""
+    found = [f"{path.relative_to(REPO)}:{n}" for path in _outside_sim()
+             if path.relative_to(REPO).as_posix() not in TWIN_STARTED_IN
+             for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1) if _STARTS_A_TWIN.search(line)]
+    assert found == []
+
+
+def test_the_design_draws_the_simulator_faces():
+    """DESIGN.md §2 names the tester-side API module by module, and the engine's folder."""
+    design = (LIBRARY / "DESIGN.md").read_text(encoding="utf-8")
+    layers = design[design.index("## 2."):design.index("## 3.")]
+    assert [m for m in sorted(SIM_API) if f"sim/{m}.py" not in layers] == []
+    assert "sim/engine/" in layers
 
 
 #: the library's packages, bottom to top: a package imports from its own folder and lower layers only, never from

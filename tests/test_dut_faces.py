@@ -11,7 +11,7 @@ import encoder_conformance.dut.nmt as nmt_face
 from encoder_conformance.cia.cia301 import NMT_COB_ID, TPDO1_BASE, NmtCommand
 from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.engine.nmt import NmtState
 from tests import sim_rig
 from tests.sim_rig import Rig
 

@@ -1,7 +1,7 @@
 """Every conformance test fails against at least one simulator fault and passes without faults.
 
 Runs the real suites (separate pytest processes, simulator in its own process) once per fault,
-each fault against the suite modules it is made for (sim/faults.py FAULT_GROUPS); the full
+each fault against the suite modules it is made for (sim/engine/faults.py FAULT_GROUPS); the full
 product of faults and suites is `encoder-conformance fault-matrix`. The matrix is printed in the
 test output (run with -s, or see the captured stdout on failure).
 """

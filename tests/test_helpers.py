@@ -15,7 +15,7 @@ from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.models.timing import interval_stats
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import HeartbeatTolerance
-from encoder_conformance.sim.nvm import NonVolatileMemory
+from encoder_conformance.sim.engine.nvm import NonVolatileMemory
 from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter
 
 MINIMAL = Path(__file__).resolve().parent / "data" / "profiles" / "minimal-encoder.yaml"
@@ -205,8 +205,9 @@ def test_quirk_faults_name_known_faults_and_effects():
 
 
 def test_every_suite_module_is_the_target_of_a_fault_group():
-    """A new suite module needs faults made for it (sim/faults.py FAULT_GROUPS), and targets must exist; the goods-in
-    module runs only in acceptances, where tests/test_coverage_verdict.py fails it with device_error_at_start."""
+    """A new suite module needs faults made for it (sim/fault_catalogue.py FAULT_GROUPS), and targets must exist; the
+    goods-in module runs only in acceptances, where tests/test_coverage_verdict.py fails it with
+    device_error_at_start."""
     from pathlib import Path
 
     from encoder_conformance.plugin.acceptance import GOODS_IN_MODULE

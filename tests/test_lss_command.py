@@ -30,9 +30,9 @@ from encoder_conformance.dut.lss.lss_find import error_text
 from encoder_conformance.dut.lss.lss_master import LssAnswer
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim.host import SimulatorHost
-from encoder_conformance.sim.lss_slave import LssSlave
-from encoder_conformance.sim.node import SimulatedNode
+from encoder_conformance.sim.engine.host import SimulatorHost
+from encoder_conformance.sim.engine.lss_slave import LssSlave
+from encoder_conformance.sim.engine.node import SimulatedNode
 from encoder_conformance.sim.process import SimulatorProcess, start_simulator
 
 REPO = Path(__file__).resolve().parents[1]

@@ -25,7 +25,7 @@ from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster
 from encoder_conformance.dut.store.store_watch import StoreWatch
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim.node import SimulatedNode
+from encoder_conformance.sim.engine.node import SimulatedNode
 from tests import sim_rig
 from tests.sim_rig import Rig
 

@@ -1,4 +1,5 @@
-"""The LSS master (dut/lss/lss_master.py) against the twin's LSS slaves (sim/lss_slave.py) on a private virtual bus.
+"""The LSS master (dut/lss/lss_master.py) against the twin's LSS slaves (sim/engine/lss_slave.py) on a private virtual
+bus.
 
 Issue 10: fastscan finds one unconfigured device in < 1 s and eight on one bus in < 5 s (canopen's LssMaster
 took 16.9 s for one); every service answers as CiA 305 says. A request keeps one frame time after an answer, as a
@@ -21,7 +22,7 @@ from encoder_conformance.dut.link.frames import FrameLog
 from encoder_conformance.dut.lss import lss_master
 from encoder_conformance.dut.lss.lss_master import FRAME_BITS, FRAME_S, LssAddress, LssMaster
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim.lss_slave import LssSlave
+from encoder_conformance.sim.engine.lss_slave import LssSlave
 from tests import sim_rig
 
 rig = sim_rig.rig  # the shared simulator fixture

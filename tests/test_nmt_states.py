@@ -20,7 +20,7 @@ from encoder_conformance.dut.custody.settings_journal import SettingsJournal
 from encoder_conformance.dut.nmt.persistent_error import persisting_error
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.runs.fault_matrix import run_suite
-from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.engine.nmt import NmtState
 from tests import sim_rig
 from tests.sim_rig import Rig
 

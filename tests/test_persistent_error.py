@@ -14,7 +14,7 @@ from encoder_conformance.dut.tpdo.periodic_capture import PeriodicCapture
 from encoder_conformance.errors import HeldByPersistentError
 from encoder_conformance.plugin.outcomes import is_device_finding
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim.nmt import NmtState
+from encoder_conformance.sim.engine.nmt import NmtState
 from tests import sim_rig
 from tests.sim_rig import Rig
 

@@ -20,7 +20,7 @@ from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.lss.lss_device import LssDevice, expect_success
 from encoder_conformance.dut.lss.lss_master import LssAddress, LssMaster
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim.node import SimulatedNode
+from encoder_conformance.sim.engine.node import SimulatedNode
 from tests import sim_rig
 from tests.bench_twin import start_twin
 from tests.sim_rig import WAIT_S, Rig

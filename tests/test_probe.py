@@ -24,7 +24,7 @@ from encoder_conformance.probe.session import ProbeOptions, ProbeResult, probe_d
 from encoder_conformance.profile.eds import export_eds, profile_draft_from_eds, write_profile_draft
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile
-from encoder_conformance.sim.node import SimulatedNode
+from encoder_conformance.sim.engine.node import SimulatedNode
 from tests.sim_rig import Twin, twin_of
 
 SHIPPED = ["wachendorff-wdga-mt", "faulhaber-mc5005", "fraba-posital-awc58-c2-mt", "siko-wx58m-1212-mt", "waycon-sx",

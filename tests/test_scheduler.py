@@ -15,7 +15,7 @@ import time
 
 import pytest
 
-from encoder_conformance.sim.scheduler import DeadlineScheduler
+from encoder_conformance.sim.engine.scheduler import DeadlineScheduler
 
 WAIT_S = 5.0  # generous upper bound for any event; tests end as soon as the event is set
 
@@ -135,7 +135,7 @@ def test_raising_job_does_not_kill_the_thread(scheduler, caplog):
             third_failure.set()
         raise RuntimeError("job failed on purpose")
 
-    with caplog.at_level(logging.ERROR, logger="encoder_conformance.sim.scheduler"):
+    with caplog.at_level(logging.ERROR, logger="encoder_conformance.sim.engine.scheduler"):
         handle = scheduler.call_later(0.002, broken, 0.002)
         assert third_failure.wait(WAIT_S), "the periodic job stopped after raising"
         handle.cancel()

@@ -16,8 +16,8 @@ from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.attribution import attribute
 from encoder_conformance.fuzz.oracle import Exchange, Judge
 from encoder_conformance.readings import all_readings
-from encoder_conformance.sim.faults import FaultSet, assemble
-from encoder_conformance.sim.sdo_server import SdoServer
+from encoder_conformance.sim.engine.faults import FaultSet, assemble
+from encoder_conformance.sim.engine.sdo_server import SdoServer
 from tests import sim_rig
 from tests.sdo_server_rig import TEXT, FakeAccess, abort_of, frame, segment
 from tests.test_sdo_fuzz_runner import _runner as fuzz_runner

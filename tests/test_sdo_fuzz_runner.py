@@ -1,6 +1,6 @@
 """The SDO fuzz runner and device watch against an in-process twin: fault-free examples pass, each fault of
-sim/sdo_fuzz_faults.py is reported, and an NMT state change, a restart or an EMCY during an example is noticed; the
-short-frame variants pass every time (each reply paired with its request), and a confirmation followed by an abort
+sim/engine/sdo_fuzz_faults.py is reported, and an NMT state change, a restart or an EMCY during an example is noticed;
+the short-frame variants pass every time (each reply paired with its request), and a confirmation followed by an abort
 fails naming both."""
 
 from __future__ import annotations

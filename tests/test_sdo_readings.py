@@ -13,9 +13,9 @@ from encoder_conformance.cia.cia301 import SdoAbortCode
 from encoder_conformance.fuzz.oracle import Exchange, Judge
 from encoder_conformance.fuzz.strategies import Request
 from encoder_conformance.readings import sdo as sdo_readings
-from encoder_conformance.sim.faults import FaultSet, assemble
-from encoder_conformance.sim.sdo_block import BlockEngine
-from encoder_conformance.sim.sdo_server import SdoServer
+from encoder_conformance.sim.engine.faults import FaultSet, assemble
+from encoder_conformance.sim.engine.sdo_block import BlockEngine
+from encoder_conformance.sim.engine.sdo_server import SdoServer
 from tests.sdo_server_rig import TEXT, FakeAccess, abort_of, frame, segment
 
 UPLOAD_TEXT = frame(0x40, 0x1008)

@@ -10,7 +10,7 @@ import struct
 
 import pytest
 
-from encoder_conformance.sim.sdo_server import SdoServer
+from encoder_conformance.sim.engine.sdo_server import SdoServer
 from tests.sdo_server_rig import (
     COMMAND_INVALID,
     LENGTH_MISMATCH,

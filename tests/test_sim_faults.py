@@ -5,12 +5,12 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import encoder_conformance.sim.node
+import encoder_conformance.sim.engine.node
+from encoder_conformance.sim.engine.faults import FaultSet, assemble, implemented_faults
+from encoder_conformance.sim.engine.heartbeat import HeartbeatProducer
 from encoder_conformance.sim.fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS
-from encoder_conformance.sim.faults import FaultSet, assemble, implemented_faults
-from encoder_conformance.sim.heartbeat import HeartbeatProducer
 
-SIM = Path(encoder_conformance.sim.node.__file__).parent
+SIM = Path(encoder_conformance.sim.engine.node.__file__).parent
 
 
 def test_every_catalogued_fault_has_exactly_one_implementation():

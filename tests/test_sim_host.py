@@ -12,7 +12,7 @@ import can
 import pytest
 
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.sim.host import SimulatorHost
+from encoder_conformance.sim.engine.host import SimulatorHost
 from tests.sim_rig import MINIMAL, WAIT_S
 
 NODE_ID = 5

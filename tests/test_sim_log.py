@@ -6,10 +6,10 @@ import logging
 
 import pytest
 
-from encoder_conformance.sim.hooks import NodeHooks, ReloadEvent
-from encoder_conformance.sim.nmt import NmtState
-from encoder_conformance.sim.nvm import NonVolatileMemory
-from encoder_conformance.sim.sim_log import LOGGER, EventLog, nvm_text
+from encoder_conformance.sim.engine.hooks import NodeHooks, ReloadEvent
+from encoder_conformance.sim.engine.nmt import NmtState
+from encoder_conformance.sim.engine.nvm import NonVolatileMemory
+from encoder_conformance.sim.engine.sim_log import LOGGER, EventLog, nvm_text
 
 
 def test_nvm_changes_name_the_objects_and_the_count():

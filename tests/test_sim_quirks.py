@@ -21,10 +21,10 @@ from canopen.sdo.exceptions import SdoAbortedError
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirks import QuirkBase, parse_quirk
-from encoder_conformance.sim.control import LocalControl
-from encoder_conformance.sim.faults import FaultSet
-from encoder_conformance.sim.nmt import NmtState
-from encoder_conformance.sim.nvm import NonVolatileMemory
+from encoder_conformance.sim.engine.control_server import LocalControl
+from encoder_conformance.sim.engine.faults import FaultSet
+from encoder_conformance.sim.engine.nmt import NmtState
+from encoder_conformance.sim.engine.nvm import NonVolatileMemory
 from tests import sim_rig
 from tests.sim_rig import MINIMAL, WAIT_S
 

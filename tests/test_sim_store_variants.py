@@ -13,7 +13,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import ReloadImmediate
-from encoder_conformance.sim.store_variants import ParameterSets, set_slot
+from encoder_conformance.sim.engine.store_variants import ParameterSets, set_slot
 from tests import sim_rig
 
 rig = sim_rig.rig  # the shared fixture

@@ -68,7 +68,8 @@ def test_every_conformant_variant_passes_on_every_profile_where_it_applies(varia
 def test_readings_share_a_twin_only_where_no_variant_hides_another():
     """combine(): every (reading, profile) runs exactly once; readings on one twin override no method in common
     (a mixin in front would hide the other's), and a shared twin plays one profile."""
-    from encoder_conformance.runs.variant_matrix import _overrides, combine
+    from encoder_conformance.runs.variant_matrix import combine
+    from encoder_conformance.sim.twin import overridden_methods
 
     pairs = plan(REPRESENTATIVE_PROFILES)
     runs = combine(pairs)
@@ -76,7 +77,7 @@ def test_readings_share_a_twin_only_where_no_variant_hides_another():
     for profile, readings in runs:
         taken: set[tuple[str, str]] = set()
         for reading in readings:
-            overridden = _overrides(reading.variant)
+            overridden = overridden_methods(reading.variant)
             assert overridden, f"{reading.variant}: no mixin found (is every behaviour imported?)"
             assert not overridden & taken, f"{reading.variant} on {profile} shares a method with another variant"
             taken |= overridden

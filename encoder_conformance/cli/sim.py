@@ -13,7 +13,7 @@ from encoder_conformance.exit_codes import RunExit
 
 
 def _cmd_sim(args: argparse.Namespace, extra: list[str]) -> int:
-    from encoder_conformance.sim.serve import plan_nodes, serve
+    from encoder_conformance.sim.twin import plan_nodes, serve
 
     for profile in args.profile:
         usage.check_profile("--profile", profile)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from encoder_conformance.plugin.option_table import imported_before_pytest, unused_plugins
+from encoder_conformance.sim.twin import SERVE_MODULE
 
 #: the libraries of the pytest plugins a session loads through entry points (not the plugin modules themselves)
 ENTRY_POINT_LIBRARIES = ("hypothesis", "pytest_html", "pytest_metadata")
@@ -36,7 +37,7 @@ PRELOADED_DISTRIBUTION_MODULES = ("encoder_conformance", *ENTRY_POINT_LIBRARIES,
 PRELOAD = ["pytest", "_pytest.assertion.rewrite", "_pytest.python", "jinja2", "allure_commons", "attr", "can",
            "canopen", "pydantic", "yaml", "encoder_conformance.profile.loader", "encoder_conformance.dut.device",
            "encoder_conformance.sim.process", "encoder_conformance.plugin.hooks",
-           "encoder_conformance.sim.serve", *ENTRY_POINT_LIBRARIES]
+           SERVE_MODULE, *ENTRY_POINT_LIBRARIES]
 #: how long a child may take to stop after SIGTERM before it is killed
 STOP_GRACE_S = 5.0
 

@@ -21,6 +21,7 @@ from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.model import DeviceProfile, resolve_node_id_expression
 from encoder_conformance.readings import OpenReading, all_readings
 from encoder_conformance.runs.fault_matrix import PREFLIGHT, RunResult, run_suite
+from encoder_conformance.sim.twin import overridden_methods  # imports the twin's engine when called
 
 #: one profile per family, the generic class C3 and the self-test profiles with the optional features
 #: (inhibit time, SYNC start value, block transfer) no shipped device has
@@ -109,15 +110,6 @@ def plan(profiles: tuple[str, ...] = REPRESENTATIVE_PROFILES,
     return pairs
 
 
-def _overrides(variant: str) -> frozenset[tuple[str, str]]:
-    """(behaviour, method) pairs the variant's mixins override in the twin."""
-    from encoder_conformance.sim import node  # noqa: F401  # imports every behaviour, so every mixin is declared
-    from encoder_conformance.sim.faults import mixins_of
-
-    return frozenset((behaviour.__name__, name) for behaviour, mixin in mixins_of(variant)
-                     for name in vars(mixin) if not name.startswith("__"))
-
-
 def combine(pairs: list[tuple[OpenReading, str]]) -> list[tuple[str, list[OpenReading]]]:
     """The pairs as runs: per profile, readings whose variants override no method in common share one twin
     (and one run of the union of their modules). Readings of different points are independent choices, so a
@@ -126,7 +118,7 @@ def combine(pairs: list[tuple[OpenReading, str]]) -> list[tuple[str, list[OpenRe
     (``shares_twin``)."""
     runs: list[tuple[str, list[OpenReading], set[tuple[str, str]]]] = []
     for reading, profile in pairs:
-        taken = _overrides(reading.variant)
+        taken = overridden_methods(reading.variant)
         home = next((run for run in runs if run[0] == profile and not run[2] & taken
                      and reading.shares_twin and all(r.shares_twin for r in run[1])), None)
         if home is None:

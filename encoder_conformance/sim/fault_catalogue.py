@@ -2,9 +2,10 @@
 
 Each fault is one deliberate deviation from CiA 301 (or from the profile), committed by the simulator to prove that
 each conformance test can fail. This module is data only, so that the plugin and the command line can list and check
-faults without importing the simulator; the faults themselves are small classes next to the simulator behaviour they
-break (``sim.faults`` wires them). tests/test_fault_matrix.py runs the suites against every fault and shows which
-tests catch it; each fault names the suite modules it is made for, so that the matrix can run it against those alone.
+faults without importing the simulator's engine; the faults themselves are small classes next to the behaviour they
+break (``sim/engine/faults.py`` wires them). tests/test_fault_matrix.py runs the suites against every fault and shows
+which tests catch it; each fault names the suite modules it is made for, so that the matrix can run it against those
+alone.
 It is over 400 lines because it is one table: a line or two per fault, grouped by area.
 """
 

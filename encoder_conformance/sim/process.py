@@ -135,7 +135,7 @@ def launch_simulator(
     process: ProcessHandle
     if fork and not extra_args and forked.can_fork():
         def serve_one() -> int:  # what ``sim`` with ``args`` does, less its usage checks (our own arguments)
-            from encoder_conformance.sim.serve import plan_nodes, serve
+            from encoder_conformance.sim.twin import plan_nodes, serve
 
             plan = plan_nodes([profile], [] if node_id is None else [node_id])
             return serve(plan, "127.0.0.1:0", "127.0.0.1:0", list(faults or []), nvm_path, True)
