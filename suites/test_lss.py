@@ -3,7 +3,7 @@ allows, the node-ID life cycle (pending, active, stored, unconfigured) and fasts
 
 Sources: CiA 305 v3.0.0, cited by the heading of each service (``cia305.CLAUSE_*``); the device manuals for
 their quirks; where a text allows more than one behaviour, every reading it allows is accepted
-(``encoder_conformance/readings/lss.py`` lists them with their sentences). Devices without LSS (switch-configured)
+(``encoder_conformance/open_points/lss.py`` lists them with their sentences). Devices without LSS (switch-configured)
 skip every test with that reason. Every test starts in pre-operational, waits what the device owes (its LSS
 answer window, its boot-up time) and checks it got there; the lss fixture puts the device back wherever the test
 left it, also when it fails.
@@ -45,7 +45,7 @@ from encoder_conformance.suite_support import destructive_if_self_stored, docume
 
 pytestmark = pytest.mark.spec(cia305.CIA305)
 #: the WDGA manual's "new boot-up" after LSS changes (M §8.2.4): open readings lss-node-id-activation and
-#: lss-unconfigured-start (readings/lss.py)
+#: lss-unconfigured-start (open_points/lss.py)
 NEW_BOOT_UP = "Wachendorff WDGA manual M §8.2.4 (a new boot-up after LSS configuration) and M §4.2"
 #: CiA 305 leaves open when an unconfigured slave given a node-ID starts (open reading lss-unconfigured-start)
 UNCONFIGURED_START_READINGS = ("CiA 305 v3.0.0, configure node-ID and the LSS slave states: an unconfigured slave "

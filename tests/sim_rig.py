@@ -20,8 +20,8 @@ import pytest
 from encoder_conformance.config.bus import BusConfig
 from encoder_conformance.dut.link.frames import FrameLog, Mark
 from encoder_conformance.dut.link.tracing_bus import TracingBus
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import SilentUntilBusTraffic
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.faults import FaultSet
 from encoder_conformance.sim.engine.host import SimulatorHost
 from encoder_conformance.sim.engine.node import SimulatedNode

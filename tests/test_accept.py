@@ -21,7 +21,7 @@ from encoder_conformance.cli.accept import exit_code, format_verdict
 from encoder_conformance.config.station import StationError, load_station
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.plugin.acceptance import IDENTITY_CHECK, SELECTION, pytest_args
-from encoder_conformance.profile.model import SerialFormat
+from encoder_conformance.profile.schema import SerialFormat
 from encoder_conformance.run_summary import RunSummary, TestResult
 
 REPO = Path(__file__).resolve().parents[1]

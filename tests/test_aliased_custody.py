@@ -20,7 +20,7 @@ from encoder_conformance.dut.custody.custody import Custody
 from encoder_conformance.dut.store.store_watch import StoreWatch
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 from tests import sim_rig
 from tests.sim_rig import Rig
 

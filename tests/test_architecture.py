@@ -205,7 +205,7 @@ LAYERS: list[set[str]] = [
     {"(root)"},
     {"cia", "config", "vcan"},
     {"profile"},
-    {"models", "readings"},
+    {"models", "open_points"},
     {"dut", "sim", "history"},
     {"fuzz", "plugin", "probe"},
     {"suite_support"},

@@ -29,7 +29,7 @@ from encoder_conformance.dut.store.persist import StoreCommand, persist_entry, s
 from encoder_conformance.dut.store.store_watch import AUTO_STORED, StoreWatch
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 from tests import sim_rig
 from tests.sim_rig import WAIT_S, Rig
 

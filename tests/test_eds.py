@@ -22,7 +22,7 @@ from encoder_conformance.profile.eds import (
     write_profile_draft,
 )
 from encoder_conformance.profile.loader import iter_profile_ids, load_profile
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 EDS_DIR = Path(__file__).parent / "data" / "eds"
 FIXTURES = sorted(p.name for p in EDS_DIR.glob("*.eds"))

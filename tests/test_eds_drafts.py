@@ -16,8 +16,8 @@ from pydantic import ValidationError
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.eds import export_eds, profile_draft_from_eds, write_profile_draft
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import EntrySpec
 from encoder_conformance.profile.od_builder import initial_value
+from encoder_conformance.profile.schema import EntrySpec
 
 EDS = Path(__file__).parent / "data" / "eds"
 DRIVE, ENCODER = EDS / "drive_oddities.eds", EDS / "encoder_oddities.eds"

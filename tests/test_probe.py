@@ -23,7 +23,7 @@ from encoder_conformance.probe.put_back import PutBack
 from encoder_conformance.probe.session import ProbeOptions, ProbeResult, probe_device
 from encoder_conformance.profile.eds import export_eds, profile_draft_from_eds, write_profile_draft
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.node import SimulatedNode
 from tests.sim_rig import Twin, twin_of
 

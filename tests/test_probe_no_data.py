@@ -22,7 +22,7 @@ from encoder_conformance.probe.link import Answer
 from encoder_conformance.probe.services import store_restore_subindices
 from encoder_conformance.profile.eds import profile_draft_from_eds
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import EntrySpec
+from encoder_conformance.profile.schema import EntrySpec
 from encoder_conformance.profile.value_domain import refusal_basis
 from tests.sim_rig import twin_of
 from tests.suite_session import run_suite

@@ -20,12 +20,12 @@ from encoder_conformance.profile.loader import (
     iter_profile_ids,
     load_profile,
 )
-from encoder_conformance.profile.model import (
+from encoder_conformance.profile.od_builder import build_object_dictionary
+from encoder_conformance.profile.schema import (
     SCHEMA_VERSION,
     is_node_id_expression,
     resolve_node_id_expression,
 )
-from encoder_conformance.profile.od_builder import build_object_dictionary
 
 REPO = Path(__file__).resolve().parents[1]
 PROFILE_REFS = list(iter_profile_ids())

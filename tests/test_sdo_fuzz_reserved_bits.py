@@ -15,7 +15,7 @@ from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.attribution import attribute
 from encoder_conformance.fuzz.oracle import Exchange, Judge
-from encoder_conformance.readings import all_readings
+from encoder_conformance.open_points import all_readings
 from encoder_conformance.sim.engine.faults import FaultSet, assemble
 from encoder_conformance.sim.engine.sdo_server import SdoServer
 from tests import sim_rig

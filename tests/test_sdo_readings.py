@@ -1,4 +1,4 @@
-"""The SDO open readings (encoder_conformance/readings/sdo.py): each variant of the twin plays its reading, and the
+"""The SDO open readings (encoder_conformance/open_points/sdo.py): each variant of the twin plays its reading, and the
 fuzz oracle accepts what the texts allow (an abort of the open transfer before, or instead of, the answer to a new
 initiate) and nothing more."""
 
@@ -12,7 +12,7 @@ import pytest
 from encoder_conformance.cia.cia301 import SdoAbortCode
 from encoder_conformance.fuzz.oracle import Exchange, Judge
 from encoder_conformance.fuzz.strategies import Request
-from encoder_conformance.readings import sdo as sdo_readings
+from encoder_conformance.open_points import sdo as sdo_readings
 from encoder_conformance.sim.engine.faults import FaultSet, assemble
 from encoder_conformance.sim.engine.sdo_block import BlockEngine
 from encoder_conformance.sim.engine.sdo_server import SdoServer

@@ -20,7 +20,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 from encoder_conformance.cia.cia301 import SdoAbortCode
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.node import SimulatedNode
 from encoder_conformance.sim.fault_catalogue import TARGET_MODULES, faults_for
 from tests import sim_rig

@@ -17,8 +17,8 @@ import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile, resolve_node_id_expression
 from encoder_conformance.profile.quirk_effects import WritesPreopOnly
+from encoder_conformance.profile.schema import DeviceProfile, resolve_node_id_expression
 from encoder_conformance.sim.engine.faults import FaultSet
 from encoder_conformance.sim.engine.nmt import NmtState
 from encoder_conformance.sim.engine.node import SimulatedNode

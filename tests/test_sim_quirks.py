@@ -19,8 +19,8 @@ import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirks import QuirkBase, parse_quirk
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.control_server import LocalControl
 from encoder_conformance.sim.engine.faults import FaultSet
 from encoder_conformance.sim.engine.nmt import NmtState

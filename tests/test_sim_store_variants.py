@@ -11,8 +11,8 @@ import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import ReloadImmediate
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.store_variants import ParameterSets, set_slot
 from tests import sim_rig
 

@@ -1,4 +1,4 @@
-"""The twin's conformant variants of the SYNC, error-behaviour and PDO open readings (encoder_conformance/readings/):
+"""The twin's conformant variants of the SYNC, error-behaviour and PDO open readings (encoder_conformance/open_points/):
 each plays the reading it names, and the default twin the other one."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Conformant variants as a bench meets them: external twins, a stored customer configuration, destructive runs.
 
-Each twin is a separate simulator process playing several open readings at once (encoder_conformance/readings/)
+Each twin is a separate simulator process playing several open readings at once (encoder_conformance/open_points/)
 with the customer's values stored in its memory file, reached only over the bus. One run has no power switch
 (a plain adapter), the other the bench's power commands and a shaft drive. Both must pass (exit 0) and give the
 device back as found: every value, the whole memory, and every value after a power cycle.

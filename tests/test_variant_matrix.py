@@ -1,6 +1,6 @@
 """Every reading the texts allow passes: the suites against each conformant variant of the twin.
 
-The open readings (encoder_conformance/readings/) list each point where CiA or a manual leaves a choice,
+The open readings (encoder_conformance/open_points/) list each point where CiA or a manual leaves a choice,
 with the sentence it comes from; each has a variant of the twin that plays the reading the default twin
 does not. Here every variant runs against the suite modules its point concerns, on every representative
 profile where it applies: 0 failures, and at least one test judged per run.
@@ -12,8 +12,8 @@ import re
 
 import pytest
 
+from encoder_conformance.open_points import all_readings
 from encoder_conformance.paths import SUITES_DIR
-from encoder_conformance.readings import all_readings
 from encoder_conformance.runs.variant_matrix import REPRESENTATIVE_PROFILES, format_runs, plan, run_variants
 from encoder_conformance.sim.fault_catalogue import FAULTS, TARGET_MODULES, VARIANTS
 from tests.suite_session import PARALLEL_RUNS

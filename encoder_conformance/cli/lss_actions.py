@@ -24,7 +24,7 @@ from encoder_conformance.dut.lss.lss_find import FULL_RANGE, error_text, find_re
 from encoder_conformance.dut.lss.lss_master import LssAddress, LssAnswer, LssMaster
 from encoder_conformance.errors import BusSetupError, DutLostError, LssStop
 from encoder_conformance.exit_codes import RunExit
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 REFUSED = RunExit.NON_CONFORMANT  # 1: the device answered with an error code
 NO_ANSWER = RunExit.COULD_NOT_TEST  # 69: no device answered (or no bus)

@@ -12,7 +12,7 @@ from encoder_conformance.cli.usage import positive_int
 
 
 def _cmd_readings(args: argparse.Namespace, extra: list[str]) -> int:
-    from encoder_conformance.readings import all_readings
+    from encoder_conformance.open_points import all_readings
 
     for reading in all_readings():
         print(f"{reading.point}  (variant: {reading.variant}; suites: {', '.join(reading.modules)})")

@@ -33,7 +33,7 @@ from encoder_conformance.dut.store.store_watch import StoreWatch
 from encoder_conformance.errors import BusSetupError, DutLostError
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ from encoder_conformance.dut.sdo.sdo_frames import abort_name
 from encoder_conformance.dut.store.persist import CannotPersist, StoreCommand, store_commands_for
 from encoder_conformance.errors import BusSetupError, DutLostError, UsageError
 from encoder_conformance.exit_codes import RunExit
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 STORED_BY_COMMAND = ("store_all", "store_comm", "store_app", "store_manufacturer", "manufacturer_store")
 

@@ -16,7 +16,7 @@ from encoder_conformance.dut.nmt.face import NmtFace
 from encoder_conformance.dut.sdo.face import SdoFace
 from encoder_conformance.dut.store.face import StoreFace
 from encoder_conformance.dut.tpdo.face import Tpdos
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 
 class DeviceUnderTest(DeviceLink):

@@ -11,7 +11,7 @@ from __future__ import annotations
 from encoder_conformance.cia.cia301 import RESTORE_DEFAULT_PARAMETERS, STORE_PARAMETERS
 from encoder_conformance.models.encoder.objects import HIGH_PRECISION_PRESET, EncoderObjects
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 #: quirk effects whose object a write must never reach, and why
 _QUIRK_OBJECTS: tuple[tuple[type[fx.ObjectAt], str], ...] = (

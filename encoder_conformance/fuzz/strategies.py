@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 from encoder_conformance.cia.cia301 import SDO_ABORT
 from encoder_conformance.profile import datatypes
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 Mux = tuple[int, int]
 #: CiA 301 §7.4.1 index areas in which no object can be writable: data types and the reserved area

@@ -9,7 +9,7 @@ import pytest
 from encoder_conformance.coverage import Kind
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.plugin.skips import not_selected
-from encoder_conformance.profile.model import Capabilities, DeviceProfile, EntrySpec
+from encoder_conformance.profile.schema import Capabilities, DeviceProfile, EntrySpec
 from encoder_conformance.profile.value_domain import probe_values
 
 #: fixture name -> which profile entries it is parametrised with

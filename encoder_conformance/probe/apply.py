@@ -15,7 +15,7 @@ from encoder_conformance.probe.link import upload
 from encoder_conformance.probe.no_data import holds_no_data, record_no_data
 from encoder_conformance.profile.datatypes import canonical_name, size_bytes, string_bytes
 from encoder_conformance.profile.eds.draft import flag_unchecked
-from encoder_conformance.profile.model import resolve_node_id_expression
+from encoder_conformance.profile.schema import resolve_node_id_expression
 from encoder_conformance.profile.value_domain import RESERVED_TYPES_CLAUSE
 
 #: draft todos a probe settles, by their start, with what must have been seen to settle each

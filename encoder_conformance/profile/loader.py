@@ -18,9 +18,10 @@ from pydantic import BaseModel, ValidationError
 
 from encoder_conformance.errors import ProfileError
 from encoder_conformance.paths import PROFILE_DIR
-from encoder_conformance.profile import model
+from encoder_conformance.profile import schema as profile_schema
 from encoder_conformance.profile.quirk_effects import EFFECT_MODELS
 from encoder_conformance.profile.quirks import DOCUMENTATION_ONLY
+from encoder_conformance.profile.schema import SCHEMA_VERSION, DeviceProfile
 
 if TYPE_CHECKING:
     from pydantic_core import ErrorDetails
@@ -35,7 +36,7 @@ DEFAULT_PROFILE_DIR = PROFILE_DIR
 class LoadedProfile:
     """A validated profile plus where it came from (for the report header)."""
 
-    profile: model.DeviceProfile
+    profile: DeviceProfile
     path: Path
     sha256: str
     chain: tuple[Path, ...]  # the file and every file it extends, child first
@@ -43,7 +44,7 @@ class LoadedProfile:
 
 def _all_field_names() -> set[str]:
     names: set[str] = set()
-    for obj in vars(model).values():
+    for obj in vars(profile_schema).values():
         if isinstance(obj, type) and issubclass(obj, BaseModel):
             names.update(obj.model_fields)
     for effect in EFFECT_MODELS.values():
@@ -321,19 +322,19 @@ def load_profile(name_or_path: str | Path, search_dirs: list[Path] | None = None
     path = find_profile(str(name_or_path), search_dirs)
     data, chain, _ = _resolve_raw(path, ())
     schema = data.get("schema_version")
-    if schema != model.SCHEMA_VERSION:
+    if schema != SCHEMA_VERSION:
         line = _line_map(path.read_text(encoding="utf-8")).get(("schema_version",))
         where = f"{path.name}:{line}: " if line else f"{path.name}: "
         raise ProfileError(
             str(path),
-            [f"{where}schema_version: is {schema!r}; this tool reads schema_version {model.SCHEMA_VERSION}"],
+            [f"{where}schema_version: is {schema!r}; this tool reads schema_version {SCHEMA_VERSION}"],
         )
     if data.get("id") != path.stem:
         raise ProfileError(
             str(path), [f"{path.name}: id: is {data.get('id')!r}; it must equal the file name {path.stem!r}"]
         )
     try:
-        profile = model.DeviceProfile.model_validate(data)
+        profile = DeviceProfile.model_validate(data)
     except ValidationError as exc:
         raise ProfileError(str(path), _describe(exc, chain)) from None
     digest = hashlib.sha256()

@@ -6,7 +6,7 @@ import canopen
 from canopen.objectdictionary import ODArray, ODRecord, ODVariable
 
 from encoder_conformance.profile import datatypes
-from encoder_conformance.profile.model import DeviceProfile, EntrySpec, ObjectSpec, resolve_node_id_expression
+from encoder_conformance.profile.schema import DeviceProfile, EntrySpec, ObjectSpec, resolve_node_id_expression
 
 _ACCESS_TO_EDS = {"const": "const", "ro": "ro", "wo": "wo", "rw": "rw", "rwr": "rwr", "rww": "rww"}
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from encoder_conformance.basis import Basis
 from encoder_conformance.cia.cia301 import RESERVED_TRANSMISSION_TYPES
 from encoder_conformance.profile import datatypes
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.profile.value_set import ValueSet
 
 TPDO_COMMUNICATION = range(0x1800, 0x1A00)

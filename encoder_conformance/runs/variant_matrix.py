@@ -16,10 +16,10 @@ from pathlib import Path
 
 from encoder_conformance.cia.cia301 import COB_ID_INVALID, PDO_MAPPING_OFFSET
 from encoder_conformance.exit_codes import RunExit
+from encoder_conformance.open_points import OpenReading, all_readings
 from encoder_conformance.paths import CONTENT_ROOT
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile, resolve_node_id_expression
-from encoder_conformance.readings import OpenReading, all_readings
+from encoder_conformance.profile.schema import DeviceProfile, resolve_node_id_expression
 from encoder_conformance.runs.fault_matrix import PREFLIGHT, RunResult, run_suite
 from encoder_conformance.sim.twin import overridden_methods  # imports the twin's engine when called
 

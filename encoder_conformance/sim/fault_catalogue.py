@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from encoder_conformance.readings import variant_modules, variants
+from encoder_conformance.open_points import variant_modules, variants
 from encoder_conformance.sim.hold_faults import HOLD_FAULTS
 
 #: (the suite modules a group of faults is made for, the group). The CI fault matrix runs each
@@ -351,7 +351,7 @@ PROBED_VARIANTS: dict[str, str] = {
     "empty_arrays": "an ARRAY from 2000h on with a read-only sub 0 holds as many elements as sub 0 counts: an element "
                     "above it aborts 08000024h (all of them where the EDS gave sub 0 no DefaultValue, CiA 306)",
 }
-#: conformant variants: each open reading's (encoder_conformance.readings), the abort-family and the probed ones
+#: conformant variants: each open reading's (encoder_conformance.open_points), the abort-family and the probed ones
 VARIANTS: dict[str, str] = {**variants(), **ABORT_FAMILY_VARIANTS, **PROBED_VARIANTS}
 #: every name the simulator's --fault takes
 SIMULATOR_DEVIATIONS: dict[str, str] = {**FAULTS, **VARIANTS, **{n: h.text for n, h in HOLD_FAULTS.items()}}

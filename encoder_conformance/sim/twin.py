@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 from encoder_conformance.sim.control import ControlApi
 
 if TYPE_CHECKING:
-    from encoder_conformance.profile.model import DeviceProfile
+    from encoder_conformance.profile.schema import DeviceProfile
     from encoder_conformance.sim.engine.serve import NodePlan
 
 __all__ = ["SERVE_MODULE", "InProcessTwin", "overridden_methods", "plan_nodes", "serve", "start_in_process"]

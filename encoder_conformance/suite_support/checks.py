@@ -10,8 +10,8 @@ from encoder_conformance.dut.sdo import SdoResponse, abort_name, sdo_words
 from encoder_conformance.models.timing import interval_stats, schedule_fit
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable, not_judged
-from encoder_conformance.profile.model import HeartbeatTolerance
 from encoder_conformance.profile.quirk_effects import AbortCode, P
+from encoder_conformance.profile.schema import HeartbeatTolerance
 
 
 def expected_aborts(dut: DeviceUnderTest, situation: str, evidence: Evidence) -> set[int]:

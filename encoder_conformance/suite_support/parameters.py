@@ -6,8 +6,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from encoder_conformance.profile import datatypes
-from encoder_conformance.profile.model import DeviceProfile, EntrySpec
 from encoder_conformance.profile.quirk_effects import BitrateObject, NodeIdObject
+from encoder_conformance.profile.schema import DeviceProfile, EntrySpec
 from encoder_conformance.profile.value_domain import declared_domain
 
 STORE_GROUPS = ("store_all", "store_comm", "store_app", "store_manufacturer")

@@ -20,7 +20,7 @@ from encoder_conformance.dut.link.device import TESTER_MARGIN_S
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.objects import EncoderObjects
 from encoder_conformance.models.encoder.position import unsigned_in_span
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 Key = tuple[int, int]
 

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.dut.custody.snapshot import Snapshot
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import CyclicTimerRelationUnstated
+from encoder_conformance.profile.schema import DeviceProfile
 
 Key = tuple[int, int]
 Values = dict[Key, bytes | None]

@@ -22,7 +22,7 @@ from encoder_conformance.dut.bench.reference_point import ReferencePoint, preset
 from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.sdo.patient_read import read_patiently
 from encoder_conformance.dut.store.store_watch import store_command_objects
-from encoder_conformance.profile.model import DeviceProfile, EntrySpec
+from encoder_conformance.profile.schema import DeviceProfile, EntrySpec
 
 SNAPSHOT_FILE = "device-snapshot.json"
 FORMAT = "encoder-conformance device snapshot 1"

@@ -17,8 +17,8 @@ from encoder_conformance.cia.cia301 import (
     TPDO_COMMUNICATION,
     pdo_mapping_of,
 )
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import WritesNeedScalingBit
+from encoder_conformance.profile.schema import DeviceProfile
 
 Key = tuple[int, int]
 SCALING_GATE = (0x6000, 0)  # CiA 406 operating parameters; bit 2 = scaling function control

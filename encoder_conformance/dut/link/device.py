@@ -33,8 +33,8 @@ from encoder_conformance.dut.link.frames import FrameLog, Mark, format_frames
 from encoder_conformance.dut.link.time_budget import BUDGET
 from encoder_conformance.errors import BusLostError, DutLostError, EncoderConformanceError, RunInterrupted
 from encoder_conformance.models.encoder.freeze import FreezeRule
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import SilentUntilBusTraffic
+from encoder_conformance.profile.schema import DeviceProfile
 
 #: how much later than the device owes a frame may reach this tester: bus arbitration, a busy PC, the
 #: remote twin's websocket hop. Measured on the 2-core CI machine with two runs and a busy process beside

@@ -6,7 +6,7 @@ from __future__ import annotations
 from encoder_conformance.dut.link.frames import Mark, format_frames
 from encoder_conformance.dut.lss.lss_device import LssDevice, expect_success
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import resolve_node_id_expression
+from encoder_conformance.profile.schema import resolve_node_id_expression
 
 SWITCH_DELAY_MS = 100
 

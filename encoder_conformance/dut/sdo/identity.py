@@ -8,7 +8,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.sdo.patient_read import read_patiently
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 #: what a device without a serial number reads (SIKO WV58M manual p.37-38: 650Bh = FFFFFFFFh "not supported")
 NO_SERIAL = (0, 0xFFFFFFFF)

@@ -15,7 +15,7 @@ from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.errors import CannotPersist
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 __all__ = ["SAVE", "STORE_SUB", "CannotPersist", "StoreCommand", "persist_entry", "store_commands_for"]
 

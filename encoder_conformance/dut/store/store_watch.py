@@ -22,12 +22,12 @@ from encoder_conformance.cia.cia301 import (
 )
 from encoder_conformance.cia.cia305 import MASTER_COB_ID as LSS_MASTER_COB_ID
 from encoder_conformance.cia.cia305 import LssCommand
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import (
     LssConfigAutoStored,
     ManufacturerStoreObject,
     StoreRebootsWithoutReply,
 )
+from encoder_conformance.profile.schema import DeviceProfile
 
 #: SDO client command specifiers that start a download (CiA 301 §7.2.4.3): initiate, block initiate
 _DOWNLOAD_INITIATE = {SdoClientCommand.INITIATE_DOWNLOAD, SdoClientCommand.BLOCK_DOWNLOAD}

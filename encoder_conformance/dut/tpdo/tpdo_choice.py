@@ -13,7 +13,7 @@ from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.errors import NoUsableTpdo
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import resolve_node_id_expression
+from encoder_conformance.profile.schema import resolve_node_id_expression
 from encoder_conformance.profile.value_domain import declared_domain
 
 

@@ -17,7 +17,7 @@ from encoder_conformance.dut.tpdo.tpdo import TpdoParameters
 from encoder_conformance.dut.tpdo.tpdo_choice import TpdoChoice
 from encoder_conformance.dut.tpdo.tpdo_while_invalid import WhileInvalid
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 
 @dataclass

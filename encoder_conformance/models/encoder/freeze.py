@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 SCALING_BIT_SET = 0x04  # 6000h bit 2: the manual gives the scaling switch its own duration
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 #: CiA 406 CAM and work-area objects (channel n at sub-index n)
 CAM_STATE, CAM_ENABLE, CAM_POLARITY = 0x6300, 0x6301, 0x6302

@@ -25,7 +25,7 @@ from encoder_conformance.models.encoder.position import (
     signed_half_range,
 )
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 #: reads an integer entry (index, sub) as the device's data type gives it; None where it does not exist
 Reader = Callable[[int, int], "int | None"]

@@ -11,7 +11,7 @@ import canopen
 from canopen.objectdictionary import ODVariable
 from canopen.objectdictionary import eds as canopen_eds
 
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 
 logger = logging.getLogger(__name__)
 

@@ -15,7 +15,7 @@ from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.eds.ini_text import CleanedEds
 from encoder_conformance.profile.eds.numbers import _ACCESS_ALIASES, parse_number
 from encoder_conformance.profile.eds.repair import clean_eds
-from encoder_conformance.profile.model import is_node_id_expression
+from encoder_conformance.profile.schema import is_node_id_expression
 
 logger = logging.getLogger(__name__)
 

@@ -21,7 +21,7 @@ from encoder_conformance.cia.cia301 import (
 from encoder_conformance.cia.cia301 import SdoAbortCode as Abort
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.profile.value_domain import declared_domain, refusal_basis
 from encoder_conformance.profile.value_set import ValueSet
 from encoder_conformance.sim.engine.faults import breaks

@@ -27,7 +27,7 @@ from encoder_conformance.models.encoder.settings import EncoderDescription, Enco
 from encoder_conformance.models.encoder.speed import speed_value
 from encoder_conformance.models.encoder.work_area import ABOVE, BELOW
 from encoder_conformance.profile import datatypes
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.faults import breaks
 from encoder_conformance.sim.engine.nvm import Key, NonVolatileMemory
 from encoder_conformance.sim.engine.object_store import ObjectStore

@@ -23,8 +23,8 @@ import can
 from can.interfaces.virtual import VirtualBus, channels_lock
 
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import SecondNode
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.faults import FaultSet
 from encoder_conformance.sim.engine.node import SimulatedNode
 from encoder_conformance.sim.engine.scheduler import DeadlineScheduler

@@ -17,7 +17,7 @@ from collections.abc import Callable
 from encoder_conformance.cia.cia301 import NmtState
 from encoder_conformance.cia.cia305 import AUTO_BIT_RATE_INDEX, MAX_NODE_ID, SLAVE_COB_ID
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile, resolve_node_id_expression
+from encoder_conformance.profile.schema import DeviceProfile, resolve_node_id_expression
 from encoder_conformance.sim.engine.faults import FaultSet, assemble, breaks
 from encoder_conformance.sim.engine.hooks import NodeHooks, ReloadEvent
 from encoder_conformance.sim.engine.lss_configuration import LssConfiguration

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from encoder_conformance.cia.cia305 import MAX_NODE_ID, UNCONFIGURED_NODE_ID
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.faults import breaks
 from encoder_conformance.sim.engine.hooks import ReloadEvent
 from encoder_conformance.sim.engine.nvm import Key, NonVolatileMemory

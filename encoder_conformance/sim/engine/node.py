@@ -22,8 +22,8 @@ import can
 from encoder_conformance.cia import cia301, cia305  # by module: sim/engine/node.py stays within 400 lines
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.datatypes import as_signed
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.od_builder import initial_value
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine import sdo_fuzz_faults, sdo_short_frames, tpdo_sync_cycle  # noqa: F401  (register the SDO fuzzing faults, the short-frame variants, a TPDO variant)
 from encoder_conformance.sim.engine.access import ObjectAccess, situation_codes
 from encoder_conformance.sim.engine.autostart import Autostart

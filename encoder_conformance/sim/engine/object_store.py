@@ -9,9 +9,9 @@ from canopen.objectdictionary import ODVariable
 
 from encoder_conformance.cia.cia301 import TPDO_MAPPING
 from encoder_conformance.profile import datatypes
-from encoder_conformance.profile.model import DeviceProfile, EntrySpec, resolve_node_id_expression
 from encoder_conformance.profile.od_builder import build_object_dictionary, initial_value
 from encoder_conformance.profile.quirk_effects import RestoreExcludes
+from encoder_conformance.profile.schema import DeviceProfile, EntrySpec, resolve_node_id_expression
 from encoder_conformance.sim.engine.faults import breaks
 from encoder_conformance.sim.engine.nvm import Key, NonVolatileMemory
 

@@ -25,8 +25,8 @@ from encoder_conformance.cia.cia301 import (
     SdoAbortCode,
     mapping_fields,
 )
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import MappingChangeWhileValid
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.faults import breaks
 from encoder_conformance.sim.engine.hooks import NodeHooks, Value
 from encoder_conformance.sim.engine.nvm import Key

@@ -255,7 +255,7 @@ class BlockEndSizeIgnored(BlockEngine):
         return 0
 
 
-# -- conformant variants (encoder_conformance/readings/sdo.py) ----------------------------------------------------
+# -- conformant variants (encoder_conformance/open_points/sdo.py) ----------------------------------------------------
 @breaks(BlockEngine, "slow_subblock_timeout")
 class SlowSubblockTimeout(BlockEngine):
     """A download segment out of sequence is ignored; a sub-block left incomplete is acknowledged (ackseq: the

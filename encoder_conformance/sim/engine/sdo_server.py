@@ -216,7 +216,7 @@ class SdoServer:
         return bytes([command]) + chunk.ljust(7, b"\x00")
 
 
-# -- conformant variants (encoder_conformance/readings/sdo.py) ----------------------------------------------------
+# -- conformant variants (encoder_conformance/open_points/sdo.py) ----------------------------------------------------
 def _interrupts(server: SdoServer, request: bytes) -> bool:
     """An initiate request (expedited or segmented up/download) while a segmented transfer is open."""
     return len(request) == 8 and request[0] >> 5 in (1, 2) and server._transfer is not None

@@ -1,7 +1,7 @@
 """What the twin's SDO server does with a request frame under 8 bytes, beyond ignoring it (the default twin).
 
 CiA 301 draws every SDO frame with 8 data bytes and gives no rule for a shorter one (open readings sdo-short-frame
-and sdo-short-frame-served, ``encoder_conformance/readings/sdo.py``): these conformant variants refuse it, or serve
+and sdo-short-frame-served, ``encoder_conformance/open_points/sdo.py``): these conformant variants refuse it, or serve
 it where its bytes carry the request. One fault beside them: a segmented download's last segment confirmed before
 the write is checked, so a refused one draws two answers.
 """

@@ -24,8 +24,8 @@ import can
 
 from encoder_conformance.cia.cia305 import MAX_NODE_ID, UNCONFIGURED_NODE_ID
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.profile.model import DeviceProfile
 from encoder_conformance.profile.quirk_effects import SecondNode
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.control import parse_address
 from encoder_conformance.sim.engine.control_server import serve_control
 from encoder_conformance.sim.engine.faults import FaultSet

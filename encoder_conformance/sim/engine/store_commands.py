@@ -14,7 +14,7 @@ from typing import Any
 
 from encoder_conformance.cia.cia301 import LOAD_SIGNATURE, SAVE_SIGNATURE
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.profile.model import DeviceProfile
+from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.faults import breaks
 from encoder_conformance.sim.engine.hooks import NodeHooks
 from encoder_conformance.sim.engine.nvm import Key, NonVolatileMemory

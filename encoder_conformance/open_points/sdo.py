@@ -8,7 +8,7 @@ numbers agree with other public citations of CiA 301 v4.2.0 but were not seen in
 
 from __future__ import annotations
 
-from encoder_conformance.readings.model import OpenReading
+from encoder_conformance.open_points.record import OpenReading
 
 SDO_PROTOCOL = ("test_sdo_protocol", "test_sdo_fuzz")
 ABORT_ANY_TIME = ('CiA 301 v4.2.0 §7.2.4.2 (SDO services), abort SDO transfer: the client and the server of an SDO '

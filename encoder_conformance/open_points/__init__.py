@@ -12,8 +12,8 @@ gathers them. Data only: the plugin, the command line and the simulator import i
 
 from __future__ import annotations
 
-from encoder_conformance.readings import errors, lss, nmt, pdo, sdo
-from encoder_conformance.readings.model import OpenReading
+from encoder_conformance.open_points import errors, lss, nmt, pdo, sdo
+from encoder_conformance.open_points.record import OpenReading
 
 __all__ = ["OpenReading", "all_readings", "variant_modules", "variants"]
 

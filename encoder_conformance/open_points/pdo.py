@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from encoder_conformance.readings.model import OpenReading
+from encoder_conformance.open_points.record import OpenReading
 
 READINGS: list[OpenReading] = [
     OpenReading(

@@ -9,7 +9,7 @@ text itself.
 
 from __future__ import annotations
 
-from encoder_conformance.readings.model import OpenReading
+from encoder_conformance.open_points.record import OpenReading
 
 ERROR_BEHAVIOUR = ('CiA 301 v4.2.0, object 1029h (error behaviour, §7.5.2.32): a serious device failure in '
                    'operational, such as a communication error, sends the device to pre-operational by default; '

@@ -10,7 +10,7 @@ technical manual, "M") is German; its sentences are quoted with a translation.
 
 from __future__ import annotations
 
-from encoder_conformance.readings.model import OpenReading
+from encoder_conformance.open_points.record import OpenReading
 
 LSS = ("test_lss",)
 #: the WDGA sentence both node-ID points come from (M §8.2.4, after store configuration and switch state global 0)
