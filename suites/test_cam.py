@@ -40,8 +40,7 @@ from encoder_conformance.models.encoder.cam import Cam
 from encoder_conformance.models.encoder.position import units_per_rev
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable, skip_text
-from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import (
+from encoder_conformance.plugin.suite_helpers import (
     CHANNEL,
     WINDOW_RULE,
     CamChannel,
@@ -50,6 +49,7 @@ from encoder_conformance.suite_support import (
     abort_accepted,
     cam_names,
 )
+from encoder_conformance.profile import quirk_effects as fx
 
 # the position is put by preset (capability preset), so the tests run on a bench without a motor
 pytestmark = [pytest.mark.spec("CiA 406 6300h-6337h (CAM)"), pytest.mark.requires("cam", "preset"),

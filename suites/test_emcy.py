@@ -3,9 +3,9 @@ register bit 0 (1001h), the error-reset EMCY, the NMT states that allow EMCY, an
 RPDOs offers (a SYNC of the wrong length, a heartbeat-consumer time-out). The error history 1003h:
 test_emcy_history.py.
 
-Errors come from a trigger the bench and the device offer (suite_support/emcy.py: the bench's error stimulus, else the
-bus triggers). A bench run adds entries to the device's error history (1003h) with each error; clearing them needs
-the clear (1003h sub 0 = 0), which only test_emcy_history's clearing test sends. Settings the tests change (1014h,
+Errors come from a trigger the bench and the device offer (plugin/suite_helpers/emcy.py: the bench's error stimulus,
+else the bus triggers). A bench run adds entries to the device's error history (1003h) with each error; clearing them
+needs the clear (1003h sub 0 = 0), which only test_emcy_history's clearing test sends. Settings the tests change (1014h,
 1015h, 1019h, 1016h) are put back afterwards (on a SIKO each write of 1014h is stored by the device itself); an error
 still active after a test (a bus trigger's) is cleared by NMT reset communication (fixtures/emcy.py), so that no
 later test inherits it (a device may hold a communication error out of operational).
@@ -33,8 +33,8 @@ from encoder_conformance.dut.emcy import HeartbeatTimeout, SyncLengthError, emcy
 from encoder_conformance.dut.link import LatencyProbe, format_frames
 from encoder_conformance.dut.nmt import raise_if_held_by_error
 from encoder_conformance.plugin.skips import not_applicable, not_judged
+from encoder_conformance.plugin.suite_helpers import inconclusive_if_host_late
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import inconclusive_if_host_late
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.7 (EMCY)"), pytest.mark.requires("emcy")]
 

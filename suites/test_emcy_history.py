@@ -17,8 +17,8 @@ from encoder_conformance.cia.cia301 import ERROR_HISTORY, SdoAbortCode
 from encoder_conformance.dut.emcy import BENCH_OTHER_CODE, BenchError
 from encoder_conformance.dut.sdo import abort_name, sdo_frames
 from encoder_conformance.plugin.skips import not_applicable
+from encoder_conformance.plugin.suite_helpers import abort_accepted
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import abort_accepted
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2 object 1003h (pre-defined error field)"), pytest.mark.requires("emcy")]
 

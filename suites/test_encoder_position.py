@@ -21,8 +21,8 @@ from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.position import position_limits, units_per_rev, unsigned_in_span
 from encoder_conformance.plugin.options import settings_of
 from encoder_conformance.plugin.skips import not_applicable, not_equipped
+from encoder_conformance.plugin.suite_helpers import documented_quirk
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import documented_quirk
 
 pytestmark = [pytest.mark.spec("CiA 406 §6 (6000h-6004h, 6500h, 6509h)"), pytest.mark.requires("encoder")]
 

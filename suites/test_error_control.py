@@ -10,8 +10,8 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.plugin.suite_helpers import assert_abort, documented_quirk
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import assert_abort, documented_quirk
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.8.3.1 (error control); profile quirk guarding_heartbeat_exclusive"),
               pytest.mark.requires("node_guarding"), pytest.mark.requires("heartbeat_producer")]

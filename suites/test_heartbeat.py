@@ -6,7 +6,7 @@ import pytest
 
 from encoder_conformance.cia.cia301 import HEARTBEAT_BASE
 from encoder_conformance.dut.link import format_frames
-from encoder_conformance.suite_support import judge_stream
+from encoder_conformance.plugin.suite_helpers import judge_stream
 
 pytestmark = [
     pytest.mark.spec("CiA 301 §7.2.8.3.2.2 (heartbeat protocol)"),

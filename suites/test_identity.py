@@ -6,8 +6,8 @@ import pytest
 
 from encoder_conformance.dut.sdo import NO_SERIAL, read_identity, serial_650b_key
 from encoder_conformance.plugin.skips import not_applicable, not_selected
+from encoder_conformance.plugin.suite_helpers import describe_value
 from encoder_conformance.profile import datatypes
-from encoder_conformance.suite_support import describe_value
 
 pytestmark = pytest.mark.spec("CiA 301 §7.5.2")
 

@@ -40,8 +40,8 @@ from encoder_conformance.dut.lss import (
     stored_node_id_survives_power_cycle,
 )
 from encoder_conformance.plugin.skips import not_applicable, not_equipped
+from encoder_conformance.plugin.suite_helpers import destructive_if_self_stored, documented_quirk, require_service
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import destructive_if_self_stored, documented_quirk, require_service
 
 pytestmark = pytest.mark.spec(cia305.CIA305)
 #: the WDGA manual's "new boot-up" after LSS changes (M §8.2.4): open readings lss-node-id-activation and

@@ -11,9 +11,10 @@ from __future__ import annotations
 import pytest
 
 from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.store import changeable_parameter, other_valid_value
 from encoder_conformance.plugin.skips import not_applicable
+from encoder_conformance.plugin.suite_helpers import documented_quirk
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import changeable_parameter, documented_quirk, other_valid_value
 
 pytestmark = [pytest.mark.spec("manufacturer store commands (profile quirks store_reboots_without_reply, "
                                 "manufacturer_store_object)"),

@@ -16,11 +16,11 @@ from encoder_conformance.dut.nmt import (
     settled_state,
 )
 from encoder_conformance.dut.sdo import sdo_frames
-from encoder_conformance.dut.store import CannotPersist
+from encoder_conformance.dut.store import STORE_GROUPS, CannotPersist, changeable_parameter, other_valid_value
 from encoder_conformance.dut.tpdo import TpdoUnderTest, pdo_stimulus
 from encoder_conformance.plugin.skips import not_applicable
+from encoder_conformance.plugin.suite_helpers import documented_quirk
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import STORE_GROUPS, changeable_parameter, documented_quirk, other_valid_value
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2 (NMT state machine)")
 

@@ -51,11 +51,11 @@ from encoder_conformance.dut.custody import SettingsJournal
 from encoder_conformance.dut.link import Mark, format_frames
 from encoder_conformance.dut.nmt import HeartbeatObserver, describe, newest_state, raise_if_held_by_error, settled_state
 from encoder_conformance.dut.sdo import upload_request
+from encoder_conformance.dut.store import STORE_GROUPS, changeable_parameter
 from encoder_conformance.models.nmt import NmtModel, Tracked
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
-from encoder_conformance.suite_support import STORE_GROUPS, changeable_parameter
 
 pytestmark = pytest.mark.spec("CiA 301 §7.3.2.2 (NMT state diagram, services per state, initialisation)")
 

@@ -11,10 +11,10 @@ from canopen.sdo.exceptions import SdoAbortedError
 from encoder_conformance.cia.cia301 import ERROR_HISTORY, SdoAbortCode
 from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.plugin.skips import not_applicable
+from encoder_conformance.plugin.suite_helpers import assert_abort, describe_value, expected_aborts
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.schema import resolve_node_id_expression
-from encoder_conformance.suite_support import assert_abort, describe_value, expected_aborts
 
 pytestmark = pytest.mark.spec("CiA 301 §7.4, §7.2.4.3.17")
 

@@ -13,8 +13,8 @@ import pytest
 
 from encoder_conformance.dut.link import format_frames
 from encoder_conformance.dut.tpdo import pdo_stimulus
+from encoder_conformance.plugin.suite_helpers import documented_quirk, tpdo_under_test
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import documented_quirk, tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]

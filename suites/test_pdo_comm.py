@@ -36,9 +36,9 @@ from encoder_conformance.dut.link import answer_window, format_frames, received_
 from encoder_conformance.dut.sdo import abort_name, sdo_frames
 from encoder_conformance.dut.tpdo import TpdoUnderTest, fixed_behaviour_tpdos
 from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
+from encoder_conformance.plugin.suite_helpers import abort_accepted, expected_aborts, tpdo_under_test
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
-from encoder_conformance.suite_support import abort_accepted, expected_aborts, tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.37 (TPDO communication parameter)"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]

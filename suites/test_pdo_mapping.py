@@ -42,9 +42,9 @@ from encoder_conformance.dut.tpdo import (
 )
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable, not_judged, skip_text
+from encoder_conformance.plugin.suite_helpers import assert_abort, documented_quirk, expected_aborts
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import assert_abort, documented_quirk, expected_aborts
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.38 (TPDO mapping)"), pytest.mark.requires("tpdos")]
 

@@ -13,8 +13,8 @@ from encoder_conformance.cia.cia301 import COB_ID_INVALID, can_id_of, cob_id_val
 from encoder_conformance.dut.link import Mark, format_frames, received_on
 from encoder_conformance.dut.tpdo import TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable, not_equipped
+from encoder_conformance.plugin.suite_helpers import documented_quirk
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import documented_quirk
 
 RESET_EVENTS = {"reset-node": "nmt_81h", "reset-communication": "nmt_82h"}
 

@@ -22,7 +22,7 @@ from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.link import LatencyProbe, format_frames
 from encoder_conformance.dut.tpdo import NoUsableTpdo, TpdoUnderTest
 from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
-from encoder_conformance.suite_support import inconclusive_if_host_late, judge_stream, tpdo_under_test
+from encoder_conformance.plugin.suite_helpers import inconclusive_if_host_late, judge_stream, tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.2.2.2 (PDO transmission), §7.5.2.37"), pytest.mark.requires("tpdos"),
               pytest.mark.usefixtures("no_error_left")]

@@ -20,9 +20,9 @@ import pytest
 from encoder_conformance.cia.cia301 import SdoAbortCode, block_crc
 from encoder_conformance.dut.sdo import SdoProtocolClient
 from encoder_conformance.plugin.skips import not_applicable
+from encoder_conformance.plugin.suite_helpers import judge_refusal
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import judge_refusal
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3.9-16 (SDO block transfer)")
 

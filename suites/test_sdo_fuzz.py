@@ -29,7 +29,7 @@ from encoder_conformance.fuzz import exclusions, replay, rounds
 from encoder_conformance.fuzz import strategies as fz
 from encoder_conformance.fuzz.runner import Failure, FuzzRunner
 from encoder_conformance.fuzz.watch import EMCY_RULE, DeviceWatch
-from encoder_conformance.suite_support import abort_accepted
+from encoder_conformance.plugin.suite_helpers import abort_accepted
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocol)")
 

@@ -17,8 +17,8 @@ from encoder_conformance.coverage import Hold
 from encoder_conformance.dut.link import SdoAborted
 from encoder_conformance.dut.sdo import SdoProtocolClient, SdoResponse, abort_name, echoes, upload_request
 from encoder_conformance.plugin.skips import not_applicable, not_judged
+from encoder_conformance.plugin.suite_helpers import assert_one_answer, expected_aborts, judge_refusal
 from encoder_conformance.profile import datatypes
-from encoder_conformance.suite_support import assert_one_answer, expected_aborts, judge_refusal
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3 (SDO protocols)")
 

@@ -6,17 +6,10 @@ import pytest
 
 from encoder_conformance.cia.cia301 import LOAD, SAVE
 from encoder_conformance.dut.sdo import sdo_frames
-from encoder_conformance.dut.store import CannotPersist
+from encoder_conformance.dut.store import STORE_GROUPS, CannotPersist, changeable_parameter, other_valid_value
 from encoder_conformance.plugin.skips import not_applicable
+from encoder_conformance.plugin.suite_helpers import assert_abort, documented_quirk, expected_aborts
 from encoder_conformance.profile import quirk_effects as fx
-from encoder_conformance.suite_support import (
-    STORE_GROUPS,
-    assert_abort,
-    changeable_parameter,
-    documented_quirk,
-    expected_aborts,
-    other_valid_value,
-)
 
 pytestmark = [pytest.mark.spec("CiA 301 §7.5.2.13/§7.5.2.14"), pytest.mark.destructive]
 

@@ -29,9 +29,9 @@ from encoder_conformance.cia.cia301 import (
 from encoder_conformance.dut.link import format_frames, received_on
 from encoder_conformance.dut.sdo import SdoResponse, abort_name, sdo_frames
 from encoder_conformance.plugin.skips import not_applicable
+from encoder_conformance.plugin.suite_helpers import abort_accepted, tpdo_under_test
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain
-from encoder_conformance.suite_support import abort_accepted, tpdo_under_test
 
 pytestmark = [pytest.mark.spec("CiA 301 v4.2.0 §7.5.2.5 object 1005h (COB-ID SYNC)"),
               pytest.mark.requires("sync_consumer"), pytest.mark.usefixtures("no_error_left")]

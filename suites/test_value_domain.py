@@ -16,10 +16,10 @@ from canopen.sdo.exceptions import SdoAbortedError
 from encoder_conformance.cia.cia301 import SdoAbortCode
 from encoder_conformance.dut.sdo import sdo_frames
 from encoder_conformance.plugin.skips import skip_text
+from encoder_conformance.plugin.suite_helpers import abort_accepted, assert_abort, describe_value, expected_aborts
 from encoder_conformance.profile import datatypes
 from encoder_conformance.profile import quirk_effects as fx
 from encoder_conformance.profile.value_domain import declared_domain, probe_values, refusal_basis
-from encoder_conformance.suite_support import abort_accepted, assert_abort, describe_value, expected_aborts
 
 pytestmark = pytest.mark.spec("CiA 301 §7.2.4.3.17 (abort codes 06090030h..06090032h)")
 

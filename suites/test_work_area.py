@@ -14,7 +14,7 @@ import pytest
 from encoder_conformance.dut.bench import EncoderBench
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import not_applicable
-from encoder_conformance.suite_support import WorkArea
+from encoder_conformance.plugin.suite_helpers import WorkArea
 
 # the position is put by preset (capability preset), so the tests run on a bench without a motor
 pytestmark = [pytest.mark.spec("CiA 406 6400h-6402h (work area)"), pytest.mark.requires("work_area", "preset"),

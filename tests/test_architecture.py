@@ -208,7 +208,6 @@ LAYERS: list[set[str]] = [
     {"models", "open_points"},
     {"dut", "sim", "history"},
     {"fuzz", "plugin", "probe"},
-    {"suite_support"},
     {"runs"},
     {"cli"},
 ]
@@ -399,9 +398,15 @@ def test_the_error_picture_names_every_class():
     assert {name for name in drawn - defined if not hasattr(builtins, name)} == set()
 
 
+#: the suites' helpers that need pytest or the evidence (formerly suite_support/): a face, as dut's packages have
+SUITE_HELPERS = LIBRARY / "plugin" / "suite_helpers"
+#: the packages a suite imports through their faces only
+FACED = ("encoder_conformance.dut", "encoder_conformance.plugin.suite_helpers")
+
+
 def test_hooks_live_in_the_plugin_and_fixture_modules_hold_fixtures():
     """No pytest hook in conftest.py, fixtures/ or suites/ (the plugin's hooks.py is the hub); a fixture module
-    defines fixtures and private helpers only (device-handling classes live in dut/ or suite_support/)."""
+    defines fixtures and private helpers only (device-handling classes live in dut/ or plugin/suite_helpers/)."""
     misplaced = []
     for path in [REPO / "conftest.py", *(REPO / "fixtures").glob("*.py"), *(REPO / "suites").glob("*.py")]:
         tree = ast.parse(path.read_text(encoding="utf-8"))
@@ -419,7 +424,7 @@ def test_hooks_live_in_the_plugin_and_fixture_modules_hold_fixtures():
 
 
 def test_suites_and_fixtures_do_not_import_fixture_modules():
-    """Suites get their helpers from the package (dut/, suite_support/), which works wherever it is installed."""
+    """Suites get their helpers from the package (dut/, plugin/suite_helpers/), which works wherever it is installed."""
     offenders = [str(path.relative_to(REPO)) for folder in ("suites", "fixtures")
                  for path in (REPO / folder).glob("*.py")
                  if any(i == "fixtures" or i.startswith(("fixtures.", "encoder_conformance.plugin.fixtures"))
@@ -431,7 +436,7 @@ def test_suites_skip_only_with_a_typed_reason():
     """A test ends without a verdict only through plugin/skips.py (a scope kind or a coverage.Hold): a bare
     ``pytest.skip`` in the suites, fixtures or the suites' helpers would be an untyped reason."""
     bare = []
-    for folder in (REPO / "suites", REPO / "fixtures", LIBRARY / "suite_support", LIBRARY / "dut"):
+    for folder in (REPO / "suites", REPO / "fixtures", SUITE_HELPERS, LIBRARY / "dut"):
         for path in folder.rglob("*.py"):
             for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
                 if isinstance(node, ast.Call) and ast.unparse(node.func) in ("pytest.skip", "skip"):
@@ -460,7 +465,7 @@ def test_nmt_states_are_entered_in_one_place():
     """Suites, fixtures and the DUT layer enter an NMT state through ``dut.nmt.transition`` (dut/nmt/nmt_states.py),
     which sees it there."""
     found = []
-    for folder in (REPO / "suites", REPO / "fixtures", LIBRARY / "dut", LIBRARY / "suite_support"):
+    for folder in (REPO / "suites", REPO / "fixtures", LIBRARY / "dut", SUITE_HELPERS):
         for path in folder.rglob("*.py"):
             where = path.relative_to(REPO).as_posix()
             if where != NMT_HOME and where not in NMT_STATE_COMMANDS_ALSO_IN:
@@ -498,11 +503,11 @@ def test_nmt_commands_are_sent_only_through_dut_nmt():
 
 
 def _faces() -> dict[str, set[str]]:
-    """Each package of dut/ (and dut itself, and suite_support/), and the names its face exports: its ``__init__``'s
-    names, and its modules."""
+    """Each package of dut/ (and dut itself, and plugin/suite_helpers/), and the names its face exports: its
+    ``__init__``'s names, and its modules."""
     from encoder_conformance.dut.face_exports import face_names
 
-    packages = [LIBRARY / "dut", LIBRARY / "suite_support",
+    packages = [LIBRARY / "dut", SUITE_HELPERS,
                 *(p.parent for p in (LIBRARY / "dut").glob("*/__init__.py"))]
     return {_module_name(p): set(face_names(str(p / "__init__.py"))) | {m.stem for m in p.glob("*.py")}
             for p in packages}
@@ -510,17 +515,15 @@ def _faces() -> dict[str, set[str]]:
 
 def test_suites_import_only_the_faces_of_dut():
     """A suite imports from ``encoder_conformance.dut`` or one of its packages (``dut.nmt``, ``dut.tpdo``, ...), and
-    from ``suite_support``, the names its face exports, never a module inside a package: what a test uses has one
-    address per protocol."""
+    from ``plugin.suite_helpers`` (the helpers that need pytest or the evidence), the names its face exports, never a
+    module inside a package: what a test uses has one address per protocol."""
     faces = _faces()
     found = []
     for path in (REPO / "suites").glob("*.py"):
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.Import):
-                found += [f"{path.name}: import {a.name}" for a in node.names if a.name.startswith(
-                    ("encoder_conformance.dut", "encoder_conformance.suite_support"))]
-            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith(
-                    ("encoder_conformance.dut", "encoder_conformance.suite_support")):
+                found += [f"{path.name}: import {a.name}" for a in node.names if a.name.startswith(FACED)]
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith(FACED):
                 module = node.module or ""
                 if module not in faces:
                     found.append(f"{path.name}: from {module}")

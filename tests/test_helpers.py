@@ -12,11 +12,11 @@ import pytest
 
 from encoder_conformance.dut.link.frames import FrameLog, format_frames
 from encoder_conformance.dut.sdo import sdo_frames
+from encoder_conformance.dut.store.changeable import STORE_GROUPS, changeable_parameter
 from encoder_conformance.models.timing import interval_stats
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.schema import HeartbeatTolerance
 from encoder_conformance.sim.engine.nvm import NonVolatileMemory
-from encoder_conformance.suite_support.parameters import STORE_GROUPS, changeable_parameter
 
 MINIMAL = Path(__file__).resolve().parent / "data" / "profiles" / "minimal-encoder.yaml"
 

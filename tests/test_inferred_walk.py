@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from encoder_conformance import suite_support
 from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
+from encoder_conformance.plugin import suite_helpers
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
 from encoder_conformance.run_summary import RunSummary
 from encoder_conformance.runs.suite_runner import run_pytest
@@ -28,7 +28,7 @@ from tests.suite_session import PARALLEL_RUNS
 
 PROFILE = "wachendorff-wdga-mt"
 #: the suites' helpers beside their modules (a basis chosen there counts as the suites')
-SUITE_SUPPORT_DIR = Path(suite_support.__file__).parent
+SUITE_HELPERS_DIR = Path(suite_helpers.__file__).parent
 #: faults whose tests need what the WDGA lacks (a writable 1019h)
 PROFILE_OF = {"sync_length_unchecked": "tests/data/profiles/cia406-full-pdo.yaml",
               "sync_length_error_silent": "tests/data/profiles/cia406-full-pdo.yaml"}
@@ -41,7 +41,7 @@ NO_INFERRED_ASSERTION = {
 }
 #: the places that take a verdict's basis from data at run time, and the test the walk covers through each
 DYNAMIC_BASIS = {
-    "cam::Findings": "CAM checks (suite_support/cam.py): the inferred cams are recorded problems (walked by "
+    "cam::Findings": "CAM checks (plugin/suite_helpers/cam.py): the inferred cams are recorded problems (walked by "
                      "cam_edge_off_by_one)",
     "test_emcy::_bus_trigger": "test_emcy::test_emcy_on_sync_length",
 }
@@ -127,9 +127,10 @@ def _declares(node: ast.AST, tops: dict[str, ast.AST], seen: tuple[str, ...] = (
 
 def _declaring_tests() -> tuple[set[str], set[str]]:
     """(tests resting on a literal "inferred", directly or through a helper of their module; the top-level
-    functions and classes, of the suites and of suite_support/, that pass a basis taken from data at run time)."""
+    functions and classes, of the suites and of plugin/suite_helpers/, that pass a basis taken from data at run
+    time)."""
     tests, dynamic = set(), set()
-    for path in [*sorted(SUITES_DIR.glob("test_*.py")), *sorted(SUITE_SUPPORT_DIR.glob("*.py"))]:
+    for path in [*sorted(SUITES_DIR.glob("test_*.py")), *sorted(SUITE_HELPERS_DIR.glob("*.py"))]:
         tree = ast.parse(path.read_text(encoding="utf-8"))
         tops: dict[str, ast.AST] = {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef | ast.ClassDef)}
         for name, node in tops.items():

@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 from encoder_conformance.dut.link.latency_probe import HostLatency, LatencyProbe
 from encoder_conformance.models.timing import percentile, schedule_fit
 from encoder_conformance.plugin.evidence import Evidence
+from encoder_conformance.plugin.suite_helpers.checks import check_periodic
 from encoder_conformance.profile.schema import HeartbeatTolerance
-from encoder_conformance.suite_support.checks import check_periodic
 
 PERIOD_MS = 50.0
 _SVG = "{http://www.w3.org/2000/svg}"

@@ -9,13 +9,13 @@ import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 from pydantic import ValidationError
 
+from encoder_conformance.dut.store.changeable import changeable_parameter, other_valid_value
 from encoder_conformance.errors import ProfileError
 from encoder_conformance.profile.eds import export_eds
 from encoder_conformance.profile.loader import deep_merge, load_profile
 from encoder_conformance.profile.schema import EntrySpec, ObjectSpec
 from encoder_conformance.profile.value_domain import declared_domain, probe_values
 from encoder_conformance.profile.value_set import ValueSet
-from encoder_conformance.suite_support.parameters import changeable_parameter, other_valid_value
 from tests import sim_rig
 from tests.sim_rig import MINIMAL
 

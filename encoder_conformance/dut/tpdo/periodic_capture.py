@@ -2,7 +2,7 @@
 
 Each period test needs >= 50 intervals (2.5 s at 50 ms); measured one after the other they were
 the two longest tests of every run. Here both streams are set up together, captured once, and each
-test judges its own stream (``suite_support/periodic.py``). The streams stay independent: a TPDO that cannot be
+test judges its own stream (``plugin/suite_helpers/periodic.py``). The streams stay independent: a TPDO that cannot be
 configured does not touch the heartbeat verdict, and the other way round. The capture owns its preconditions: no
 error active before it starts (an earlier test's, e.g. an EMCY trigger's: NMT reset communication clears it, noted
 in both streams), and operational seen in the heartbeat's state byte before the TPDO stream is counted (a device

@@ -8,8 +8,8 @@ import pytest
 from encoder_conformance.dut.tpdo import PeriodicCapture, PeriodicStream
 from encoder_conformance.plugin.evidence import Evidence
 from encoder_conformance.plugin.skips import skip_text
+from encoder_conformance.plugin.suite_helpers.checks import check_periodic
 from encoder_conformance.profile.schema import HeartbeatTolerance
-from encoder_conformance.suite_support.checks import check_periodic
 
 
 def replay(stream: PeriodicStream, evidence: Evidence) -> None:
