@@ -84,7 +84,7 @@ def test_switch_selective_only_own_address(lss: LssDevice):
 def test_inquire_identity_equals_1018h(lss: LssDevice):
     """Inquire vendor-ID, product code, revision and serial number (5Ah-5Dh) answer 1018h sub 1..4."""
     require_service(lss, "inquire_identity")
-    assert lss.select()
+    lss.transition("configuration")
     found = lss.master.inquire_address()
     assert found == lss.address, f"inquired {found.describe() if found else 'no answer'}, 1018h holds " \
                                  f"{lss.address.describe()}"
@@ -95,7 +95,7 @@ def test_inquire_identity_equals_1018h(lss: LssDevice):
 def test_configuration_services_not_answered_in_waiting_state(lss: LssDevice, service: str):
     """Configure and inquire services belong to the configuration state: unanswered in the waiting state."""
     require_service(lss, service)
-    lss.leave()
+    lss.transition("waiting")
     with lss.master.no_answer_expected():
         answer = {"configure_node_id": lambda: lss.master.configure_node_id(lss.node_id),
                   "inquire_identity": lambda: lss.master.inquire("serial"),
@@ -126,7 +126,7 @@ def test_lss_in_nmt_state(lss: LssDevice, state: str, evidence, request: pytest.
     with lss.master.no_answer_expected() if not allowed else nullcontext():
         lss.select()
         answer = lss.master.inquire_node_id()
-    lss.leave()
+    lss.transition("waiting")
     assert (answer is not None) == allowed, (f"in NMT {state} the device {'ignored' if allowed else 'obeyed'} LSS "
                                              f"({'allowed' if allowed else 'not allowed'} here)")
     if allowed:
@@ -149,7 +149,7 @@ def test_configure_node_id_range(lss: LssDevice, node_id: int, error: int, pytes
                     f"on node-ID {node_id} (quirk lss_node_id_range)")
     if error == 0 and node_id != lss.node_id:
         destructive_if_self_stored(lss, pytestconfig, "node_id")
-    assert lss.select()
+    lss.transition("configuration")
     if error == 0:
         lss.moving_to(node_id)  # pending only; custody looks there too should a reset apply it
     answer = lss.master.configure_node_id(node_id)  # the lss fixture configures the node-ID in use again
@@ -173,7 +173,7 @@ def test_configure_bit_timing_table_0(lss: LssDevice, index: int, evidence, pyte
         destructive_if_self_stored(lss, pytestconfig, "bit_timing")
     if expected_ok and lss.bit_index is None and "bit_timing" in lss.auto_stored:
         not_equipped("the bit rate in use is unknown and the device stores a configured bit rate by itself")
-    assert lss.select()
+    lss.transition("configuration")
     answer = lss.master.configure_bit_timing(index)  # the lss fixture configures the rate in use again
     assert answer is not None, f"configure bit timing {index}: no answer"
     if (answer.error == 0) == expected_ok:
@@ -199,7 +199,7 @@ def test_activate_bit_timing_silent_for_the_switch_delay(lss: LssDevice, heartbe
     mark, delay = activate(lss, lss.bit_index)
     silent = lss.sent_after_request(mark, 2 * delay * 0.9)
     beat = lss.dut.wait_heartbeat(mark, 2 * delay + 3 * heartbeat / 1000)
-    lss.leave()
+    lss.transition("waiting")
     assert not silent, f"frames within the 2 x {SWITCH_DELAY_MS} ms switch delay:\n{format_frames(silent)}"
     assert beat is not None, "no heartbeat after the switch"
 
@@ -235,7 +235,7 @@ def test_configured_node_id_pending_until_reset(lss: LssDevice, evidence, pytest
     expect_success(lss.configure_for(new_id), f"configure node-ID {new_id}")
     if "inquire_node_id" in lss.services:
         assert lss.master.inquire_node_id() == lss.node_id, "inquire node-ID: the pending node-ID is active at once"
-    lss.leave()
+    lss.transition("waiting")
     assert lss.answers_at(lss.node_id), f"after configure node-ID {new_id} the device no longer answers at " \
                                         f"{lss.node_id}: the new node-ID was active at once"
     assert not lss.answers_at(new_id, timeout=lss.dut.sdo_silence_s), f"answers at {new_id} before any reset"
@@ -315,12 +315,12 @@ def test_unconfigured_start_up(unconfigured: LssDevice, evidence):
         if "identify_non_configured" in lss.services:
             assert lss.master.identify_non_configured() == 1, "after power-on not identified as non-configured"
     new_boot_up = lss.dut.profile.params_of(fx.LssOnlyInStates) is not None
-    assert lss.select()
+    lss.transition("configuration")
     mark = lss.dut.frames.mark()
     expect_success(lss.master.configure_node_id(lss.node_id), f"configure node-ID {lss.node_id}")
     if new_boot_up and "node_id" not in lss.auto_stored and "store_configuration" in lss.services:
         expect_success(lss.master.store_configuration(), "store configuration (the manual's step 1, M §8.2.4)")
-    lss.leave()
+    lss.transition("waiting")
     boot = lss.wait_bootup_at(lss.node_id, mark)
     if boot is None and new_boot_up and lss.power_cycle is not None:
         evidence.rests_on("manual", NEW_BOOT_UP)

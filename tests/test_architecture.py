@@ -482,6 +482,30 @@ def test_the_state_command_finder_sees_every_spelling():
     assert [bool(_STATE_COMMAND.search(line)) for line in lines] == [True, True, True, False, False, False]
 
 
+#: suite tests that switch the LSS state themselves rather than by ``LssDevice.transition`` (dut/lss/lss_device.py):
+#: each judges the switch itself (issue 41: one way into a state, seen by what the state answers)
+LSS_SWITCH_JUDGED_IN = {
+    "test_switch_global_enters_and_leaves_configuration": "judges switch state global, into and out of configuration",
+    "test_switch_selective_only_own_address": "judges switch state selective's 44h answer",
+    "test_lss_in_nmt_state": "judges whether LSS is obeyed in an NMT state: no answer may be the verdict",
+}
+_LSS_SWITCH = {"select", "leave", "switch_global", "switch_selective"}
+
+
+def test_lss_states_are_entered_in_one_place():
+    """Suites and fixtures enter the LSS configuration or waiting state through ``lss.transition`` (which sees the
+    selection answered where the device has switch state selective), but in the tests that judge the switch."""
+    found = []
+    for path in sorted([*(REPO / "suites").glob("*.py"), *(REPO / "fixtures").glob("*.py")]):
+        for function in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(function, ast.FunctionDef) or function.name in LSS_SWITCH_JUDGED_IN:
+                continue
+            found += [f"{path.relative_to(REPO)}:{call.lineno} {function.name}" for call in ast.walk(function)
+                      if isinstance(call, ast.Call) and isinstance(call.func, ast.Attribute)
+                      and call.func.attr in _LSS_SWITCH]
+    assert found == [], "LSS state switched outside LssDevice.transition (use lss.transition)"
+
+
 #: modules outside dut/nmt/ that may build an NMT command frame themselves: the twin decodes them (sim/), cia/ names
 #: them; every other NMT command the tester sends goes through dut.nmt (issue 41)
 NMT_FRAMES_ALSO_IN: dict[str, str] = {}

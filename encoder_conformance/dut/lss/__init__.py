@@ -1,4 +1,5 @@
-"""LSS: the master (the services' frames), the device's LSS states and steps, finding nodes, the LSS put-back.
+"""LSS: the master (the services' frames), the device's LSS states (reached by ``LssDevice.transition``) and
+steps, finding nodes, the LSS put-back.
 Its face: the names below (``dut/face_exports.py``)."""
 
 # the face exports what it imports, one name a line so that it reads as a list
@@ -10,6 +11,7 @@ from encoder_conformance.dut.face_exports import lazy_face
 
 if TYPE_CHECKING:
     from encoder_conformance.dut.lss.face import LssFace
+    from encoder_conformance.dut.lss.lss_device import LSS_STATES
     from encoder_conformance.dut.lss.lss_device import LssDevice
     from encoder_conformance.dut.lss.lss_device import expect_success
     from encoder_conformance.dut.lss.lss_device import table_index

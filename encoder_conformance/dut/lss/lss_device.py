@@ -32,6 +32,9 @@ from encoder_conformance.dut.nmt.heartbeat_state import describe
 from encoder_conformance.dut.sdo.sdo_frames import upload_request
 from encoder_conformance.profile import quirk_effects as fx
 
+#: the LSS states ``LssDevice.transition`` reaches (CiA 305 v3.0.0 §4.2, the LSS FSA)
+LSS_STATES = ("waiting", "configuration")
+
 
 def table_index(bitrate: int, table: dict[int, int] = BIT_TIMING_TABLE_0) -> int | None:
     """LSS table-0 index of a bit rate (None: not in the table)."""
@@ -106,7 +109,22 @@ class LssDevice:
         assert self.answers_at(node_id), f"no SDO answer at node-ID {node_id} after NMT enter pre-operational"
 
     def leave(self) -> Mark:
+        """Switch state global 0: back to the waiting state (nothing answers it); the mark before it."""
         return self.master.switch_global(LssState.WAITING)
+
+    def transition(self, state: str) -> None:
+        """The device into the LSS ``state`` by one call, as ``dut.nmt.transition`` reaches an NMT state:
+        "configuration" by switch state selective to its LSS address where it has that service, its 44h answer
+        seen (AssertionError naming the NMT state its heartbeat reports where none comes), else by switch state
+        global (which nothing answers: the test's next service shows the state); "waiting" by switch state
+        global 0."""
+        if state not in LSS_STATES:
+            raise ValueError(f"unknown LSS state {state!r}: one of {', '.join(LSS_STATES)}")
+        if state == "waiting":
+            self.leave()
+            return
+        assert self.select(), (f"switch state selective to {self.address.describe()}: no answer (44h); the heartbeat "
+                               f"at node-ID {self.node_id} reports {describe(self._state_seen())}")
 
     def sent_after_request(self, mark: Mark, window: float) -> list[can.Message]:
         """The node's frames within ``window`` after the LSS request at ``mark``, less those that crossed it:
@@ -160,9 +178,8 @@ class LssDevice:
             self.on_move(node_id)
 
     def configure_for(self, new_id: int) -> LssAnswer | None:
-        """Select the device and configure ``new_id`` (pending); the answer."""
-        assert self.select(), (f"switch state selective to {self.address.describe()}: no answer (44h); the heartbeat "
-                               f"at node-ID {self.node_id} reports {describe(self._state_seen())}")
+        """Into the configuration state and configure ``new_id`` (pending); the answer."""
+        self.transition("configuration")
         self.moving_to(new_id)
         return self.master.configure_node_id(new_id)
 

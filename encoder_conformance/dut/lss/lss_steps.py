@@ -16,7 +16,7 @@ def activate(lss: LssDevice, index: int) -> tuple[Mark, float]:
     state (the LSS FSA has activate bit timing there; open reading lss-activate-bit-timing-state); the mark
     before it and the delay. The caller leaves the configuration state after the switch (no master frame within
     it)."""
-    assert lss.select()
+    lss.transition("configuration")
     expect_success(lss.master.configure_bit_timing(index), f"configure bit timing {index}")
     return lss.master.activate_bit_timing(SWITCH_DELAY_MS), SWITCH_DELAY_MS / 1000
 

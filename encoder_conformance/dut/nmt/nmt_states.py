@@ -10,6 +10,10 @@ the heartbeat reports, before any other check could trip over it.
   communication does not clear is not testable (``persistent_error``).
 - ``return_to_preoperational``: the put-back after a test (no journal): NMT enter pre-operational, and the heartbeat's
   7Fh where the caller knows its period, else SDO answering again.
+
+The state after a reset is no transition here: the suites that reset either judge the reset itself (its boot-up and
+the state it settles in: ``boot_state``, test_nmt's ``test_state_after_reset``, the state machine's reset rule) or
+need only the boot-up (``dut.nmt.reset_node``).
 """
 
 from __future__ import annotations
