@@ -113,18 +113,24 @@ class LssDevice:
         return self.master.switch_global(LssState.WAITING)
 
     def transition(self, state: str) -> None:
-        """The device into the LSS ``state`` by one call, as ``dut.nmt.transition`` reaches an NMT state:
-        "configuration" by switch state selective to its LSS address where it has that service, its 44h answer
-        seen (AssertionError naming the NMT state its heartbeat reports where none comes), else by switch state
-        global (which nothing answers: the test's next service shows the state); "waiting" by switch state
-        global 0."""
+        """The device into the LSS ``state`` by one call, as ``dut.nmt.transition`` reaches an NMT state, and seen
+        there by what the state answers: "configuration" by switch state selective to its LSS address where it has
+        that service (its 44h answer), else by switch state global and an inquire node-ID answered (where the device
+        has that service; without it the test's next service shows the state); "waiting" by switch state global 0
+        (which nothing answers). AssertionError naming the NMT state the heartbeat reports where the device did not
+        get there."""
         if state not in LSS_STATES:
             raise ValueError(f"unknown LSS state {state!r}: one of {', '.join(LSS_STATES)}")
         if state == "waiting":
             self.leave()
             return
-        assert self.select(), (f"switch state selective to {self.address.describe()}: no answer (44h); the heartbeat "
-                               f"at node-ID {self.node_id} reports {describe(self._state_seen())}")
+        if "switch_selective" in self.services:
+            how, there = f"switch state selective to {self.address.describe()}: no answer (44h)", self.select()
+        else:
+            how, there = "switch state global: inquire node-ID unanswered after it", self.select()
+            if "inquire_node_id" in self.services:
+                there = self.master.inquire_node_id() is not None
+        assert there, f"{how}; the heartbeat at node-ID {self.node_id} reports {describe(self._state_seen())}"
 
     def sent_after_request(self, mark: Mark, window: float) -> list[can.Message]:
         """The node's frames within ``window`` after the LSS request at ``mark``, less those that crossed it:
