@@ -55,6 +55,9 @@ def _other_project(tmp_path: Path) -> Path:
 
 def _pytest(project: Path, *args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     environ = {k: v for k, v in os.environ.items() if not k.startswith(("CAN_", "PYTEST_"))}
+    # no bytecode cache either way: what the project folder gains is then only what a plugin writes into it
+    # (the CI machine leaves PYTHONDONTWRITEBYTECODE unset, and pytest's assertion rewriting writes __pycache__)
+    environ["PYTHONDONTWRITEBYTECODE"] = "1"
     return subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", *args], cwd=project,
                           env={**environ, **(env or {})}, capture_output=True, text=True, timeout=120)
 
