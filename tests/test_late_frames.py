@@ -110,6 +110,11 @@ def test_a_late_frame_while_the_host_was_late_is_inconclusive(ledger):
     assert "delivered 200" in found[0].describe()
 
 
+def test_a_host_later_than_the_margin_but_not_as_late_as_the_frame_does_not_excuse_it(ledger):
+    ledger._windows[0].closed_at -= 0.3  # the window closed 300 ms before the answer comes
+    assert [late.verdict for late in feed(ledger, rx(SDO_RESPONSE_BASE + NODE, ANSWER_R, late_by_s=0.08))] == ["fail"]
+
+
 def test_the_twins_own_lateness_makes_it_inconclusive(ledger):
     ledger.twin = lambda since: [(since + 0.05, 80.0)]  # around the window: the twin ran 80 ms late
     assert [late.verdict for late in feed(ledger, rx(SDO_RESPONSE_BASE + NODE, ANSWER_R))] == ["inconclusive"]

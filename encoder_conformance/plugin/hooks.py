@@ -209,11 +209,12 @@ def pytest_html_results_summary(prefix: list[str], summary: list[str], postfix: 
 
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
     if _active(config):
-        reporting.terminal_summary(terminalreporter, config, _run_lines(config))
+        late_frames.terminal_section(terminalreporter, config)  # frames after the window that proved them absent
+        reporting.terminal_summary(terminalreporter, config, lifecycle.summary_lines(config))
 
 
 def _run_lines(config: pytest.Config) -> list[tuple[str, bool]]:
-    """The run's own lines of the summaries: the device on the bench, then the late frames."""
+    """The run's own lines of the HTML summary: the device on the bench, then the late frames."""
     return [*lifecycle.summary_lines(config), *late_frames.summary_lines(config)]
 
 

@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
 import pytest
 
+from encoder_conformance.basis import Basis
 from encoder_conformance.dut.link.late_frames import LATE_RULE, LateFrame, LateLedger, Owner
 from encoder_conformance.plugin import lifecycle, run_record
 from encoder_conformance.run_summary import TestResult, area_of
@@ -78,16 +80,30 @@ def settle(config: pytest.Config) -> None:
         if state is not None:
             state.failed_tests.add(nodeid)
         if summary is not None and not any(r.nodeid == nodeid for r in summary.results):
-            summary.results.append(TestResult(nodeid, area_of(late.window.owner), "failed", "inferred",
+            summary.results.append(TestResult(nodeid, area_of(late.window.owner), "failed", _basis(late),
                                               f"{late.window.basis}; {LATE_RULE}", late.describe()))
     if summary is not None:
         summary.late_frames = [late.describe() for late in config.stash.get(FOUND, [])]
+
+
+def _basis(late: LateFrame) -> Basis:
+    """The window's clause: a CiA document's, else the manual's."""
+    return "cia" if late.window.basis.startswith("CiA") else "manual"
 
 
 def summary_lines(config: pytest.Config) -> list[tuple[str, bool]]:
     """(text, alarm) lines for the terminal and the HTML summary."""
     found = config.stash.get(FOUND, [])
     return [(late.describe(), late.verdict == "fail") for late in found]
+
+
+def terminal_section(terminalreporter: Any, config: pytest.Config) -> None:
+    """The late frames in the terminal summary, each with its owner, window, lateness and basis."""
+    lines = summary_lines(config)
+    if lines:
+        terminalreporter.write_sep("-", "late frames: after the window that proved them absent", red=True)
+        for text, alarm in lines:
+            terminalreporter.write_line(text, red=alarm, yellow=not alarm)
 
 
 def add_to_junit(junit: Path, config: pytest.Config) -> None:

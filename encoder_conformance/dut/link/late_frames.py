@@ -21,10 +21,13 @@ The rules are made so that a conformant device can never be blamed (DESIGN §5, 
   plus the answer window).
 
 A late frame in a moment the host itself was late (the frame's own delivery, a lateness probe started when it came,
-the twin's timing thread around the window) is inconclusive, not a failure: there the tester's view of the order
-and timing of frames is not to be trusted beyond the margin every window allows for it (``HOST_TOLERANCE_MS``).
-That a late frame is a failure at all is this suite's inference from the rule the window checks: no text says how
-late a forbidden frame may come.
+the twin's timing thread around the window) is inconclusive, not a failure: where the host ran later than the margin
+every window allows for it (``HOST_TOLERANCE_MS``) and at least as late as the frame came, the tester's view of when
+the frame came, and so of which window should have seen it, is not to be trusted. (The order of frames is: the
+tester logs its own before they go out, and receives the device's in bus order.)
+The verdict rests on the window's clause, which forbids the frame at any time (a TPDO in stopped, an answer to a
+request in stopped); that this frame is the one the window proved absent is our attribution (``LATE_RULE``): no
+text says how late a forbidden frame may come.
 """
 
 from __future__ import annotations
@@ -49,8 +52,12 @@ HORIZON_S = 5.0
 HOST_TOLERANCE_MS = 50.0
 #: how long the lateness probe started by a late frame runs (s)
 PROBE_S = 0.1
-#: the late-frame rule itself: our inference (no text says how late a forbidden frame may come)
-LATE_RULE = "late-frame attribution (this suite's inference: a frame a window proved absent does not come later)"
+#: what a late frame's verdict rests on beside the window's clause: the clause forbids the frame at any time; that this
+#: frame is the one the window proved absent is our attribution (no text says how late a forbidden frame may come)
+LATE_RULE = ("attributed by this suite's late-frame rules (our inference: the clause forbids the frame at any time, "
+             "no text says how late it may come)")
+#: the rule an SDO request in stopped breaks when answered (the tests that send one, and its late answer)
+NO_SDO_IN_STOPPED = "CiA 301 §7.3.2.2 (services per NMT state: no SDO in stopped)"
 BLOCK_CCS = (5, 6)  # block download and upload requests (CiA 301 §7.2.4.3.9-14)
 
 Predicate = Callable[[can.Message], bool]
@@ -246,7 +253,9 @@ class LateLedger:
         late.host_late_ms = max(lag_ms, lateness.worst_ms, twin_ms)
         late.host_seen = (f"frame delivered {lag_ms:.1f} ms after its stamp; {lateness.describe()}; the twin's timing "
                           f"thread up to {twin_ms:.1f} ms late around the window")
-        late.verdict = "inconclusive" if late.host_late_ms > HOST_TOLERANCE_MS else "fail"
+        # the host late beyond the windows' margin, and enough to have carried the frame past the window's end
+        host_late = late.host_late_ms > HOST_TOLERANCE_MS and late.host_late_ms >= late.late_ms
+        late.verdict = "inconclusive" if host_late else "fail"
 
     def judged(self, owner: str | None = None) -> list[LateFrame]:
         """The late frames not yet reported (of ``owner``, or all), judged; each marked reported."""
