@@ -58,7 +58,9 @@ LATE_RULE = ("attributed by this suite's late-frame rules (our inference: the cl
              "no text says how late it may come)")
 #: the rule an SDO request in stopped breaks when answered (the tests that send one, and its late answer)
 NO_SDO_IN_STOPPED = "CiA 301 §7.3.2.2 (services per NMT state: no SDO in stopped)"
-BLOCK_CCS = (5, 6)  # block download and upload requests (CiA 301 §7.2.4.3.9-14)
+BLOCK_CCS = (5, 6)
+#: how deep the pairing of replies with later requests searches before it counts a reply as paired (never blames)
+PAIRING_DEPTH = 32  # block download and upload requests (CiA 301 §7.2.4.3.9-14)
 
 Predicate = Callable[[can.Message], bool]
 Verdict = Literal["fail", "inconclusive", "pending"]
@@ -122,18 +124,25 @@ class SdoWindow(Window):
         self.replies.pop()  # the late frame: not one a later request drew
         return True
 
-    def _pair(self, reply: int, tried: set[tuple[int, bool]]) -> bool:
-        """Kuhn's augmenting path: pair ``reply`` with a later request, moving earlier pairs where needed. A request
-        may draw one answer and one abort (a server may abort a transfer after confirming its initiate, e.g. on its
-        own time-out, CiA 301 §7.2.4.3.17)."""
+    def _pair(self, reply: int, tried: set[tuple[int, bool]], depth: int = 0) -> bool:
+        """Pair ``reply`` with a later request: a free one first, newest first (a reply's own request is usually the
+        last sent), else Kuhn's augmenting path, moving earlier pairs. A request may draw one answer and one abort (a
+        server may abort a transfer after confirming its initiate, e.g. on its own time-out, CiA 301 §7.2.4.3.17).
+        A search deeper than ``PAIRING_DEPTH`` counts as paired: the rule errs towards never blaming."""
         data = self.replies[reply]
         abort = data[0] >> 5 == ABORT_SCS
-        for index, request in enumerate(self.later):
+        for index in range(len(self.later) - 1, -1, -1):  # lazily: the first free one ends the search
             slot = (index, abort)
-            if slot in tried or not answers(request, data):
+            if slot not in self.paired and answers(self.later[index], data):
+                self.paired[slot] = reply
+                return True
+        if depth >= PAIRING_DEPTH:
+            return True
+        for slot in [(i, abort) for i in range(len(self.later)) if answers(self.later[i], data)]:
+            if slot in tried:
                 continue
             tried.add(slot)
-            if slot not in self.paired or self._pair(self.paired[slot], tried):
+            if self._pair(self.paired[slot], tried, depth + 1):
                 self.paired[slot] = reply
                 return True
         return False
