@@ -157,6 +157,7 @@ class RunSummary:
     time_budget: dict[str, Any] | None = None  # where the run's time went (plugin/time_budget.py)
     scope: dict[str, str] = field(default_factory=dict)  # what the station and the options left out, declared up front
     deselected: int = 0  # tests the selection (-k, -m) left out: scope, not counted
+    late_frames: list[str] = field(default_factory=list)  # frames after the window that proved them absent
 
     @property
     def serial(self) -> str | None:

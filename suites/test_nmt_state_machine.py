@@ -48,7 +48,7 @@ from encoder_conformance.cia.cia301 import (
 from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.custody import SettingsJournal
-from encoder_conformance.dut.link import Mark, format_frames
+from encoder_conformance.dut.link import NO_SDO_IN_STOPPED, Mark, format_frames
 from encoder_conformance.dut.nmt import HeartbeatObserver, describe, newest_state, raise_if_held_by_error, settled_state
 from encoder_conformance.dut.sdo import upload_request
 from encoder_conformance.dut.store import STORE_GROUPS, changeable_parameter
@@ -424,7 +424,10 @@ class NmtMachine(RuleBasedStateMachine):
         dut = self.dut
         mark = dut.frames.mark()
         if not self.model.sdo_answered:
-            reply = dut.sdo_request(upload_request(*key), timeout=dut.sdo_silence_s)
+            request = upload_request(*key)
+            reply = dut.sdo_request(request, timeout=dut.sdo_silence_s)
+            # an answer after the window is still this request's (dut/link/late_frames.py)
+            dut.frames.late.close_sdo(dut.node_id, request, "SDO request in stopped", NO_SDO_IN_STOPPED)
             assert reply is None, f"SDO answered in stopped: {reply.describe()}"
             self._say(f"read {key[0]:04X}h.{key[1]:02X}: no answer (stopped)", mark)
             return

@@ -83,6 +83,9 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
     assert len(running) == 2, f"{comm:04X}h with event timer {period_s * 1000:.0f} ms: {len(running)} TPDO(s) in " \
                               f"operational within {window * 1000:.0f} ms"
     dut.nmt.command(state)
+    # a TPDO after the heartbeat shows the state is this state's, also after the window (dut/link/late_frames.py)
+    dut.frames.late.open_state(dut.node_id, state, is_this_tpdo, f"TPDO {cob_id:03X}h",
+                               "CiA 301 §7.3.2.2 (PDO communication only in operational)")
     dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)  # the state change
     after = dut.frames.mark()
     late = dut.frames.quiet_period(is_this_tpdo, window, after)

@@ -538,6 +538,9 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
                     "test_change_of_state_sends_event_tpdo), so its silence outside operational proves nothing")
     assert running, f"{comm:04X}h: no TPDO on {cob_id:03X}h on {trigger} in operational"
     dut.nmt.command(state)
+    # a TPDO after the heartbeat shows the state is this state's, also after the window (dut/link/late_frames.py)
+    dut.frames.late.open_state(dut.node_id, state, is_this, f"TPDO {cob_id:03X}h",
+                               "CiA 301 §7.3.2.2 (PDO communication only in operational)")
     dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)
     late = stimulate(expected=False)
     evidence.measure(f"TPDO {cob_id:03X}h frames on {trigger} in {state}", len(late), "frames", 0, 0)

@@ -36,6 +36,7 @@ if TYPE_CHECKING:
         bus_trace,
         hypothesis_profiles,
         junit_coverage,
+        late_frames,
         lifecycle,
         outcomes,
         reporting,
@@ -50,10 +51,11 @@ if TYPE_CHECKING:
     from encoder_conformance.plugin import history_hook as history
     from encoder_conformance.plugin import options as opts
 else:  # imported at their first use: only in a session of ours (plugin/activation.py)
-    (allure_labels, allure_run, bus_trace, hypothesis_profiles, junit_coverage, lifecycle, outcomes, reporting,
-     run_record, selection, shuffle, skips, time_budget, twin_launch, verdicts, history, opts) = (
+    (allure_labels, allure_run, bus_trace, hypothesis_profiles, junit_coverage, late_frames, lifecycle, outcomes,
+     reporting, run_record, selection, shuffle, skips, time_budget, twin_launch, verdicts, history, opts) = (
         LazyModule(f"encoder_conformance.plugin.{name}") for name in (
-            "allure_labels", "allure_run", "bus_trace", "hypothesis_profiles", "junit_coverage", "lifecycle",
+            "allure_labels", "allure_run", "bus_trace", "hypothesis_profiles", "junit_coverage", "late_frames",
+            "lifecycle",
             "outcomes", "reporting", "run_record", "selection", "shuffle", "skips", "time_budget", "twin_launch",
             "verdicts", "history_hook", "options"))
 
@@ -136,8 +138,10 @@ def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> 
     if not _active(item.config):
         return (yield)
     lifecycle.stop_if_gone(item.config)  # the device or bus is gone: one reason, the rest not run
+    late_frames.begin(item)  # the "must not come" windows declared from now on are this test's
     with time_budget.measure(item):
         result = yield
+    late_frames.end(item)
     lifecycle.stop_if_gone(item.config)
     return result
 
@@ -173,6 +177,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
     if report.skipped:
         skips.book(report, exc)  # why it did not judge: out of scope, not testable, inconclusive
     outcomes.classify(item, call, report)  # no finding about the device: an internal error of the tool
+    late_frames.judge(item, report)  # a frame after a window this test closed fails it (before it reports)
     lifecycle.note_loss(item, report)  # the device stopped answering in this test: it fails, naming the frames
     verdicts.judge(item, report, exc)  # a broken inferred rule: a warning, or a failure with --strict
     reporting.attach_evidence(item, call, report)
@@ -199,13 +204,18 @@ def pytest_html_report_title(report: Any) -> None:
 def pytest_html_results_summary(prefix: list[str], summary: list[str], postfix: list[str],
                                 session: pytest.Session) -> None:
     if _active(session.config):
-        reporting.html_summary(prefix, session, run_record.completed(session),
-                               lifecycle.summary_lines(session.config))
+        reporting.html_summary(prefix, session, run_record.completed(session), _run_lines(session.config))
 
 
 def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pytest.Config) -> None:
     if _active(config):
+        late_frames.terminal_section(terminalreporter, config)  # frames after the window that proved them absent
         reporting.terminal_summary(terminalreporter, config, lifecycle.summary_lines(config))
+
+
+def _run_lines(config: pytest.Config) -> list[tuple[str, bool]]:
+    """The run's own lines of the HTML summary: the device on the bench, then the late frames."""
+    return [*lifecycle.summary_lines(config), *late_frames.summary_lines(config)]
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -219,10 +229,12 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> Generator[
     if not _active(session.config):
         return (yield)
     lifecycle.give_back(session.config)  # after Ctrl-C or a stop: first thing, while the bus is still open
+    late_frames.settle(session.config)  # late frames no running test took: run-level checks
     result = yield
     xmlpath = session.config.option.xmlpath  # written by pytest's junitxml in the hooks just run
     if xmlpath:
         outcomes.junit_internal_errors_as_errors(Path(xmlpath))
+        late_frames.add_to_junit(Path(xmlpath), session.config)
     bus_trace.write_unsettled(session.config)  # a test stopped before its teardown report keeps its trace
     if not lifecycle.ended_early(session.config):
         reporting.fail_all_skipped(session)

@@ -104,6 +104,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "reset_comm_keeps_state": "NMT reset communication is ignored",
             "reset_node_keeps_values": "NMT reset node does not reload the application parameters",
             "sdo_in_stopped": "SDO requests are answered in stopped",
+            "sdo_late_in_stopped": "an SDO request in stopped is answered 330 ms later (after the tester's silence "
+                                   "window on every shipped profile: caught by late-frame attribution)",
             "pdo_outside_operational": "TPDOs are also sent in pre-operational and stopped",
             "wrong_heartbeat_state": "the heartbeat reports operational (05h) while pre-operational",
             "respond_to_other_node": "NMT commands addressed to another node-id are obeyed",
@@ -160,6 +162,9 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
                                                 "change check stop",
             "change_tpdo_outside_operational": "after leaving operational event-driven TPDOs are still sent on a "
                                                "change of their mapped value; SYNC TPDOs and timers stop",
+            "tpdo_late_after_leaving_operational": "each TPDO sent in operational is sent once more 40 ms after "
+                                                   "leaving it (after the heartbeat shows the new state: caught by "
+                                                   "late-frame attribution)",
             "preop_only_writes_accepted": "quirk writes_preop_only ignored: the listed objects are writable in "
                                           "operational too",
         },

@@ -1,6 +1,6 @@
 """The link to the device: the bus connection and its frame log (every test's trace), the device object with
 raw frames and its liveness, the windows a wait owes (answer, silence), the time budget the waits are booked in,
-the host's clock and lateness.
+the host's clock and lateness, the ledger of late frames (``late_frames.py``).
 Its face: the names below (``dut/face_exports.py``)."""
 
 # the face exports what it imports, one name a line so that it reads as a list
@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from encoder_conformance.dut.link.frames import Predicate
     from encoder_conformance.dut.link.frames import format_frames
     from encoder_conformance.dut.link.frames import received_on
+    from encoder_conformance.dut.link.late_frames import NO_SDO_IN_STOPPED
     from encoder_conformance.dut.link.latency_probe import HostLatency
     from encoder_conformance.dut.link.latency_probe import LatencyProbe
     from encoder_conformance.dut.link.latency_probe import TwinLateness

@@ -19,6 +19,7 @@ import can
 
 from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.link.clock import FrameClock
+from encoder_conformance.dut.link.late_frames import LateLedger
 from encoder_conformance.dut.link.time_budget import BUDGET
 from encoder_conformance.errors import BusLostError
 
@@ -46,6 +47,8 @@ class FrameLog(can.Listener):
         self.closed_reason: str | None = None
         #: what stamps the frames (set where the bus is opened): timing verdicts say which clock judged
         self.clock = FrameClock("not known (the bus was opened without saying which clock stamps it)", False)
+        #: the closed "must not come" windows: a frame after its window is still attributed (late_frames.py)
+        self.late = LateLedger()
 
     def close(self, reason: str) -> None:
         """The bus is gone: wake every wait (they raise BusLostError from now on)."""
@@ -70,6 +73,8 @@ class FrameLog(can.Listener):
         with self._cond:
             self._seq += 1
             self._frames.append((self._seq, msg))
+            if self.late.watching:
+                self.late.on_frame(msg)
             for listener in self._listeners:
                 try:
                     listener.on_message_received(msg)

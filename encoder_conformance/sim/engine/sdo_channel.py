@@ -65,6 +65,25 @@ class SdoInStopped(SdoChannel):
         return self._state() is not None or super().serves(request)
 
 
+#: how late ``sdo_late_in_stopped`` answers: 30 ms after the longest SDO silence window of a shipped profile (SIKO:
+#: sdo_response_max_ms 250 + the tester's 50 ms margin), after the window on every profile
+LATE_ANSWER_S = 0.33
+
+
+@breaks(SdoChannel, "sdo_late_in_stopped")
+class SdoLateInStopped(SdoChannel):
+    """A request in stopped is answered, but only LATE_ANSWER_S later (after the tester's silence window)."""
+
+    def on_request(self, request: bytes) -> None:
+        state = self._state()
+        later = self._server._later  # the node's delayed send, which the server's own time-outs use
+        if state is not NmtState.STOPPED or later is None:
+            super().on_request(request)
+            return
+        frames = self._server.respond(request)
+        later(LATE_ANSWER_S, lambda: frames)
+
+
 @breaks(SdoChannel, "ignore_unknown_command")
 class IgnoresUnknownCommands(SdoChannel):
     def serves(self, request: bytes) -> bool:

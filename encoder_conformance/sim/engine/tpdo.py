@@ -324,6 +324,25 @@ class SendsOutsideOperational(TpdoEngine):
         return True
 
 
+#: how long after leaving operational ``tpdo_late_after_leaving_operational`` sends
+LATE_TPDO_S = 0.04
+
+
+@breaks(TpdoEngine, "tpdo_late_after_leaving_operational")
+class TpdoLateAfterLeavingOperational(TpdoEngine):
+    """Each TPDO that was sent in operational is sent once more LATE_TPDO_S after leaving it (a queue flushed late)."""
+
+    def on_state(self, state: NmtState) -> None:
+        leaving = self.running and not self.sends_in(state)
+        sent = [c for c in self._configs if c.valid and c.last_sent > 0] if leaving else []
+        super().on_state(state)
+        for config in sent:
+            self._scheduler.call_later(LATE_TPDO_S, partial(self._send_late, config))
+
+    def _send_late(self, config: TpdoConfig) -> None:
+        self._send(config.cob_id, self._payload(config))
+
+
 @breaks(TpdoEngine, "tpdo_not_resumed_after_stopped")
 class NotResumedAfterStopped(TpdoEngine):
     """Once stopped, the TPDOs stay silent (also in operational) until a reset halts the node."""
