@@ -33,9 +33,10 @@ from encoder_conformance.cia.cia305 import (
     LssCommand,
     LssState,
 )
-from encoder_conformance.dut.link.device import TESTER_MARGIN_S, answer_window
+from encoder_conformance.dut.link.device import answer_window
 from encoder_conformance.dut.link.frames import FrameLog, Mark
 from encoder_conformance.dut.link.time_budget import BUDGET
+from encoder_conformance.dut.link.windows import UNMEASURED_MARGIN_S
 
 #: the shortest response window a learned one may be (``LssMaster.learned_window``)
 WINDOW_FLOOR_S = 0.01
@@ -83,15 +84,19 @@ Send = Callable[[int, bytes], None]
 class LssMaster:
     """LSS services over ``send`` (one frame on 7E5h) and the frame log (answers on 7E4h)."""
 
-    def __init__(self, send: Send, frames: FrameLog, response_s: float, bitrate: int | None = None) -> None:
+    def __init__(self, send: Send, frames: FrameLog, response_s: float, bitrate: int | None = None,
+                 silence_s: float | None = None) -> None:
         """``bitrate``: the bus's bit rate, bit/s, if known: a request keeps one frame time at it after an answer
-        (``frame_s``); else one frame time at 125 kbit/s (``FRAME_S``)."""
+        (``frame_s``); else one frame time at 125 kbit/s (``FRAME_S``). ``silence_s``: how long an answer that
+        must not come is watched for (the device's window, ``DeviceLink.silence_window``); without it the
+        profile's window plus the unmeasured tester margin."""
         self._send = send
         self.frames = frames
         self.response_s = response_s  # the profile's window: what the device owes (search steps wait this)
         self.frame_s = FRAME_BITS / bitrate if bitrate else FRAME_S  # the least time from an answer to a request
         self._sent = frames.mark()  # the last request: the slave frames after it are the answers to keep clear of
         self.answer_timeout_s = answer_window(response_s)  # an expected answer is waited for this long
+        self._silence_s = response_s + UNMEASURED_MARGIN_S if silence_s is None else silence_s
         self._silence = False  # inside ``no_answer_expected``
         self.steps = 0  # frames sent (fastscan cost, for the report)
         self.latencies: list[float] = []  # seconds each answer took
@@ -123,8 +128,9 @@ class LssMaster:
 
     @property
     def silence_s(self) -> float:
-        """How long an answer that must not come is watched for: the profile's window plus the tester's margin."""
-        return self.response_s + TESTER_MARGIN_S
+        """How long an answer that must not come is watched for (``silence_s`` given, or the profile's window plus
+        the unmeasured tester margin)."""
+        return self._silence_s
 
     @contextmanager
     def no_answer_expected(self) -> Iterator[None]:
