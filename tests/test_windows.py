@@ -11,7 +11,7 @@ import pytest
 from encoder_conformance.dut import DeviceUnderTest
 from encoder_conformance.dut.link.answer_times import SDO_SAMPLES, AnswerTimes, measure_sdo
 from encoder_conformance.dut.link.latency_probe import HostLatency
-from encoder_conformance.dut.link.windows import FACTOR, SILENCE_FIGURES, UNMEASURED_MARGIN_S, Windows
+from encoder_conformance.dut.link.windows import FACTOR, MIN_OBSERVED, SILENCE_FIGURES, UNMEASURED_MARGIN_S, Windows
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.schema import Timing
 from tests import sim_rig
@@ -90,3 +90,15 @@ def test_the_start_measurement_takes_its_round_trips_from_the_twin(rig):
     assert evidence["twin_late_ms"] is None
     dut.windows.measured(times)
     assert dut.sdo_silence_s >= profile.timing.sdo_response_max_ms / 1000  # the manual's 1 ms, at least
+
+
+def test_a_kind_the_run_observes_is_sized_from_its_answers_once_enough_came():
+    windows = Windows(Timing(bootup_max_ms=1000, sdo_response_max_ms=1))
+    windows.measured(_times(0.5))
+    for _ in range(MIN_OBSERVED - 1):
+        windows.observe("lss_response_ms", 2.0)
+    assert windows.silence_s("lss_response_ms") == pytest.approx((50 + FACTOR * 0.5) / 1000)
+    windows.observe("lss_response_ms", 2.0)
+    window = windows.silence("lss_response_ms")
+    assert window.seconds == pytest.approx(FACTOR * 2.0 / 1000)
+    assert f"LSS ({MIN_OBSERVED} answers in the run)" in window.source

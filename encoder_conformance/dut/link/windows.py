@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from encoder_conformance.dut.link.answer_times import AnswerTimes
+from encoder_conformance.models.timing import percentile
 from encoder_conformance.profile.schema import Timing
 
 #: a window is this many times the device's measured p99 round trip. The spread measured on the twins (DESIGN.md
@@ -29,6 +30,9 @@ FACTOR = 10.0
 #: SDO round trips to the twin measured p99 < 20 ms on the 2-core CI machine with two runs and a busy process
 #: beside them; 50 ms leaves room (the margin every silence window had before windows were measured)
 UNMEASURED_MARGIN_S = 0.05
+#: answers of a kind seen in the run before its window is sized from them (LSS answers, observed where the suite
+#: first exchanges them); with 5, the p99 is their slowest
+MIN_OBSERVED = 5
 #: the timing figures a silence window is watched for (every one is in the evidence, used or not)
 SILENCE_FIGURES = ("sdo_response_max_ms", "pdo_response_max_ms", "emcy_response_max_ms", "lss_response_ms")
 
@@ -51,12 +55,20 @@ class Windows:
     def __init__(self, timing: Timing) -> None:
         self.timing = timing
         self.sdo: AnswerTimes | None = None
+        self._observed: dict[str, list[float]] = {}
         self._cache: dict[str, Window] = {}
 
     def measured(self, sdo: AnswerTimes | None) -> None:
         """The start-of-run measurement (None: it failed; the windows stay the profile's plus the margin)."""
         self.sdo = sdo
         self._cache.clear()
+
+    def observe(self, figure: str, ms: float) -> None:
+        """An answer of the kind ``figure`` bounds came ``ms`` after its request (as the tester saw it)."""
+        samples = self._observed.setdefault(figure, [])
+        samples.append(ms)
+        if len(samples) >= MIN_OBSERVED:
+            self._cache.pop(figure, None)
 
     def silence(self, figure: str) -> Window:
         """The silence window for what the profile's timing ``figure`` (e.g. ``sdo_response_max_ms``) bounds."""
@@ -81,15 +93,26 @@ class Windows:
         if self.sdo is None:
             return Window(figure, owed_ms / 1000 + UNMEASURED_MARGIN_S,
                           f"{owed} + unmeasured tester margin {UNMEASURED_MARGIN_S * 1000:g} ms (no measurement)")
-        spread_ms = FACTOR * self.sdo.p99_ms
         late_ms = self.sdo.host_late_ms
-        measured = (f"{FACTOR:g} x measured SDO p99 {self.sdo.p99_ms:.2f} ms = {spread_ms:.2f} ms, host lateness "
-                    f"{late_ms:.2f} ms")
-        if figure == "sdo_response_max_ms":
-            floor_ms = owed_ms if documented else 0.0
-            seconds = max(spread_ms, late_ms, floor_ms) / 1000
-            floor = f", documented floor {owed_ms:g} ms ({documented})" if documented else \
-                f" ({owed} is no floor)"
-            return Window(figure, seconds, f"largest of {measured}{floor}")
-        return Window(figure, (owed_ms + max(spread_ms, late_ms)) / 1000,
-                      f"{owed}, not measured, + tester's part: largest of {measured}")
+        measured = self._measured(figure)
+        if measured is None:
+            spread_ms = FACTOR * self.sdo.p99_ms
+            return Window(figure, (owed_ms + max(spread_ms, late_ms)) / 1000,
+                          f"{owed}, not measured, + tester's part: largest of {FACTOR:g} x measured SDO p99 "
+                          f"{self.sdo.p99_ms:.2f} ms = {spread_ms:.2f} ms, host lateness {late_ms:.2f} ms")
+        what, p99_ms = measured
+        spread_ms = FACTOR * p99_ms
+        floor_ms = owed_ms if documented else 0.0
+        floor = f", documented floor {owed_ms:g} ms ({documented})" if documented else f" ({owed} is no floor)"
+        return Window(figure, max(spread_ms, late_ms, floor_ms) / 1000,
+                      f"largest of {FACTOR:g} x measured {what} p99 {p99_ms:.2f} ms = {spread_ms:.2f} ms, host "
+                      f"lateness {late_ms:.2f} ms{floor}")
+
+    def _measured(self, figure: str) -> tuple[str, float] | None:
+        """What was measured of the kind ``figure`` bounds, and its p99 (ms); None where too little."""
+        if figure == "sdo_response_max_ms" and self.sdo is not None:
+            return "SDO", self.sdo.p99_ms
+        observed = self._observed.get(figure, [])
+        if len(observed) < MIN_OBSERVED:
+            return None
+        return f"{figure.split('_')[0].upper()} ({len(observed)} answers in the run)", percentile(observed, 0.99)

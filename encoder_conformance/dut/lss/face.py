@@ -24,4 +24,4 @@ class LssFace:
         (an answer that must not come: the device's LSS silence window)."""
         dut = self._dut
         return LssMaster(lambda cob_id, data: dut.network.send_message(cob_id, data), dut.frames,
-                         dut.profile.timing.lss_response_ms / 1000, silence_s=dut.silence_window("lss_response_ms"))
+                         dut.profile.timing.lss_response_ms / 1000, windows=dut.windows)
