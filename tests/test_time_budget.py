@@ -83,4 +83,7 @@ def test_a_run_reports_its_budget(tmp_path: Path):
     heartbeat = next(t for t in budget["costliest"] if "heartbeat_period" in t["nodeid"])
     assert heartbeat["why"].startswith("periodic")
     assert "time budget:" in completed.output
-    assert "id='time-budget'" in (tmp_path / "report" / "report.html").read_text(encoding="utf-8")
+    html = (tmp_path / "report" / "report.html").read_text(encoding="utf-8")
+    assert "id='time-budget'" in html
+    assert "id='silence-windows'" in html, "the report shows each window and its source"
+    assert "Measured at the start of the run" in html
