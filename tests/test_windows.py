@@ -102,3 +102,15 @@ def test_a_kind_the_run_observes_is_sized_from_its_answers_once_enough_came():
     window = windows.silence("lss_response_ms")
     assert window.seconds == pytest.approx(FACTOR * 2.0 / 1000)
     assert f"LSS ({MIN_OBSERVED} answers in the run)" in window.source
+
+
+def test_a_device_that_stops_answering_gives_no_measurement_and_costs_only_half_the_time_outs(rig):
+    profile = load_profile("wachendorff-wdga-mt").profile
+    node, _ = rig.boot(profile)
+    dut = DeviceUnderTest(rig.network, rig.log, profile, node.node_id)
+    node.power_off()
+    mark = rig.log.mark()
+    assert measure_sdo(dut, samples=4) is None
+    requests = rig.log.since(mark, lambda m: not m.is_rx and m.arbitration_id == 0x600 + node.node_id)
+    assert len(requests) == 2, "it stops once half the round trips went unanswered"
+    assert dut.windows.silence("sdo_response_max_ms").source.endswith("(no measurement)")

@@ -86,6 +86,7 @@ def measure_sdo(link: SdoLink, samples: int = SDO_SAMPLES, twin: TwinLateness | 
     window (the link's SDO time-out); None where fewer than half were answered (nothing to size a window from)."""
     seen: list[float] = []
     stamped: list[float] = []
+    missed = 0
     request = upload_request(*PROBE_OBJECT)
     with LatencyProbe(twin) as probe:
         for _ in range(samples):
@@ -93,6 +94,9 @@ def measure_sdo(link: SdoLink, samples: int = SDO_SAMPLES, twin: TwinLateness | 
             started = time.perf_counter()
             reply = link.sdo_request(request, check_alive=False)
             if reply is None:
+                missed += 1
+                if missed * 2 >= samples:  # too few left to size from: no more time-outs spent on it
+                    break
                 continue
             seen.append((time.perf_counter() - started) * 1000)
             frames = link.frames.since(mark)
@@ -100,7 +104,7 @@ def measure_sdo(link: SdoLink, samples: int = SDO_SAMPLES, twin: TwinLateness | 
             answer = next((m for m in frames if m.is_rx and m.arbitration_id == SDO_RESPONSE_BASE + link.node_id), None)
             if sent is not None and answer is not None:
                 stamped.append(max(0.0, (answer.timestamp - sent.timestamp) * 1000))
-    if len(seen) * 2 < samples:
+    if missed * 2 >= samples:
         return None
     return AnswerTimes(f"SDO expedited upload {PROBE_OBJECT[0]:04X}h", tuple(seen), tuple(stamped), probe.result(),
-                       samples - len(seen))
+                       missed)
