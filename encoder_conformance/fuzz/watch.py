@@ -14,8 +14,8 @@ import can
 
 from encoder_conformance.cia.cia301 import NmtState
 from encoder_conformance.dut import DeviceUnderTest
-from encoder_conformance.dut.link.device import TESTER_MARGIN_S
 from encoder_conformance.dut.link.frames import Mark, format_frames
+from encoder_conformance.dut.link.windows import UNMEASURED_MARGIN_S
 
 #: heartbeat periods without a heartbeat that count as a stalled producer, and at least GAP_FLOOR_S (not a
 #: timing verdict: those are test_heartbeat's, with the tester's own lateness; this one survives a busy tester)
@@ -52,7 +52,7 @@ class DeviceWatch:
 
     @property
     def gap_limit_s(self) -> float:
-        return max(GAP_PERIODS * self.period_s, GAP_FLOOR_S) + TESTER_MARGIN_S
+        return max(GAP_PERIODS * self.period_s, GAP_FLOOR_S) + UNMEASURED_MARGIN_S
 
     def _emcy(self, msg: can.Message) -> bool:
         return msg.is_rx and msg.arbitration_id == self.emcy_cob_id and not msg.is_remote_frame

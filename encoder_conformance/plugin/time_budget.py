@@ -19,6 +19,7 @@ from typing import Any
 import pytest
 
 from encoder_conformance.dut.link.time_budget import BUDGET, difference
+from encoder_conformance.dut.link.windows import Windows
 from encoder_conformance.run_summary import area_of
 
 TOP = 10
@@ -44,6 +45,7 @@ class TestCost:
 class RunBudget:
     session_started: float = field(default_factory=time.monotonic)
     tests: list[TestCost] = field(default_factory=list)
+    windows: Windows | None = None  # the device's silence windows and the measurement they came from
 
 
 KEY = pytest.StashKey[RunBudget]()
@@ -62,6 +64,13 @@ def _process_age_s() -> float | None:
 
 def start(config: pytest.Config) -> None:
     config.stash[KEY] = RunBudget()
+
+
+def record_windows(config: pytest.Config, windows: Windows) -> None:
+    """The run's silence windows: each used window's length and source go into the budget."""
+    run = config.stash.get(KEY, None)
+    if run is not None:
+        run.windows = windows
 
 
 @contextmanager
@@ -102,12 +111,28 @@ def budget(config: pytest.Config) -> dict[str, Any] | None:
         "tester_s": round(wall - owed_total, 3),
         "tester_share": round((wall - owed_total) / wall, 3) if wall > 0 else None,
         "outside_tests_s": round(wall - in_tests, 3),  # start-up, collection, reports
+        "inside_tests_s": round(in_tests, 3),
+        "tester_share_inside": round(_tester_inside(run.tests) / in_tests, 3) if in_tests > 0 else None,
         "tests": len(run.tests),
         "tester_per_test_median_ms": _median_ms([t.tester for t in run.tests]),
         "areas": {name: {key: round(value, 3) for key, value in values.items()} for name, values in areas.items()},
         "costliest": [{"nodeid": t.nodeid, "seconds": round(t.seconds, 3), "why": t.why()}
                       for t in sorted(run.tests, key=lambda t: -t.seconds)[:TOP]],
+        **_windows(run.windows),
     }
+
+
+def _tester_inside(tests: list[TestCost]) -> float:
+    """The tester's seconds inside the tests: each test's time less what it owed the device."""
+    return sum(t.tester for t in tests)
+
+
+def _windows(windows: Windows | None) -> dict[str, Any]:
+    """Each silence window used (name, seconds, source) and the measurement of the device's answers."""
+    if windows is None:
+        return {}
+    return {"windows": windows.evidence(),
+            "answer_times": None if windows.sdo is None else {"sdo": windows.sdo.evidence()}}
 
 
 def _median_ms(values: list[float]) -> float | None:
@@ -122,4 +147,4 @@ def terminal_line(config: pytest.Config) -> str | None:
     return (f"time budget: {data['wall_s']:.1f} s, of which owed to the device {data['owed_s']:.1f} s ({owed}); "
             f"tester {data['tester_s']:.1f} s ({100 * (data['tester_share'] or 0):.0f} %, "
             f"{data['outside_tests_s']:.1f} s outside the tests, median {data['tester_per_test_median_ms']} ms per "
-            "test)")
+            f"test; {100 * (data['tester_share_inside'] or 0):.0f} % of the time inside the tests)")

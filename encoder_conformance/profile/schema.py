@@ -439,7 +439,7 @@ class Timing(StrictModel):
     emcy_response_max_ms: float = Field(
         default=100, gt=0, description="an error's cause to its EMCY; CiA 301 gives no bound, so the default is this "
         "suite's inference (an expected EMCY is waited for 4 x this, at least 0.3 s; a check that no EMCY comes "
-        "watches this plus the tester's 50 ms margin)")
+        "watches this plus the tester's part measured at the start of the run: dut/link/windows.py)")
     lss_response_ms: float = Field(
         default=50, gt=0, description="LSS request to the slave's answer; CiA 305 gives no bound, so the default "
         "is this suite's inference (each LSS request nobody should answer waits this long)")
@@ -459,6 +459,20 @@ class Timing(StrictModel):
         "so that p95/p99 of the intervals mean something")
     heartbeat_tolerance: HeartbeatTolerance = HeartbeatTolerance()
     manual: str | None = None
+    documented: dict[str, str] = Field(
+        default_factory=dict, description="timing figure -> the manual's section that gives it (e.g. "
+        "sdo_response_max_ms: 'M §5.3.2'): a documented response time is a promise, so a window is never shorter; "
+        "a figure not listed is this suite's default or guess, and windows are sized from what the device is "
+        "measured to answer in (dut/link/windows.py)")
+
+    @model_validator(mode="after")
+    def _documented_figures(self) -> Timing:
+        figures = {name for name in type(self).model_fields if name.endswith("_ms")}
+        unknown = sorted(set(self.documented) - figures)
+        if unknown:
+            raise ValueError(f"timing.documented names no timing figure: {', '.join(unknown)} "
+                             f"(figures: {', '.join(sorted(figures))})")
+        return self
 
 
 class SimulatorSpec(StrictModel):

@@ -16,7 +16,6 @@ from dataclasses import asdict, dataclass
 
 from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.bench.encoder_access import EncoderAccess
-from encoder_conformance.dut.link.device import TESTER_MARGIN_S
 from encoder_conformance.models.encoder import objects as od
 from encoder_conformance.models.encoder.objects import EncoderObjects
 from encoder_conformance.models.encoder.position import unsigned_in_span
@@ -150,7 +149,7 @@ def _preset_reads(access: EncoderAccess) -> str:
 def _late_s(access: EncoderAccess) -> float:
     """How long to read again after the execution time the manual gives: a busy device (or a twin on a busy PC)
     may show the new value later; the reads stop as soon as it shows."""
-    return max(TESTER_MARGIN_S, access.dut.sdo_timeout)
+    return access.dut.sdo_timeout
 
 
 def _settle(access: EncoderAccess) -> None:

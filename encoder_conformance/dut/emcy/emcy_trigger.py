@@ -106,7 +106,8 @@ class EmcyTrigger:
 
     def silence_s(self) -> float:
         """How long to watch for an EMCY the device must not send: what it would owe plus the tester's margin."""
-        return self._dut.silence_window(self.window_s() * 1000)
+        extra_s = self.window_s() - self._dut.profile.timing.emcy_response_max_ms / 1000  # a trigger's own delay
+        return extra_s + self._dut.silence_window("emcy_response_max_ms")
 
 
 class BenchError(EmcyTrigger):

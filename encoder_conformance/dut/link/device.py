@@ -31,16 +31,12 @@ from encoder_conformance.cia.cia301 import (
 )
 from encoder_conformance.dut.link.frames import FrameLog, Mark, format_frames
 from encoder_conformance.dut.link.time_budget import BUDGET
+from encoder_conformance.dut.link.windows import Windows
 from encoder_conformance.errors import BusLostError, DutLostError, EncoderConformanceError, RunInterrupted
 from encoder_conformance.models.encoder.freeze import FreezeRule
 from encoder_conformance.profile.quirk_effects import SilentUntilBusTraffic
 from encoder_conformance.profile.schema import DeviceProfile
 
-#: how much later than the device owes a frame may reach this tester: bus arbitration, a busy PC, the
-#: remote twin's websocket hop. Measured on the 2-core CI machine with two runs and a busy process beside
-#: them: SDO round trips to the twin p99 < 20 ms; 50 ms leaves room. A silence window is what the device
-#: owes plus this margin; an expected frame is waited for with the generous limits (boot-up, SDO timeout).
-TESTER_MARGIN_S = 0.05
 #: an answer the device owes is waited for 4 x what it owes, and at least this long: a late answer is a loaded
 #: tester host far more often than a slow device (SDO and LSS answers alike)
 ANSWER_FLOOR_S = 0.3
@@ -98,6 +94,7 @@ class DeviceLink:
         self.node = canopen.RemoteNode(node_id, canopen.ObjectDictionary())
         network.add_node(self.node)
         self.node.sdo.RESPONSE_TIMEOUT = answer_window(profile.timing.sdo_response_max_ms / 1000)
+        self.windows = Windows(profile.timing)  # silence windows; measured at the start of a run (answer_times.py)
         self._lost: str | None = None
         self.bench_failure: str | None = None  # the bench failed (power switch): nothing about the device shown
         self.lost_frames = ""  # the last frames the tester sent before the device stopped answering
@@ -168,21 +165,20 @@ class DeviceLink:
     def sdo_timeout(self) -> float:
         return self.node.sdo.RESPONSE_TIMEOUT
 
-    @staticmethod
-    def silence_window(device_ms: float) -> float:
-        """How long to watch for a frame the device must NOT send: what it would owe (``device_ms``, from
-        the profile) plus the tester's own latency (TESTER_MARGIN_S)."""
-        return device_ms / 1000 + TESTER_MARGIN_S
+    def silence_window(self, figure: str) -> float:
+        """How long to watch for a frame the device must NOT send, of the kind the profile's timing ``figure``
+        bounds (``dut/link/windows.py``: from the device's measured answers, the host's lateness, the manual)."""
+        return self.windows.silence_s(figure)
 
     @property
     def sdo_silence_s(self) -> float:
         """Watch this long for an SDO answer that must not come."""
-        return self.silence_window(self.profile.timing.sdo_response_max_ms)
+        return self.silence_window("sdo_response_max_ms")
 
     @property
     def pdo_silence_s(self) -> float:
         """Watch this long after a SYNC (or RTR) for a TPDO that must not come."""
-        return self.silence_window(self.profile.timing.pdo_response_max_ms)
+        return self.silence_window("pdo_response_max_ms")
 
     # -- SDO through canopen (normal access) ------------------------------------------------
     def read(self, index: int, sub: int = 0) -> bytes:

@@ -20,7 +20,8 @@ class LssFace:
         return LssAddress(*(self._dut.read_uint(IDENTITY, sub) for sub in range(1, 5)))
 
     def master(self) -> LssMaster:
-        """An LSS master on the device's bus, its frames in the device's log, waiting the profile's LSS window."""
+        """An LSS master on the device's bus, its frames in the device's log, waiting the profile's LSS window
+        (an answer that must not come: the device's LSS silence window)."""
         dut = self._dut
         return LssMaster(lambda cob_id, data: dut.network.send_message(cob_id, data), dut.frames,
-                         dut.profile.timing.lss_response_ms / 1000)
+                         dut.profile.timing.lss_response_ms / 1000, windows=dut.windows)

@@ -33,10 +33,13 @@ from encoder_conformance.cia.cia305 import (
     LssCommand,
     LssState,
 )
-from encoder_conformance.dut.link.device import TESTER_MARGIN_S, answer_window
+from encoder_conformance.dut.link.device import answer_window
 from encoder_conformance.dut.link.frames import FrameLog, Mark
 from encoder_conformance.dut.link.time_budget import BUDGET
+from encoder_conformance.dut.link.windows import UNMEASURED_MARGIN_S, Windows
 
+#: the profile's timing figure of an LSS answer (its silence window's name)
+LSS_FIGURE = "lss_response_ms"
 #: the shortest response window a learned one may be (``LssMaster.learned_window``)
 WINDOW_FLOOR_S = 0.01
 #: after an answer, how long other slaves' copies of it may still arrive (on a real bus identical
@@ -83,15 +86,19 @@ Send = Callable[[int, bytes], None]
 class LssMaster:
     """LSS services over ``send`` (one frame on 7E5h) and the frame log (answers on 7E4h)."""
 
-    def __init__(self, send: Send, frames: FrameLog, response_s: float, bitrate: int | None = None) -> None:
+    def __init__(self, send: Send, frames: FrameLog, response_s: float, bitrate: int | None = None,
+                 windows: Windows | None = None) -> None:
         """``bitrate``: the bus's bit rate, bit/s, if known: a request keeps one frame time at it after an answer
-        (``frame_s``); else one frame time at 125 kbit/s (``FRAME_S``)."""
+        (``frame_s``); else one frame time at 125 kbit/s (``FRAME_S``). ``windows``: the device's silence windows
+        (``DeviceLink.windows``): an answer that must not come is watched for its LSS window, and every answer's
+        time is observed there; without it the profile's window plus the unmeasured tester margin."""
         self._send = send
         self.frames = frames
         self.response_s = response_s  # the profile's window: what the device owes (search steps wait this)
         self.frame_s = FRAME_BITS / bitrate if bitrate else FRAME_S  # the least time from an answer to a request
         self._sent = frames.mark()  # the last request: the slave frames after it are the answers to keep clear of
         self.answer_timeout_s = answer_window(response_s)  # an expected answer is waited for this long
+        self._windows = windows
         self._silence = False  # inside ``no_answer_expected``
         self.steps = 0  # frames sent (fastscan cost, for the report)
         self.latencies: list[float] = []  # seconds each answer took
@@ -123,8 +130,11 @@ class LssMaster:
 
     @property
     def silence_s(self) -> float:
-        """How long an answer that must not come is watched for: the profile's window plus the tester's margin."""
-        return self.response_s + TESTER_MARGIN_S
+        """How long an answer that must not come is watched for (the device's LSS silence window, or without
+        ``windows`` the profile's window plus the unmeasured tester margin)."""
+        if self._windows is None:
+            return self.response_s + UNMEASURED_MARGIN_S
+        return self._windows.silence_s(LSS_FIGURE)
 
     @contextmanager
     def no_answer_expected(self) -> Iterator[None]:
@@ -146,6 +156,8 @@ class LssMaster:
         found = self.frames.wait_for(self._is_answer(command), timeout, mark)
         if found is not None:
             self.latencies.append(time.perf_counter() - start)
+            if self._windows is not None:
+                self._windows.observe(LSS_FIGURE, self.latencies[-1] * 1000)
         return found
 
     def learned_window(self, floor_s: float = WINDOW_FLOOR_S) -> float:
