@@ -12,13 +12,15 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from encoder_conformance.cia.cia301 import SDO_RESPONSE_BASE
-from encoder_conformance.dut.link.frames import FrameLog
 from encoder_conformance.dut.link.latency_probe import HostLatency, LatencyProbe, TwinLateness
 from encoder_conformance.dut.sdo.sdo_frames import SdoResponse, upload_request
 from encoder_conformance.models.timing import percentile
+
+if TYPE_CHECKING:  # frames -> late_frames -> windows -> here: a type only
+    from encoder_conformance.dut.link.frames import FrameLog
 
 #: round trips measured at the start: 30 give a p99 that is the worst but one of them (statistics.quantiles
 #: inclusive), and cost ~30 x 1 ms on a device answering within 1 ms
