@@ -424,10 +424,7 @@ class NmtMachine(RuleBasedStateMachine):
         dut = self.dut
         mark = dut.frames.mark()
         if not self.model.sdo_answered:
-            request = upload_request(*key)
-            reply = dut.sdo_request(request, timeout=dut.sdo_silence_s)
-            # an answer after the window is still this request's (dut/link/late_frames.py)
-            dut.frames.late.close_sdo(dut.node_id, request, "SDO request in stopped", NO_SDO_IN_STOPPED)
+            reply = dut.sdo_request_unanswered(upload_request(*key), "SDO request in stopped", NO_SDO_IN_STOPPED)
             assert reply is None, f"SDO answered in stopped: {reply.describe()}"
             self._say(f"read {key[0]:04X}h.{key[1]:02X}: no answer (stopped)", mark)
             return

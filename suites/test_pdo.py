@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import pytest
 
-from encoder_conformance.dut.link import format_frames
+from encoder_conformance.dut.link import NO_PDO_OUTSIDE_OPERATIONAL, format_frames
 from encoder_conformance.dut.tpdo import pdo_stimulus
 from encoder_conformance.plugin.suite_helpers import documented_quirk, tpdo_under_test
 from encoder_conformance.profile import quirk_effects as fx
@@ -68,7 +68,7 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
                                                         state):
     """A TPDO whose event timer is running when the device leaves operational sends nothing more in pre-operational
     or stopped (CiA 301 §7.3.2.2: PDOs only in operational), and sends again after NMT start."""
-    evidence.rests_on("cia", "CiA 301 §7.3.2.2 (PDO communication only in operational)")
+    evidence.rests_on("cia", NO_PDO_OUTSIDE_OPERATIONAL)
     tpdo = tpdo_under_test(dut, 5, evidence, settings_journal, [255, 254])
     comm, cob_id = tpdo.comm, tpdo.can_id()
     period_s = 0.02
@@ -85,7 +85,7 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
     dut.nmt.command(state)
     # a TPDO after the heartbeat shows the state is this state's, also after the window (dut/link/late_frames.py)
     dut.frames.late.open_state(dut.node_id, state, is_this_tpdo, f"TPDO {cob_id:03X}h",
-                               "CiA 301 §7.3.2.2 (PDO communication only in operational)")
+                               NO_PDO_OUTSIDE_OPERATIONAL)
     dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)  # the state change
     after = dut.frames.mark()
     late = dut.frames.quiet_period(is_this_tpdo, window, after)

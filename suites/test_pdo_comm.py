@@ -32,7 +32,7 @@ from encoder_conformance.cia.cia301 import (
     with_can_id,
 )
 from encoder_conformance.coverage import Hold
-from encoder_conformance.dut.link import answer_window, format_frames, received_on
+from encoder_conformance.dut.link import NO_PDO_OUTSIDE_OPERATIONAL, answer_window, format_frames, received_on
 from encoder_conformance.dut.sdo import abort_name, sdo_frames
 from encoder_conformance.dut.tpdo import TpdoUnderTest, fixed_behaviour_tpdos
 from encoder_conformance.plugin.skips import not_applicable, not_equipped, not_judged
@@ -508,7 +508,7 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
                                               trigger, state):
     """A TPDO sent on SYNC (type 1) or on a change of state sends nothing once the device left operational,
     although SYNCs arrive and the shaft turns, and is sent again after NMT start."""
-    evidence.rests_on("cia", "CiA 301 §7.3.2.2 (PDO communication only in operational)")
+    evidence.rests_on("cia", NO_PDO_OUTSIDE_OPERATIONAL)
     if trigger == "SYNC":
         tpdo = _sync_tpdo(dut, evidence, settings_journal, [1])
     else:
@@ -540,7 +540,7 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
     dut.nmt.command(state)
     # a TPDO after the heartbeat shows the state is this state's, also after the window (dut/link/late_frames.py)
     dut.frames.late.open_state(dut.node_id, state, is_this, f"TPDO {cob_id:03X}h",
-                               "CiA 301 §7.3.2.2 (PDO communication only in operational)")
+                               NO_PDO_OUTSIDE_OPERATIONAL)
     dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)
     late = stimulate(expected=False)
     evidence.measure(f"TPDO {cob_id:03X}h frames on {trigger} in {state}", len(late), "frames", 0, 0)

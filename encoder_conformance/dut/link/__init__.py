@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from encoder_conformance.dut.link.frames import Predicate
     from encoder_conformance.dut.link.frames import format_frames
     from encoder_conformance.dut.link.frames import received_on
+    from encoder_conformance.dut.link.late_frames import NO_PDO_OUTSIDE_OPERATIONAL
     from encoder_conformance.dut.link.late_frames import NO_SDO_IN_STOPPED
     from encoder_conformance.dut.link.latency_probe import HostLatency
     from encoder_conformance.dut.link.latency_probe import LatencyProbe

@@ -244,6 +244,15 @@ class DeviceLink:
         return self.sdo_request(sdo_frames.upload_request(0x1000, 0), check_alive=False, timeout=timeout) is not None
 
     # -- raw SDO (byte-exact) ------------------------------------------------------------
+    def sdo_request_unanswered(self, request: bytes, provoked_by: str,
+                               basis: str) -> sdo_frames.SdoResponse | None:
+        """Send ``request``, which ``basis`` says the device must not answer, and watch its silence window; the
+        reply, or None. The window is declared to the late-frame ledger, so an answer after it is still charged to
+        this request (``late_frames.py``)."""
+        reply = self.sdo_request(request, timeout=self.sdo_silence_s)
+        self.frames.late.close_sdo(self.node_id, request, provoked_by, basis)
+        return reply
+
     def sdo_request(self, request: bytes, check_alive: bool = True,
                     timeout: float | None = None) -> sdo_frames.SdoResponse | None:
         """Send one raw SDO request frame; the response frame, or None if none came within ``timeout``

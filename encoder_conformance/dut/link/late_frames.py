@@ -49,7 +49,7 @@ from encoder_conformance.dut.sdo.sdo_frames import ABORT_SCS, answers
 HORIZON_S = 5.0
 #: the host was late beyond this (ms): the late frame is inconclusive; the tester's margin a silence window adds for the
 #: host before any measurement (``windows.UNMEASURED_MARGIN_S``; measured windows carry less: to be revisited, issue 42)
-HOST_TOLERANCE_MS = 50.0  # checked equal by tests/test_late_frames.py (windows imports this module's users)
+HOST_TOLERANCE_MS = 50.0  # = windows.UNMEASURED_MARGIN_S, checked by tests/test_late_frames.py (not imported: a loop)
 #: how long the lateness probe started by a late frame runs (s)
 PROBE_S = 0.1
 #: what a late frame's verdict rests on beside the window's clause: the clause forbids the frame at any time; that this
@@ -58,6 +58,8 @@ LATE_RULE = ("attributed by this suite's late-frame rules (our inference: the cl
              "no text says how late it may come)")
 #: the rule an SDO request in stopped breaks when answered (the tests that send one, and its late answer)
 NO_SDO_IN_STOPPED = "CiA 301 §7.3.2.2 (services per NMT state: no SDO in stopped)"
+#: the rule a TPDO outside operational breaks (the tests that leave operational, and a TPDO after the state shows)
+NO_PDO_OUTSIDE_OPERATIONAL = "CiA 301 §7.3.2.2 (PDO communication only in operational)"
 BLOCK_CCS = (5, 6)
 #: how deep the pairing of replies with later requests searches before it counts a reply as paired (never blames)
 PAIRING_DEPTH = 32  # block download and upload requests (CiA 301 §7.2.4.3.9-14)

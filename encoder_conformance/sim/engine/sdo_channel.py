@@ -65,8 +65,8 @@ class SdoInStopped(SdoChannel):
         return self._state() is not None or super().serves(request)
 
 
-#: how late ``sdo_late_in_stopped`` answers: 30 ms after the longest SDO silence window of a shipped profile (SIKO:
-#: sdo_response_max_ms 250 + the tester's 50 ms margin), after the window on every profile
+#: how late ``sdo_late_in_stopped`` answers: after the longest SDO silence window any shipped profile can get before
+#: its measurement (SIKO: sdo_response_max_ms 250 + the unmeasured 50 ms margin), so after the window on every profile
 LATE_ANSWER_S = 0.33
 
 
