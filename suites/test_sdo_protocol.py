@@ -351,8 +351,7 @@ def test_client_abort_ends_segmented_transfer(dut, sdo, evidence):
     is refused (05040001h), not served, and the next upload is served."""
     evidence.rests_on("cia", "CiA 301 §7.2.4.3.17 (abort SDO transfer: unconfirmed, ends the transfer)")
     key = _open_upload(dut, sdo)
-    mark = sdo.abort(*key, SdoAbortCode.GENERAL_ERROR)
-    answers = sdo.silent_after(mark)
+    answers = sdo.abort_unanswered(*key, SdoAbortCode.GENERAL_ERROR)
     assert not answers, f"the client's abort was answered: {[a.hex(' ') for a in answers]}"
     response = sdo.upload_segment(toggle=1)
     judge_refusal(dut, response, {SdoAbortCode.COMMAND_SPECIFIER}, {SdoAbortCode.GENERAL_ERROR},

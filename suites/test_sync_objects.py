@@ -121,6 +121,9 @@ def test_sync_producer_sends_every_cycle(dut, sync_cob_id, settings_journal, evi
         dut.write(COMMUNICATION_CYCLE_PERIOD, 0, bytes(4))  # stop the SYNCs before anything else
     stopped = dut.frames.mark()
     late = dut.frames.quiet_period(is_own_sync, 2 * period_s + dut.pdo_silence_s, stopped)
+    dut.forbid_until_written(is_own_sync, f"a SYNC on {can_id:03X}h", "1006h = 0",
+                             "CiA 301 §7.5.2.6 (1006h = 0: no SYNC transmitted)", (COMMUNICATION_CYCLE_PERIOD, 0),
+                             bytes(4))
     dut.write(SYNC_COB_ID_OBJECT, 0, sync_cob_id.to_bytes(4, "little"))
     evidence.measure(f"SYNCs on {can_id:03X}h within {window * 1000:.0f} ms of 1006h = {PRODUCER_PERIOD_US} us",
                      len(syncs), "frames", PRODUCER_SYNCS, None)

@@ -135,6 +135,60 @@ def test_a_state_window_runs_from_the_heartbeat_to_the_next_nmt_command():
     assert not ledger.watching
 
 
+def test_a_client_abort_draws_no_reply_that_could_excuse_a_late_one(ledger):
+    """An abort is unconfirmed (CiA 301 §7.2.4.3.17): a reply after it is still the surplus of the closed request."""
+    abort = bytes([0x80, 0x00, 0x10, 0x00, 0x00, 0x00, 0x00, 0x08])
+    found = feed(ledger, tx(SDO_REQUEST_BASE + NODE, abort), rx(SDO_RESPONSE_BASE + NODE, ANSWER_R))
+    assert len(found) == 1
+
+
+def test_a_frame_is_charged_to_one_window_only(ledger):
+    Owner.nodeid = "suites/test_x.py::test_later"
+    ledger.close_sdo(NODE, bytes([0x80, 0x18, 0x10, 0x01, 0, 0, 0, 8]), "the client's abort", "CiA 301 §7.2.4.3.17")
+    found = feed(ledger, rx(SDO_RESPONSE_BASE + NODE, ANSWER_R))
+    assert [late.window.owner for late in found] == ["suites/test_x.py::test_owner"]  # the oldest that claims it
+
+
+def test_a_forbidden_frame_is_charged_until_what_may_allow_it_again():
+    """``forbid``: a SYNC after 1006h = 0 until 1006h is written other than 0 (or the node restarts)."""
+    ledger = LateLedger()
+    sync = lambda m: m.arbitration_id == 0x80  # noqa: E731
+    until = lambda m: late_frames.writes(NODE, 0x1006, 0, unless=bytes(4))(m) or late_frames.restarts(NODE)(m)  # noqa: E731
+    ledger.forbid(sync, "a SYNC", "1006h = 0", "CiA 301 §7.5.2.6", until)
+    assert len(feed(ledger, tx(SDO_REQUEST_BASE + NODE, upload_request(0x1006, 0)), rx(0x80, b""))) == 1
+    zero = bytes([0x23, 0x06, 0x10, 0x00, 0x00, 0x00, 0x00, 0x00])  # written 0 again: still forbidden
+    assert len(feed(ledger, tx(SDO_REQUEST_BASE + NODE, zero), rx(0x80, b""))) == 1
+    write = bytes([0x23, 0x06, 0x10, 0x00, 0x10, 0x27, 0x00, 0x00])
+    assert feed(ledger, tx(SDO_REQUEST_BASE + NODE, write), rx(0x80, b"")) == []
+    assert not ledger.watching
+
+
+@pytest.mark.parametrize("restart", [tx(NMT_COB_ID, bytes([0x81, NODE])), tx(NMT_COB_ID, bytes([0x82, 0])),
+                                     rx(HEARTBEAT_BASE + NODE, b"\x00")], ids=["reset node", "reset comm", "boot-up"])
+def test_a_restart_ends_a_forbidding_window(restart):
+    ledger = LateLedger()
+    heartbeat = lambda m: m.arbitration_id == HEARTBEAT_BASE + NODE and bytes(m.data) != b"\x00"  # noqa: E731
+    ledger.forbid(heartbeat, "a heartbeat", "1017h = 0", "CiA 301 §7.2.8.3.2.2", late_frames.restarts(NODE))
+    assert feed(ledger, restart, rx(HEARTBEAT_BASE + NODE, b"\x7f")) == []
+
+
+def test_an_inconclusive_late_frame_makes_its_area_pass_with_warnings(ledger):
+    from encoder_conformance.plugin.late_frames import UNSURE, _unsure
+    from encoder_conformance.run_summary import AreaVerdict, RunSummary
+
+    Owner.nodeid = "suites/test_nmt.py::test_no_sdo_in_stopped"
+    ledger.close_sdo(NODE, R, "SDO request in stopped", "CiA 301 §7.3.2.2")
+    found = feed(ledger, rx(SDO_RESPONSE_BASE + NODE, ANSWER_R, late_by_s=0.2))
+    summary = RunSummary("run", "2026-12-07T00:00:00+00:00", "p", "0")
+    for late in found * 2:
+        _unsure(summary, late)
+    assert [r.nodeid for r in summary.results] == [UNSURE + "suites/test_x.py::test_owner"]
+    area = AreaVerdict("NMT")
+    area.passed = 1
+    area.count(summary.results[0])
+    assert area.verdict == "PASS WITH WARNINGS"
+
+
 def test_judged_takes_each_late_frame_once_and_by_owner(ledger):
     ledger.on_frame(rx(SDO_RESPONSE_BASE + NODE, ANSWER_R))
     assert ledger.judged("suites/test_x.py::test_other") == []

@@ -2,7 +2,9 @@
 fails the test that owned the window if that test has not reported yet (checked before each of its reports), or
 else a run-level check that names it: a result in run-summary.json (``late frame: <test id>``), a line in the
 terminal and HTML summaries, a JUnit testcase, and the exit code of a failed run. The run cannot end PASS with an
-unattributed late frame. An inconclusive one (the host was late) is listed, never a failure.
+unattributed late frame. An inconclusive one (the host was late) is listed, never a failure, and is an inconclusive
+check of its own (``late frame (inconclusive): <test id>``, ``Hold.HOST_LATE``): its area is at most PASS WITH
+WARNINGS, as the window's check could not be trusted to have seen what it proved absent.
 """
 
 from __future__ import annotations
@@ -14,9 +16,10 @@ from typing import Any
 import pytest
 
 from encoder_conformance.basis import Basis
+from encoder_conformance.coverage import Hold, Kind
 from encoder_conformance.dut.link.late_frames import LATE_RULE, LateFrame, LateLedger, Owner
 from encoder_conformance.plugin import lifecycle, run_record
-from encoder_conformance.run_summary import TestResult, area_of
+from encoder_conformance.run_summary import RunSummary, TestResult, area_of
 
 #: every late frame of the run, as judged (stash of the config)
 FOUND = pytest.StashKey[list[LateFrame]]()
@@ -24,6 +27,8 @@ FOUND = pytest.StashKey[list[LateFrame]]()
 RUN_LEVEL = pytest.StashKey[list[LateFrame]]()
 #: the prefix of a run-level check's node id
 CHECK = "late frame: "
+#: the prefix of an inconclusive late frame's check
+UNSURE = "late frame (inconclusive): "
 JUNIT_CLASS = "encoder_conformance.late_frames"
 SECTION = "late frames"
 
@@ -69,7 +74,11 @@ def judge(item: pytest.Item, report: pytest.TestReport) -> None:
 
 
 def settle(config: pytest.Config) -> None:
-    """At the session's end: the late frames no running test took become run-level checks (a FAIL each)."""
+    """At the session's end (the bus still open): listen out the newest window's linger, then the late frames no
+    running test took become run-level checks (a FAIL each)."""
+    custody = lifecycle.custody_of(config)
+    if custody is not None and custody.dut.usable and (linger := custody.dut.frames.late.linger_s()) > 0:
+        custody.dut.frames.quiet_period(lambda m: False, linger)  # a silence window: frames that must not come
     summary = run_record.summary_of(config)
     state = lifecycle.state_of(config)
     for late in _take(config, None):
@@ -83,7 +92,21 @@ def settle(config: pytest.Config) -> None:
             summary.results.append(TestResult(nodeid, area_of(late.window.owner), "failed", _basis(late),
                                               f"{late.window.basis}; {LATE_RULE}", late.describe()))
     if summary is not None:
-        summary.late_frames = [late.describe() for late in config.stash.get(FOUND, [])]
+        found = config.stash.get(FOUND, [])
+        summary.late_frames = [late.describe() for late in found]
+        for late in found:
+            if late.verdict == "inconclusive":
+                _unsure(summary, late)
+
+
+def _unsure(summary: RunSummary, late: LateFrame) -> None:
+    """An inconclusive late frame as an inconclusive check (once per owning test)."""
+    nodeid = UNSURE + late.window.owner
+    if not any(r.nodeid == nodeid for r in summary.results):
+        summary.results.append(TestResult(nodeid, area_of(late.window.owner), "skipped", _basis(late),
+                                          f"{late.window.basis}; {LATE_RULE}",
+                                          f"{Kind.INCONCLUSIVE.value}: {late.describe()}",
+                                          skip_kind=Kind.INCONCLUSIVE.value, hold=Hold.HOST_LATE.name))
 
 
 def _basis(late: LateFrame) -> Basis:

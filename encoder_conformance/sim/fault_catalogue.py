@@ -80,6 +80,14 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
                                                    "is checked: a refused one draws the confirmation, then the abort",
         },
     ),
+    (  # SDO, late answers: test_sdo_block's block transfers would end the late-frame window (its rule)
+        ("test_sdo_protocol",),
+        {
+            "confirmed_late_after_abort": "a refused segmented download's last segment draws its abort and, 330 ms "
+                                          "later, a confirmation (after the tester's silence window: caught by "
+                                          "late-frame attribution)",
+        },
+    ),
     (  # SDO fuzzing: what only odd request sequences show
         ("test_sdo_fuzz",),
         {
@@ -270,6 +278,8 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
             "sync_restricted_can_id_accepted": "1005h accepts restricted CAN-IDs",
             "sync_cob_id_ignored": "SYNC is taken on 080h whatever 1005h says",
             "sync_producer_never_stops": "a SYNC producer keeps sending SYNC after 1006h is set back to 0",
+            "sync_late_after_stop": "1006h = 0 stops the SYNC, but one more comes 330 ms later (after the tester's "
+                                    "window: caught by late-frame attribution)",
         },
     ),
     (  # the generated sequences against the reference model (and the preset checks)

@@ -30,6 +30,7 @@ from encoder_conformance.cia.cia301 import (
     TPDO_BASES,
 )
 from encoder_conformance.dut.link.frames import FrameLog, Mark, format_frames
+from encoder_conformance.dut.link.late_frames import restarts, writes
 from encoder_conformance.dut.link.time_budget import BUDGET
 from encoder_conformance.dut.link.windows import Windows
 from encoder_conformance.errors import BusLostError, DutLostError, EncoderConformanceError, RunInterrupted
@@ -252,6 +253,14 @@ class DeviceLink:
         reply = self.sdo_request(request, timeout=self.sdo_silence_s)
         self.frames.late.close_sdo(self.node_id, request, provoked_by, basis)
         return reply
+
+    def forbid_until_written(self, matches: Callable[[can.Message], bool], what: str, provoked_by: str, basis: str,
+                             entry: tuple[int, int], value: bytes) -> None:
+        """From now ``matches`` must not come until ``entry`` (index, sub) is written other than ``value`` (as it is
+        now) or the node restarts: one after the test's own window is still charged to it (``late_frames.py``)."""
+        written = writes(self.node_id, *entry, unless=value)
+        restarted = restarts(self.node_id)
+        self.frames.late.forbid(matches, what, provoked_by, basis, lambda m: written(m) or restarted(m))
 
     def sdo_request(self, request: bytes, check_alive: bool = True,
                     timeout: float | None = None) -> sdo_frames.SdoResponse | None:

@@ -11,11 +11,14 @@ The rules are made so that a conformant device can never be blamed (DESIGN §5, 
   (``sdo_frames.answers``: command specifier, multiplexer) is attributed only where it is a surplus: no pairing of
   the replies since the window closed with the SDO requests sent since, by any master (each may draw one reply,
   CiA 301 §7.2.4: one confirmation per request, and an abort of its transfer; a pair where ``answers`` allows it,
-  as the tester's own matching does) leaves it to a later request. A block transfer after it ends the window (its
-  server frames carry no command specifier);
+  as the tester's own matching does; a client's abort draws none, §7.2.4.3.17) leaves it to a later request. A block
+  transfer after it ends the window (its server frames carry no command specifier);
 - a state in which a frame must not come (a TPDO in pre-operational or stopped, CiA 301 §7.3.2.2): from the
   device's own heartbeat reporting that state (its word that it is there; before it the device may still be
   carrying out the command) until the tester's next NMT command;
+- a frame that must not come until something may allow it again (a SYNC after 1006h = 0 until 1006h is written
+  other than 0, an NMT reset or the device's boot-up): from the end of the test's own window until a frame ``until``
+  names, the tester's or the device's (``forbid``);
 - every window ends ``HORIZON_S`` after it closed (or opened): a bound on what the ledger keeps, far beyond every
   answer window a test waits (the longest, a block sub-block's acknowledgement: the SDO transfer time-out, 1 s,
   plus the answer window).
@@ -40,13 +43,22 @@ from typing import Literal
 
 import can
 
-from encoder_conformance.cia.cia301 import HEARTBEAT_BASE, SDO_REQUEST_BASE, SDO_RESPONSE_BASE
+from encoder_conformance.cia.cia301 import (
+    HEARTBEAT_BASE,
+    SDO_REQUEST_BASE,
+    SDO_RESPONSE_BASE,
+    NmtCommand,
+    SdoClientCommand,
+)
 from encoder_conformance.dut.link.latency_probe import LatencyProbe, TwinLateness
 from encoder_conformance.dut.nmt.nmt_frames import is_command, target_state
 from encoder_conformance.dut.sdo.sdo_frames import ABORT_SCS, answers
 
 #: how long after a window closed (or a state window opened) a frame is still attributed to it (module docstring)
 HORIZON_S = 5.0
+#: at the end of the run the tester listens this long after the newest window closed (``linger_s``): the late faults
+#: of the twin come 40-330 ms after their windows; a frame later than this after the run's last window is not seen
+LINGER_S = 0.5
 #: the host was late beyond this (ms): the late frame is inconclusive; the tester's margin a silence window adds for the
 #: host before any measurement (``windows.UNMEASURED_MARGIN_S``; measured windows carry less: to be revisited, issue 42)
 HOST_TOLERANCE_MS = 50.0  # = windows.UNMEASURED_MARGIN_S, checked by tests/test_late_frames.py (not imported: a loop)
@@ -61,6 +73,10 @@ NO_SDO_IN_STOPPED = "CiA 301 §7.3.2.2 (services per NMT state: no SDO in stoppe
 #: the rule a TPDO outside operational breaks (the tests that leave operational, and a TPDO after the state shows)
 NO_PDO_OUTSIDE_OPERATIONAL = "CiA 301 §7.3.2.2 (PDO communication only in operational)"
 BLOCK_CCS = (5, 6)
+#: the NMT commands that reset the node or its communication (CiA 301 §7.3.2.2)
+RESET_COMMANDS = (NmtCommand.RESET_NODE, NmtCommand.RESET_COMMUNICATION)
+#: a boot-up message's one data byte (CiA 301 §7.2.8.3.2.1)
+BOOT_UP = b"\x00"
 #: how deep the pairing of replies with later requests searches before it counts a reply as paired (never blames)
 PAIRING_DEPTH = 32  # block download and upload requests (CiA 301 §7.2.4.3.9-14)
 
@@ -112,6 +128,8 @@ class SdoWindow(Window):
             return
         if msg.data[0] >> 5 in BLOCK_CCS:
             self.ended = True  # a block transfer's server frames cannot be paired by command specifier
+        if msg.data[0] >> 5 == SdoClientCommand.ABORT:
+            return  # unconfirmed (CiA 301 §7.2.4.3.17): a client's abort draws no reply a late one could be
         self.later.append(bytes(msg.data))
 
     def attributes(self, msg: can.Message) -> bool:
@@ -173,6 +191,40 @@ class StateWindow(Window):
 
 
 @dataclass
+class UntilWindow(Window):
+    """``matches`` must not come from the window's end until a frame ``until`` names (any master's or the device's)."""
+
+    until: Predicate = field(default=lambda m: False)
+
+    def sent(self, msg: can.Message) -> None:
+        if self.until(msg):
+            self.ended = True
+
+
+def writes(node_id: int, index: int, sub: int, unless: bytes | None = None) -> Predicate:
+    """A frame that may change entry ``index``.``sub`` of the node: an SDO download initiate to it (any master's),
+    except an expedited one of the value ``unless`` (which keeps what the window forbids forbidden)."""
+    request_cob = SDO_REQUEST_BASE + node_id
+    mux = bytes([index & 0xFF, index >> 8, sub])
+
+    def changes(m: can.Message) -> bool:
+        if m.arbitration_id != request_cob or len(m.data) < 8 or m.data[0] >> 5 != SdoClientCommand.INITIATE_DOWNLOAD:
+            return False
+        if bytes(m.data[1:4]) != mux:
+            return False
+        expedited = m.data[0] & 0x02
+        return unless is None or not expedited or bytes(m.data[4:4 + len(unless)]) != unless
+    return changes
+
+
+def restarts(node_id: int) -> Predicate:
+    """A frame after which the node's communication starts anew: any NMT command that resets, and its boot-up."""
+    bootup_cob = HEARTBEAT_BASE + node_id
+    return lambda m: ((is_command(m) and len(m.data) >= 1 and m.data[0] in RESET_COMMANDS)
+                      or (m.arbitration_id == bootup_cob and bytes(m.data[:1]) == BOOT_UP))
+
+
+@dataclass
 class LateFrame:
     """A frame attributed to a closed window: how late, how late the host was, the verdict."""
 
@@ -226,6 +278,16 @@ class LateLedger:
                               state=target_state(command),
                               heartbeat_cob=HEARTBEAT_BASE + node_id))
 
+    def forbid(self, matches: Predicate, what: str, provoked_by: str, basis: str, until: Predicate) -> None:
+        """From now, ``matches`` must not come until a frame ``until`` names (``UntilWindow``)."""
+        self._add(UntilWindow(what, provoked_by, basis, Owner.nodeid, time.time(), matches, until=until))
+
+    def linger_s(self) -> float:
+        """How much longer the run should listen at its end: until ``LINGER_S`` after the newest open window closed."""
+        with self._lock:
+            newest = max((w.closed_at for w in self._windows if not w.ended), default=None)
+        return 0.0 if newest is None else max(0.0, newest + LINGER_S - time.time())
+
     def _add(self, window: Window) -> None:
         with self._lock:
             self._windows.append(window)
@@ -235,10 +297,12 @@ class LateLedger:
         now = time.time()
         with self._lock:
             self._windows = [w for w in self._windows if not w.ended and now - w.closed_at < HORIZON_S]
-            for window in self._windows:
+            attributed = False
+            for window in self._windows:  # oldest first: a frame is charged to the first window it is late for
                 window.sent(msg)  # another master's request or NMT command counts as the tester's would
-                if msg.is_rx and window.attributes(msg):
+                if msg.is_rx and not attributed and window.attributes(msg):
                     self._found(window, msg, now)
+                    attributed = True
 
     def _found(self, window: Window, msg: can.Message, now: float) -> None:
         late = LateFrame(window, msg, now)

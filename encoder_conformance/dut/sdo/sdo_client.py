@@ -23,6 +23,10 @@ from encoder_conformance.dut.sdo.sdo_words import Stamped
 
 SEGMENT_BYTES = 7
 MAX_BLKSIZE = 127
+#: what a further answer to an answered request breaks
+ONE_ANSWER = "CiA 301 §7.2.4.3.4-7 (each SDO request confirmed once)"
+#: what an answer to the client's abort breaks
+UNCONFIRMED_ABORT = "CiA 301 §7.2.4.3.17 (abort SDO transfer: unconfirmed)"
 #: a segmented transfer of unknown size is given up after this many segments (a device that never sets c)
 MAX_SEGMENTS = 4096
 
@@ -90,6 +94,15 @@ class SdoProtocolClient:
         """Abort SDO transfer from the client (unconfirmed: no answer is due); a mark before it."""
         return self.dut.send_sdo(struct.pack("<BHBI", SDO_ABORT, index, sub, code))
 
+    def abort_unanswered(self, index: int, sub: int, code: int = SdoAbortCode.GENERAL_ERROR) -> list[bytes]:
+        """Abort a transfer the device has no more frames of in flight (a segmented one: the server sends only on
+        request) and watch the silence window; the SDO responses in it. An answer after it is still charged to the
+        abort (the late-frame ledger). Not for a block upload: its sub-block may still be on its way."""
+        request = struct.pack("<BHBI", SDO_ABORT, index, sub, code)
+        answers = self.silent_after(self.dut.send_sdo(request))
+        self.dut.frames.late.close_sdo(self.dut.node_id, request, "the client's abort", UNCONFIRMED_ABORT)
+        return answers
+
     def silent_after(self, mark: Mark) -> list[bytes]:
         """The SDO responses within the SDO silence window after ``mark`` (none are due)."""
         return [bytes(m.data) for m in self.dut.frames.quiet_period(self.is_response, self.dut.sdo_silence_s, mark)]
@@ -100,7 +113,11 @@ class SdoProtocolClient:
         answers = self.dut.frames.quiet_period(self.is_response, self.dut.sdo_silence_s, mark)
         sent = self.dut.frames.since(mark, lambda m: not m.is_rx and m.arbitration_id == SDO_REQUEST_BASE
                                      + self.dut.node_id)
-        return (bytes(sent[0].data) if sent else b""), [Stamped(bytes(m.data), m.timestamp) for m in answers]
+        request = bytes(sent[0].data) if sent else b""
+        if request:  # a further answer after the window is still charged to the request (the late-frame ledger)
+            self.dut.frames.late.close_sdo(self.dut.node_id, request, "an SDO request already answered",
+                                           ONE_ANSWER)
+        return request, [Stamped(bytes(m.data), m.timestamp) for m in answers]
 
     def is_response(self, msg: can.Message) -> bool:
         return msg.is_rx and msg.arbitration_id == SDO_RESPONSE_BASE + self.dut.node_id and not msg.is_remote_frame

@@ -2,8 +2,8 @@
 
 CiA 301 draws every SDO frame with 8 data bytes and gives no rule for a shorter one (open readings sdo-short-frame
 and sdo-short-frame-served, ``encoder_conformance/open_points/sdo.py``): these conformant variants refuse it, or serve
-it where its bytes carry the request. One fault beside them: a segmented download's last segment confirmed before
-the write is checked, so a refused one draws two answers.
+it where its bytes carry the request. Two faults beside them: a segmented download's last segment confirmed before
+the write is checked, so a refused one draws two answers, at once or with the confirmation after the tester's window.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ import struct
 
 from encoder_conformance.cia.cia301 import SdoClientCommand
 from encoder_conformance.sim.engine.faults import breaks
+from encoder_conformance.sim.engine.sdo_channel import LATE_ANSWER_S
 from encoder_conformance.sim.engine.sdo_server import COMMAND_INVALID, INITIATE_COMMANDS, SdoServer, abort_frame
 
 FRAME_BYTES = 8
@@ -84,4 +85,18 @@ class LastSegmentConfirmedThenAborted(SdoServer):
         frames = super().respond(request)
         if last_segment and frames and frames[0][0] >> 5 == 4:  # the write was refused
             return [bytes([0x20 | (request[0] & 0x10)]) + bytes(7), *frames]
+        return frames
+
+
+@breaks(SdoServer, "confirmed_late_after_abort")
+class ConfirmedLateAfterAbort(LastSegmentConfirmedThenAborted):
+    """A refused segmented download's last segment draws its abort, and ``LATE_ANSWER_S`` later a confirmation too
+    (after the tester's silence window on every shipped profile: only the late-frame ledger sees it)."""
+
+    def respond(self, request: bytes) -> list[bytes]:
+        frames = super().respond(request)
+        if len(frames) == 2 and self._later is not None:
+            confirmation = frames[0]
+            self._later(LATE_ANSWER_S, lambda: [confirmation])
+            return frames[1:]
         return frames

@@ -92,3 +92,19 @@ class SyncProducerNeverStops(SyncProducer):
         if self._job is not None and self.period_s() <= 0:
             return
         super().restart()
+
+
+#: how late ``sync_late_after_stop`` sends its last SYNC: after the tester's window on every shipped profile (as
+#: ``sdo_channel.LATE_ANSWER_S``)
+LATE_SYNC_S = 0.33
+
+
+@breaks(SyncProducer, "sync_late_after_stop")
+class SyncLateAfterStop(SyncProducer):
+    """1006h = 0 stops the SYNC, but one more comes ``LATE_SYNC_S`` later (only the late-frame ledger sees it)."""
+
+    def restart(self) -> None:
+        running = self._job is not None
+        super().restart()
+        if running and self._job is None:
+            self._scheduler.call_later(LATE_SYNC_S, self._tick)
