@@ -65,7 +65,7 @@ def test_switch_global_enters_and_leaves_configuration(lss: LssDevice):
     lss.master.switch_global(LssState.CONFIGURATION)
     assert lss.master.inquire_node_id() == lss.node_id, "inquire node-ID in configuration state"
     lss.leave()
-    with lss.master.no_answer_expected():
+    with lss.master.no_answer_expected(cia305.CLAUSE_FSA):
         assert lss.master.inquire_node_id() is None, "inquire node-ID answered in the waiting state"
 
 
@@ -75,7 +75,7 @@ def test_switch_selective_only_own_address(lss: LssDevice):
     that differs in the serial number."""
     require_service(lss, "switch_selective")
     other = LssAddress(*lss.address.parts()[:3], (lss.address.serial + 1) & 0xFFFFFFFF)
-    with lss.master.no_answer_expected():
+    with lss.master.no_answer_expected(cia305.CLAUSE_SWITCH_SELECTIVE):
         assert not lss.master.switch_selective(other), f"answered 44h to another serial number: {other.describe()}"
     assert lss.master.switch_selective(lss.address), f"no 44h to its own address {lss.address.describe()}"
 
@@ -96,7 +96,7 @@ def test_configuration_services_not_answered_in_waiting_state(lss: LssDevice, se
     """Configure and inquire services belong to the configuration state: unanswered in the waiting state."""
     require_service(lss, service)
     lss.transition("waiting")
-    with lss.master.no_answer_expected():
+    with lss.master.no_answer_expected(cia305.CLAUSE_FSA):
         answer = {"configure_node_id": lambda: lss.master.configure_node_id(lss.node_id),
                   "inquire_identity": lambda: lss.master.inquire("serial"),
                   "inquire_node_id": lss.master.inquire_node_id}[service]()
@@ -276,7 +276,7 @@ def test_identify_remote_slave_by_ranges(lss: LssDevice):
     above = LssAddress(address.vendor, address.product, 0, address.serial + 1)
     top = LssAddress(address.vendor, address.product, 0xFFFFFFFF, 0xFFFFFFFF)
     if address.serial < 0xFFFFFFFF:
-        with lss.master.no_answer_expected():
+        with lss.master.no_answer_expected(cia305.CLAUSE_IDENTIFY):
             assert lss.master.identify_remote(above, top) == 0, "4Fh although the serial range excludes the device"
 
 
@@ -284,7 +284,7 @@ def test_identify_remote_slave_by_ranges(lss: LssDevice):
 def test_configured_device_not_identified_as_non_configured(lss: LssDevice):
     """Identify non-configured remote slave (4Ch) is answered only by a device with node-ID FFh."""
     require_service(lss, "identify_non_configured")
-    with lss.master.no_answer_expected():
+    with lss.master.no_answer_expected(cia305.CLAUSE_IDENTIFY):
         assert lss.master.identify_non_configured() == 0, f"a configured device (node-ID {lss.node_id}) answered 50h"
 
 

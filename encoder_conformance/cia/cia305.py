@@ -62,6 +62,21 @@ IDENTIFY_RANGE_COMMANDS = (LssCommand.IDENTIFY_VENDOR, LssCommand.IDENTIFY_PRODU
                            LssCommand.IDENTIFY_REVISION_LOW, LssCommand.IDENTIFY_REVISION_HIGH,
                            LssCommand.IDENTIFY_SERIAL_LOW, LssCommand.IDENTIFY_SERIAL_HIGH)
 
+#: the command specifier of the slave's answer to a master request, where it is not the request's own (switch state
+#: selective, the identify services and fastscan); switch state global draws none
+ANSWERED_BY: dict[int, int | None] = {
+    LssCommand.SWITCH_STATE_GLOBAL: None,
+    **{command: LssCommand.SWITCH_SELECTIVE_RESPONSE for command in SELECTIVE_COMMANDS},
+    **{command: LssCommand.IDENTIFY_SLAVE for command in (*IDENTIFY_RANGE_COMMANDS, LssCommand.FASTSCAN)},
+    LssCommand.IDENTIFY_NON_CONFIGURED: LssCommand.IDENTIFY_NON_CONFIGURED_SLAVE,
+}
+
+
+def answer_command(request: int) -> int | None:
+    """The command specifier a slave answers the master request ``request`` with (None: no answer)."""
+    return ANSWERED_BY.get(request, request)
+
+
 FASTSCAN_RESET_BIT = 0x80  # BitChecked 80h: every non-configured slave restarts its scan (LSSPos 0)
 
 #: error codes of configure node-ID / bit timing / store configuration (byte 1 of the answer)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import struct
 import time
+from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -32,6 +33,7 @@ from encoder_conformance.cia.cia305 import (
     SLAVE_COB_ID,
     LssCommand,
     LssState,
+    answer_command,
 )
 from encoder_conformance.dut.link.device import answer_window
 from encoder_conformance.dut.link.frames import FrameLog, Mark
@@ -40,6 +42,8 @@ from encoder_conformance.dut.link.windows import UNMEASURED_MARGIN_S, Windows
 
 #: the profile's timing figure of an LSS answer (its silence window's name)
 LSS_FIGURE = "lss_response_ms"
+#: the command specifiers of this many last requests are kept (a check that no answer comes sends a few)
+REQUESTS_KEPT = 64
 #: the shortest response window a learned one may be (``LssMaster.learned_window``)
 WINDOW_FLOOR_S = 0.01
 #: after an answer, how long other slaves' copies of it may still arrive (on a real bus identical
@@ -101,6 +105,7 @@ class LssMaster:
         self._windows = windows
         self._silence = False  # inside ``no_answer_expected``
         self.steps = 0  # frames sent (fastscan cost, for the report)
+        self._requested: deque[int] = deque(maxlen=REQUESTS_KEPT)  # the command specifiers of the last requests
         self.latencies: list[float] = []  # seconds each answer took
         self._several = False  # more than one slave answered the fastscan reset: wait for their copies
 
@@ -112,6 +117,7 @@ class LssMaster:
         self._send(MASTER_COB_ID, bytes([command]) + payload.ljust(7, b"\x00")[:7])
         self._sent = mark
         self.steps += 1
+        self._requested.append(command)
         return mark
 
     def _keep_clear_of_answers(self) -> None:
@@ -137,14 +143,33 @@ class LssMaster:
         return self._windows.silence_s(LSS_FIGURE)
 
     @contextmanager
-    def no_answer_expected(self) -> Iterator[None]:
+    def no_answer_expected(self, basis: str | None = None) -> Iterator[None]:
         """Within it, services wait ``silence_s`` for their answer instead of ``answer_timeout_s``: for checks
-        that a request goes unanswered (only a silence costs the whole wait)."""
+        that a request goes unanswered (only a silence costs the whole wait). With ``basis`` (the clause that
+        forbids the answer; not for a probe whose later answer is fine), a slave frame after it and before the
+        tester's next LSS request is still charged to the check (the late-frame ledger)."""
         saved, self._silence = self._silence, True
+        first = self.steps
         try:
             yield
         finally:
             self._silence = saved
+        if basis is not None:
+            sent = self.steps - first
+            self._forbid_answers(list(self._requested)[-sent:] if sent > 0 else [], basis)
+
+    def _forbid_answers(self, requests: list[int], basis: str) -> None:
+        """Declare the answers to ``requests`` (command specifiers) late from now until a request that may draw
+        one of them (``late_frames.py``)."""
+        answers = {answer_command(c) for c in requests} - {None}
+        if not answers:
+            return
+        drawers = {c for c in LssCommand if answer_command(c) in answers}
+        what = "an LSS answer " + "/".join(f"{a:02X}h" for a in sorted(a for a in answers if a is not None))
+        self.frames.late.forbid(lambda m: _from_slave(m) and bool(m.data) and m.data[0] in answers, what,
+                                "an LSS request that must stay unanswered", basis,
+                                until=lambda m: m.arbitration_id == MASTER_COB_ID and bool(m.data)
+                                and m.data[0] in drawers)
 
     def answer(self, command: int, mark: Mark, timeout: float | None = None) -> can.Message | None:
         """The first slave frame with ``command`` after ``mark``: within ``timeout``, else ``answer_timeout_s``

@@ -10,6 +10,7 @@ are the small classes at the bottom.
 from __future__ import annotations
 
 import struct
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
@@ -374,3 +375,20 @@ class BitTimingAutoAnd100k(LssSlave):
 
     def bit_timing_valid(self, table: int, index: int) -> bool:
         return super().bit_timing_valid(table, index) or (table == 0 and index in (5, 9))
+
+
+#: how late ``lss_inquire_late_in_waiting`` answers: after the tester's LSS silence window on every shipped profile
+LATE_ANSWER_S = 0.33
+
+
+@breaks(LssSlave, "lss_inquire_late_in_waiting")
+class InquireLateInWaiting(LssSlave):
+    """Inquire node-ID in the waiting state is answered ``LATE_ANSWER_S`` later (only the late-frame ledger sees it)."""
+
+    def _inquire_node_id(self, data: bytes) -> None:
+        if self.in_configuration():
+            super()._inquire_node_id(data)
+            return
+        late = threading.Timer(LATE_ANSWER_S, self._send, (LssCommand.INQUIRE_NODE_ID, bytes([self.node_id()])))
+        late.daemon = True
+        late.start()
