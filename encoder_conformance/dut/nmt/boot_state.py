@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import can
 
 from encoder_conformance.cia.cia301 import NmtState
-from encoder_conformance.dut.link.device import DeviceLink
+from encoder_conformance.dut.link.device import DeviceLink, answer_window
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.nmt.heartbeat_state import is_state_beat
 from encoder_conformance.profile import quirk_effects as fx
@@ -63,8 +63,9 @@ def settled_state(dut: DeviceLink, after: Mark, boot: can.Message, period_ms: in
                   slack_s: float = 0.0) -> int | None:
     """The state the first heartbeat after ``after`` reports once the settle time after ``boot`` is over (a
     self-starting device may still show pre-operational right after its boot-up); None: no heartbeat came within
-    the settle time, two periods and ``slack_s``."""
+    the settle time, the answer window for two periods (a heartbeat owed: the wait ends when it comes; a loaded
+    host delivers it late) and ``slack_s``."""
     settle = dut.profile.timing.nmt_settle_ms / 1000
     beat = dut.frames.wait_for(lambda m: is_state_beat(dut, m) and m.timestamp >= boot.timestamp + settle,
-                               settle + 2 * period_ms / 1000 + slack_s, after)
+                               settle + answer_window(2 * period_ms / 1000) + slack_s, after)
     return beat.data[0] if beat is not None else None
