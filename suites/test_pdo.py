@@ -84,11 +84,11 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
     running = dut.frames.wait_count(is_this_tpdo, 2, owed, mark)
     assert len(running) == 2, f"{comm:04X}h with event timer {period_s * 1000:.0f} ms: {len(running)} TPDO(s) in " \
                               f"operational within {owed * 1000:.0f} ms"
-    dut.nmt.command(state)
+    sent = dut.nmt.command(state)
     # a TPDO after the heartbeat shows the state is this state's, also after the window (dut/link/late_frames.py)
     dut.frames.late.open_state(dut.node_id, state, is_this_tpdo, f"TPDO {cob_id:03X}h",
                                NO_PDO_OUTSIDE_OPERATIONAL)
-    dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)  # the state change
+    dut.nmt.settle(sent, state)  # the state change: until the heartbeat reports it, at most the settle time
     after = dut.frames.mark()
     late = dut.frames.quiet_period(is_this_tpdo, window, after)
     evidence.measure(f"TPDO {cob_id:03X}h frames in {state} (event timer running at the transition)", len(late),

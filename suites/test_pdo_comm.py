@@ -540,11 +540,11 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
         not_judged(Hold.NO_TPDO_ON_CHANGE, f"{comm:04X}h sent nothing on a change in operational (see "
                     "test_change_of_state_sends_event_tpdo), so its silence outside operational proves nothing")
     assert running, f"{comm:04X}h: no TPDO on {cob_id:03X}h on {trigger} in operational"
-    dut.nmt.command(state)
+    sent = dut.nmt.command(state)
     # a TPDO after the heartbeat shows the state is this state's, also after the window (dut/link/late_frames.py)
     dut.frames.late.open_state(dut.node_id, state, is_this, f"TPDO {cob_id:03X}h",
                                NO_PDO_OUTSIDE_OPERATIONAL)
-    dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)
+    dut.nmt.settle(sent, state)  # the state change: until the heartbeat reports it, at most the settle time
     late = stimulate(expected=False)
     evidence.measure(f"TPDO {cob_id:03X}h frames on {trigger} in {state}", len(late), "frames", 0, 0)
     assert not late, f"{len(late)} TPDO(s) on {cob_id:03X}h on {trigger} after NMT {state}:\n{format_frames(late[:5])}"
