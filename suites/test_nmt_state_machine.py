@@ -447,7 +447,8 @@ class NmtMachine(RuleBasedStateMachine):
         comm = self.found.sync_tpdo
         if comm is not None and self.model.pdo_allowed and self._sync_armed(comm):
             cob_id = can_id_of(self.model.expected((comm, 1)))
-            pdo = dut.frames.wait_for(dut.tpdo.at(comm).frames(cob_id), dut.pdo_silence_s + SLACK_S, mark)
+            tpdo = dut.tpdo.at(comm)
+            pdo = dut.frames.wait_for(tpdo.frames(cob_id), tpdo.answer_s + SLACK_S, mark)  # owed: answer window
             assert pdo is not None, f"no TPDO {cob_id:03X}h on a SYNC in operational ({comm:04X}h type 1, valid)"
         # outside operational the invariant judges what came, now or after the next step (teardown waits)
         self._say("SYNC", mark)
@@ -481,6 +482,7 @@ class NmtMachine(RuleBasedStateMachine):
     def teardown(self) -> None:
         """A TPDO owed to the last step's SYNC would come within the PDO window: wait for it, then judge."""
         if self.quiet_since is not None and self.dut.usable:
+            # the TPDO must not come (outside operational): a silence window, not a settle time
             self.dut.frames.quiet_period(lambda m: False, self.dut.pdo_silence_s)
             self.no_pdo_outside_operational()
 

@@ -76,17 +76,19 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
 
     is_this_tpdo = tpdo.frames(cob_id)
 
-    window = 5 * period_s + dut.pdo_silence_s
+    # TPDOs that must come: the timer's periods plus the PDO answer window (the waits end when they came); a TPDO
+    # that must not come: the same periods plus the PDO silence window
+    owed, window = 5 * period_s + tpdo.answer_s, 5 * period_s + tpdo.silence_s
     mark = dut.frames.mark()
     dut.nmt.transition("operational", settings_journal, evidence)
-    running = dut.frames.wait_count(is_this_tpdo, 2, window, mark)
+    running = dut.frames.wait_count(is_this_tpdo, 2, owed, mark)
     assert len(running) == 2, f"{comm:04X}h with event timer {period_s * 1000:.0f} ms: {len(running)} TPDO(s) in " \
-                              f"operational within {window * 1000:.0f} ms"
-    dut.nmt.command(state)
+                              f"operational within {owed * 1000:.0f} ms"
+    sent = dut.nmt.command(state)
     # a TPDO after the heartbeat shows the state is this state's, also after the window (dut/link/late_frames.py)
     dut.frames.late.open_state(dut.node_id, state, is_this_tpdo, f"TPDO {cob_id:03X}h",
                                NO_PDO_OUTSIDE_OPERATIONAL)
-    dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)  # the state change
+    dut.nmt.settle(sent, state)  # the state change: until the heartbeat reports it, at most the settle time
     after = dut.frames.mark()
     late = dut.frames.quiet_period(is_this_tpdo, window, after)
     evidence.measure(f"TPDO {cob_id:03X}h frames in {state} (event timer running at the transition)", len(late),
@@ -95,5 +97,5 @@ def test_event_timer_tpdo_stops_when_leaving_operational(dut, settings_journal, 
                      f"transition (event timer {period_s * 1000:.0f} ms):\n{format_frames(late[:5])}"
     again = dut.frames.mark()
     dut.nmt.transition("operational", settings_journal, evidence)
-    resumed = dut.frames.wait_for(is_this_tpdo, window, again)
-    assert resumed is not None, f"no TPDO on {cob_id:03X}h within {window * 1000:.0f} ms after NMT start again"
+    resumed = dut.frames.wait_for(is_this_tpdo, owed, again)
+    assert resumed is not None, f"no TPDO on {cob_id:03X}h within {owed * 1000:.0f} ms after NMT start again"

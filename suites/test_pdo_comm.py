@@ -57,17 +57,18 @@ def _u32(value: int) -> bytes:
 
 
 def _window(dut) -> float:
-    """How long to wait for a TPDO that must come after its trigger."""
-    return dut.pdo_silence_s + dut.profile.timing.nmt_settle_ms / 1000
+    """How long to wait for a TPDO that must come after its trigger (the PDO answer window and the settle time: the
+    wait ends when it comes)."""
+    return dut.pdo_answer_s + dut.profile.timing.nmt_settle_ms / 1000
 
 
 def _syncs(dut, count: int, cob_id: int, until_first: bool = False) -> list[can.Message]:
-    """``count`` SYNCs, one PDO silence window after each (``until_first``: up to the first TPDO): the TPDOs on
-    ``cob_id`` they brought."""
+    """``count`` SYNCs, one PDO silence window after each (``until_first``: a TPDO is owed, each SYNC waits up to
+    the PDO answer window for it, and the first ends the SYNCs): the TPDOs on ``cob_id`` they brought."""
     mark = dut.frames.mark()
     for _ in range(count):
         dut.send_sync()
-        if until_first and dut.frames.wait_for(received_on(cob_id), dut.pdo_silence_s, mark) is not None:
+        if until_first and dut.frames.wait_for(received_on(cob_id), dut.pdo_answer_s, mark) is not None:
             break
         if not until_first:
             dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
@@ -295,7 +296,7 @@ def test_rtr_answered(dut, settings_journal, back_to_preoperational, evidence):
         assert not unasked, f"{comm:04X}h type 253 sent on SYNC:\n{format_frames(unasked[:5])}"
     # a TPDO that is also sent by itself (POSITAL 1800h: cyclic): ask right after one of its own frames, and wait
     # for the answer less than half its period, so that its next own frame cannot pass for the answer
-    window = dut.pdo_silence_s
+    window = dut.pdo_answer_s  # an answer the device owes
     own = dut.frames.wait_count(received_on(cob_id), 2, 2.0) if _sent_by_itself(dut, comm) else []
     if len(own) == 2:
         window = min(window, (own[1].timestamp - own[0].timestamp) / 2)
@@ -342,7 +343,7 @@ def test_type_0_sends_on_sync_only_after_change(dut, settings_journal, back_to_p
     shaft.turn_by(TURN)
     early = dut.frames.quiet_period(received_on(cob_id), dut.pdo_silence_s, mark)
     assert not early, f"{comm:04X}h type 0 sent on the change itself, before any SYNC:\n{format_frames(early)}"
-    first, then = _syncs(dut, 1, cob_id), _syncs(dut, 2, cob_id)
+    first, then = _syncs(dut, 1, cob_id, until_first=True), _syncs(dut, 2, cob_id)  # the first SYNC owes one
     evidence.measure(f"TPDO {cob_id:03X}h frames for 3 SYNCs after one change", len(first) + len(then), "frames",
                      1, 1)
     trace = format_frames(dut.frames.since(mark)[:12])
@@ -357,7 +358,9 @@ def test_change_of_state_sends_event_tpdo(dut, settings_journal, back_to_preoper
     tpdo = _event_tpdo(dut, evidence, settings_journal, shaft)
     comm, kind, cob_id = tpdo.comm, tpdo.trans_type, tpdo.can_id()
     dut.nmt.transition("operational", settings_journal, evidence)
-    dut.frames.quiet_period(lambda m: False, _window(dut))  # a TPDO on entering operational is allowed
+    # a TPDO on entering operational is allowed: it may come or not (no event to wait for), so the settle time and
+    # the PDO silence window pass before the standing shaft is watched
+    dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000 + dut.pdo_silence_s)
     standing = dut.frames.quiet_period(received_on(cob_id), dut.pdo_silence_s)
     mark = dut.frames.mark()
     shaft.turn_by(TURN)
@@ -517,15 +520,15 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
     is_this = received_on(cob_id)
 
     def stimulate(expected: bool = True) -> list[can.Message]:
-        """Three triggers, each followed by a PDO silence window (cut short by the first TPDO where one is
-        ``expected``): the TPDOs they brought."""
+        """Three triggers, each followed by a PDO silence window, or where a TPDO is ``expected`` the PDO answer
+        window cut short by the first TPDO: the TPDOs they brought."""
         mark = dut.frames.mark()
         for _ in range(3):
             if trigger == "SYNC":
                 dut.send_sync()
             else:
                 shaft.turn_by(TURN)
-            if expected and dut.frames.wait_for(is_this, dut.pdo_silence_s, mark) is not None:
+            if expected and dut.frames.wait_for(is_this, dut.pdo_answer_s, mark) is not None:
                 break
             if not expected:
                 dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
@@ -537,11 +540,11 @@ def test_tpdo_silent_after_leaving_operational(dut, settings_journal, back_to_pr
         not_judged(Hold.NO_TPDO_ON_CHANGE, f"{comm:04X}h sent nothing on a change in operational (see "
                     "test_change_of_state_sends_event_tpdo), so its silence outside operational proves nothing")
     assert running, f"{comm:04X}h: no TPDO on {cob_id:03X}h on {trigger} in operational"
-    dut.nmt.command(state)
+    sent = dut.nmt.command(state)
     # a TPDO after the heartbeat shows the state is this state's, also after the window (dut/link/late_frames.py)
     dut.frames.late.open_state(dut.node_id, state, is_this, f"TPDO {cob_id:03X}h",
                                NO_PDO_OUTSIDE_OPERATIONAL)
-    dut.frames.quiet_period(lambda m: False, dut.profile.timing.nmt_settle_ms / 1000)
+    dut.nmt.settle(sent, state)  # the state change: until the heartbeat reports it, at most the settle time
     late = stimulate(expected=False)
     evidence.measure(f"TPDO {cob_id:03X}h frames on {trigger} in {state}", len(late), "frames", 0, 0)
     assert not late, f"{len(late)} TPDO(s) on {cob_id:03X}h on {trigger} after NMT {state}:\n{format_frames(late[:5])}"

@@ -213,7 +213,7 @@ def test_mapping_procedure_payload_matches_sdo(dut: DeviceUnderTest, settings_jo
             mark = dut.frames.mark()
             for _ in range(choice.transmission_type):
                 dut.send_sync()
-            window = 2 * dut.sdo_timeout + dut.pdo_silence_s
+            window = 2 * dut.sdo_timeout + sent.answer_s  # a TPDO the SYNCs owe: the wait ends when it comes
             frame = dut.frames.wait_for(sent.frames(cob_id), window, mark)
             after = [dut.read(i, s)[: b // 8] for i, s, b in plan]
         finally:

@@ -115,7 +115,9 @@ def test_sync_producer_sends_every_cycle(dut, sync_cob_id, settings_journal, evi
     try:
         dut.write(COMMUNICATION_CYCLE_PERIOD, 0, PRODUCER_PERIOD_US.to_bytes(4, "little"))
         period_s = PRODUCER_PERIOD_US / 1e6
-        window = (PRODUCER_SYNCS + 1) * period_s + dut.pdo_silence_s
+        # frames that must come: the first within the PDO answer window of the write, each further one a period
+        # later (one period spare); the wait ends at the last of them
+        window = (PRODUCER_SYNCS + 1) * period_s + dut.pdo_answer_s
         syncs = dut.frames.wait_count(is_own_sync, PRODUCER_SYNCS, window, mark)
     finally:
         dut.write(COMMUNICATION_CYCLE_PERIOD, 0, bytes(4))  # stop the SYNCs before anything else
@@ -179,14 +181,16 @@ def test_sync_taken_on_its_cob_id(dut, sync_cob_id, settings_journal, back_to_pr
     old = can_id_of(sync_cob_id)
     settings_journal.write(SYNC_COB_ID_OBJECT, 0, other.to_bytes(4, "little"))
     dut.nmt.transition("operational", settings_journal, evidence)
-    window = dut.pdo_silence_s + dut.profile.timing.nmt_settle_ms / 1000
+    settle = dut.profile.timing.nmt_settle_ms / 1000
+    answer, window = chosen.answer_s + settle, chosen.silence_s + settle  # a TPDO that must come; one that must not
 
     is_tpdo = chosen.frames(tpdo)
 
     mark = dut.send(OTHER_SYNC_CAN_ID)
-    answered = dut.frames.wait_for(is_tpdo, window, mark)
-    assert answered is not None, (f"1005h = {OTHER_SYNC_CAN_ID:03X}h: no TPDO on {tpdo:03X}h after a SYNC on "
-                                  f"{OTHER_SYNC_CAN_ID:03X}h\n{format_frames(dut.frames.since(mark))}")
+    answered = dut.frames.wait_for(is_tpdo, answer, mark)
+    assert answered is not None, (f"1005h = {OTHER_SYNC_CAN_ID:03X}h: no TPDO on {tpdo:03X}h within "
+                                  f"{answer * 1000:.0f} ms of a SYNC on {OTHER_SYNC_CAN_ID:03X}h\n"
+                                  f"{format_frames(dut.frames.since(mark))}")
     mark = dut.send(old)
     stray = dut.frames.quiet_period(is_tpdo, window, mark)
     assert not stray, (f"1005h = {OTHER_SYNC_CAN_ID:03X}h: TPDO {tpdo:03X}h after a frame on the old SYNC CAN-ID "

@@ -10,6 +10,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from encoder_conformance.cia.cia301 import EmcyCode
 from encoder_conformance.profile.loader import load_profile
+from encoder_conformance.sim.engine.sync_producer import FIRST_SYNC_LATE_S
 from tests import sim_rig
 from tests.sim_rig import WAIT_S, Rig
 
@@ -41,6 +42,21 @@ def test_sync_producer_sends_sync_every_1006h(rig: Rig):
     stopped = rig.log.mark()
     assert rig.scheduler_drained(0.02)
     assert rig.log.since(stopped, lambda m: m.is_rx and m.arbitration_id == 0x080) == []
+
+
+def test_the_sync_producer_variant_sends_its_first_sync_late_as_canopennode(rig: Rig):
+    """The variant's first SYNC comes FIRST_SYNC_LATE_S after the 1006h write (CANopenNode's demo: 49 ms at 10 ms),
+    then every 1006h: the suite's producer test waits an answer window for it (no silence window)."""
+    _, sdo = rig.boot(FULL_PDO, faults=("sync_producer",))
+    sdo.sdo.download(0x1005, 0, _u32(0x40000080))
+    mark = rig.log.mark()
+    sdo.sdo.download(0x1006, 0, _u32(10000))
+    written = rig.log.since(mark)[-1].timestamp  # the write's confirmation
+    syncs = rig.log.wait_count(lambda m: m.is_rx and m.arbitration_id == 0x080, 3, WAIT_S, mark)
+    sdo.sdo.download(0x1006, 0, _u32(0))
+    assert len(syncs) == 3
+    assert syncs[0].timestamp - written >= FIRST_SYNC_LATE_S - 0.01
+    assert syncs[2].timestamp - syncs[0].timestamp < FIRST_SYNC_LATE_S
 
 
 def test_default_twin_of_a_may_profile_refuses_the_generate_bit(rig: Rig):

@@ -13,7 +13,6 @@ from encoder_conformance.dut.link.answer_times import SDO_SAMPLES, AnswerTimes, 
 from encoder_conformance.dut.link.latency_probe import HostLatency
 from encoder_conformance.dut.link.windows import (
     FACTOR,
-    HOLD_AT_UNMEASURED,
     MIN_OBSERVED,
     SILENCE_FIGURES,
     UNMEASURED_MARGIN_S,
@@ -32,7 +31,7 @@ def _times(p99_ms: float, host_ms: float = 0.1, twin_ms: float | None = None) ->
 
 
 def test_before_the_measurement_a_window_is_the_profile_figure_plus_the_named_margin():
-    windows = Windows(hold=False, timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=100))
+    windows = Windows(timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=100))
     window = windows.silence("sdo_response_max_ms")
     assert window.seconds == pytest.approx(0.1 + UNMEASURED_MARGIN_S)
     assert "no measurement" in window.source
@@ -40,7 +39,7 @@ def test_before_the_measurement_a_window_is_the_profile_figure_plus_the_named_ma
 
 
 def test_a_measured_sdo_window_is_factor_times_p99_and_a_suite_default_is_no_floor():
-    windows = Windows(hold=False, timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=100))
+    windows = Windows(timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=100))
     windows.measured(_times(0.8))
     window = windows.silence("sdo_response_max_ms")
     assert window.seconds == pytest.approx(FACTOR * 0.8 / 1000)
@@ -49,7 +48,7 @@ def test_a_measured_sdo_window_is_factor_times_p99_and_a_suite_default_is_no_flo
 
 
 def test_a_documented_bound_is_never_waited_less():
-    windows = Windows(hold=False, timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=20,
+    windows = Windows(timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=20,
                              documented={"sdo_response_max_ms": "M §5.3.2"}))
     windows.measured(_times(0.5))
     window = windows.silence("sdo_response_max_ms")
@@ -58,13 +57,13 @@ def test_a_documented_bound_is_never_waited_less():
 
 
 def test_the_host_lateness_wins_where_it_is_larger_the_twin_s_included():
-    windows = Windows(hold=False, timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=1))
+    windows = Windows(timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=1))
     windows.measured(_times(0.5, host_ms=3.0, twin_ms=12.0))
     assert windows.silence_s("sdo_response_max_ms") == pytest.approx(0.012)
 
 
 def test_an_unmeasured_kind_is_its_figure_plus_the_tester_s_measured_part_and_appears_in_the_evidence():
-    windows = Windows(hold=False, timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=1))
+    windows = Windows(timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=1))
     windows.measured(_times(0.5))
     window = windows.silence("pdo_response_max_ms")
     assert window.seconds == pytest.approx((10 + FACTOR * 0.5) / 1000)
@@ -72,19 +71,18 @@ def test_an_unmeasured_kind_is_its_figure_plus_the_tester_s_measured_part_and_ap
     assert [w["name"] for w in windows.evidence()] == sorted(SILENCE_FIGURES)
 
 
-def test_held_a_window_is_never_shorter_than_before_measurement_and_says_so():
-    """The run's default: the sizing rule above is evidence only while waits for frames that must come still use a
-    silence window (HOLD_AT_UNMEASURED); a rule that gives more than the held window still counts."""
-    assert HOLD_AT_UNMEASURED
+def test_a_measured_window_is_used_as_measured_shorter_than_before_measurement():
+    """No hold: once measured, a window may be shorter than its figure plus the unmeasured margin (every wait for a
+    frame that must come uses the answer window), and a measured rule above it counts too."""
     windows = Windows(Timing(bootup_max_ms=1000, sdo_response_max_ms=1))
     windows.measured(_times(0.5, host_ms=3.0, twin_ms=80.0))
-    assert windows.silence_s("sdo_response_max_ms") == pytest.approx(0.080)  # the twin's lateness, above the hold
+    assert windows.silence_s("sdo_response_max_ms") == pytest.approx(0.080)  # the twin's lateness
     windows = Windows(Timing(bootup_max_ms=1000, sdo_response_max_ms=1))
     windows.measured(_times(0.5))
     window = windows.silence("sdo_response_max_ms")
-    assert window.seconds == pytest.approx(0.001 + UNMEASURED_MARGIN_S)
-    assert "held at the window before measurement" in window.source
-    assert "measured size 5.00 ms" in window.source
+    assert window.seconds == pytest.approx(FACTOR * 0.5 / 1000)
+    assert window.seconds < 0.001 + UNMEASURED_MARGIN_S
+    assert "held" not in window.source
 
 
 def test_documented_names_only_timing_figures():
@@ -116,7 +114,7 @@ def test_the_start_measurement_takes_its_round_trips_from_the_twin(rig):
 
 
 def test_a_kind_the_run_observes_is_sized_from_its_answers_once_enough_came():
-    windows = Windows(hold=False, timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=1))
+    windows = Windows(timing=Timing(bootup_max_ms=1000, sdo_response_max_ms=1))
     windows.measured(_times(0.5))
     for _ in range(MIN_OBSERVED - 1):
         windows.observe("lss_response_ms", 2.0)

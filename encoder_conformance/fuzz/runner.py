@@ -144,8 +144,8 @@ class FuzzRunner:
         mark = self.dut.frames.mark()
         reply = self.dut.sdo_request(FENCE.frame)
         if reply is not None and reply.is_abort:
-            self.dut.frames.wait_for(lambda m: self._is_reply(m) and m.data[0] >> 5 == 2, self.dut.sdo_silence_s,
-                                     after=mark)
+            self.dut.frames.wait_for(lambda m: self._is_reply(m) and m.data[0] >> 5 == 2, self.dut.sdo_timeout,
+                                     after=mark)  # the read's answer is owed: the answer window, ended when it comes
 
     def _is_reply(self, msg: can.Message) -> bool:
         return msg.is_rx and self._is_sdo(msg)

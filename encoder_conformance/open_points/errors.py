@@ -30,7 +30,8 @@ READINGS: list[OpenReading] = [
                   "bit 30 accepted: with 1006h > 0 the device sends SYNC on the 1005h CAN-ID every 1006h µs, none "
                   "with 1006h = 0 (CANopenNode's demo device)"),
         variant="sync_producer",
-        variant_text="1005h bit 30 (generate SYNC) is accepted; with 1006h > 0 the twin sends SYNC every 1006h µs",
+        variant_text="1005h bit 30 (generate SYNC) is accepted; with 1006h > 0 the twin sends SYNC every 1006h µs, the "
+                     "first 100 ms after the write (CANopenNode's demo: 49 ms)",
         modules=("test_sync_objects",),
         requires=("sync_producer",),
     ),

@@ -181,6 +181,12 @@ class DeviceLink:
         """Watch this long after a SYNC (or RTR) for a TPDO that must not come."""
         return self.silence_window("pdo_response_max_ms")
 
+    @property
+    def pdo_answer_s(self) -> float:
+        """Wait up to this long for a frame the device owes within ``pdo_response_max_ms`` of its trigger (a TPDO
+        after a SYNC or an RTR, its first SYNC as producer): ``answer_window``, the wait ends when it comes."""
+        return answer_window(self.profile.timing.pdo_response_max_ms / 1000)
+
     # -- SDO through canopen (normal access) ------------------------------------------------
     def read(self, index: int, sub: int = 0) -> bytes:
         """Upload through canopen's client (expedited or segmented). Aborts raise SdoAbortedError."""
@@ -359,9 +365,10 @@ class DeviceLink:
     def pdos_counted(self, predicate: Callable[[can.Message], bool], expected: int, after: Mark,
                      timeout: float) -> list[can.Message]:
         """The TPDOs ``predicate`` matches after ``after``, at most one more than ``expected``: waits up to
-        ``timeout`` for ``expected`` of them, then one PDO silence window in which a surplus one would come."""
+        ``timeout`` for ``expected`` of them, then one PDO silence window in which a surplus one would come (a frame
+        that must not come: the silence window, not a settle time)."""
         self.frames.wait_count(predicate, expected, timeout, after)
-        self.frames.quiet_period(lambda m: False, self.pdo_silence_s)
+        self.frames.quiet_period(predicate, self.pdo_silence_s)
         return self.frames.since(after, predicate)[: expected + 1]
 
     def frames_from_node(self, after: Mark, duration: float) -> list[can.Message]:

@@ -10,7 +10,8 @@ A kind not measured yet (PDO, EMCY, LSS) is watched for what the profile says th
 suite's default) plus the tester's part: the largest of ``FACTOR`` x the measured SDO p99 (the round trip bounds
 the bus hop and the host both ways) and the host's lateness; before any measurement (the start-up check itself)
 the tester's part is ``UNMEASURED_MARGIN_S``. An expected answer is waited for ``answer_window`` (the wait ends when
-it comes), unchanged.
+it comes), unchanged: a silence window never sizes a wait for a frame that must come (``DeviceLink.pdo_answer_s``,
+``sdo_timeout``), so a short one loses no frame the device owes.
 """
 
 from __future__ import annotations
@@ -30,12 +31,6 @@ FACTOR = 10.0
 #: SDO round trips to the twin measured p99 < 20 ms on the 2-core CI machine with two runs and a busy process
 #: beside them; 50 ms leaves room (the margin every silence window had before windows were measured)
 UNMEASURED_MARGIN_S = 0.05
-#: no silence window is shorter than it was before measurement (its figure + ``UNMEASURED_MARGIN_S``) while some
-#: waits for frames that must come are still sized from a silence window: against CANopenNode's Linux demo the SYNC
-#: producer's first SYNC came 49 ms after the 1006h write, and test_sync_producer_sends_every_cycle, waiting 3 periods
-#: plus the PDO silence window, saw 1 SYNC in 57 ms where it had seen 3 in 100 ms. The measured size stays in each
-#: window's source; it takes effect once those waits use the answer window.
-HOLD_AT_UNMEASURED = True
 #: answers of a kind seen in the run before its window is sized from them (LSS answers, observed where the suite
 #: first exchanges them); with 5, the p99 is their slowest
 MIN_OBSERVED = 5
@@ -58,10 +53,8 @@ class Window:
 class Windows:
     """The silence windows of one device, from its profile and, once taken, its measured answer times."""
 
-    def __init__(self, timing: Timing, hold: bool = HOLD_AT_UNMEASURED) -> None:
-        """``hold``: no window shorter than before measurement (``HOLD_AT_UNMEASURED``)."""
+    def __init__(self, timing: Timing) -> None:
         self.timing = timing
-        self.hold = hold
         self.sdo: AnswerTimes | None = None
         self._observed: dict[str, list[float]] = {}
         self._cache: dict[str, Window] = {}
@@ -82,17 +75,8 @@ class Windows:
         """The silence window for what the profile's timing ``figure`` (e.g. ``sdo_response_max_ms``) bounds."""
         window = self._cache.get(figure)
         if window is None:
-            window = self._cache[figure] = self._held(self._size(figure))
+            window = self._cache[figure] = self._size(figure)
         return window
-
-    def _held(self, window: Window) -> Window:
-        """``window``, or where ``hold`` is on and it is shorter, the window before measurement (its source says so)."""
-        held_s = float(getattr(self.timing, window.name)) / 1000 + UNMEASURED_MARGIN_S
-        if not self.hold or window.seconds >= held_s:
-            return window
-        return Window(window.name, held_s, f"held at the window before measurement, {held_s * 1000:.1f} ms "
-                                           f"(HOLD_AT_UNMEASURED); measured size {window.seconds * 1000:.2f} ms: "
-                                           f"{window.source}")
 
     def silence_s(self, figure: str) -> float:
         return self.silence(figure).seconds

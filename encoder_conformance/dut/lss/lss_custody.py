@@ -5,7 +5,7 @@ FFh), in the LSS configuration state, with a pending bit rate, or with any of th
 for it in this order, each look as long as the device owes its answer (``answer_window`` of the profile's
 ``sdo_response_max_ms`` / ``lss_response_ms``, ``bootup_max_ms`` for a boot-up):
 
-1. at the node-ID it was found at, then at every node-ID a test gave it (an SDO read of 1000h);
+1. at the node-ID it was found at and at every node-ID a test gave it (an SDO read of 1000h at each, sent at once);
 2. by LSS: selected by its LSS address (switch state selective; its active node-ID from inquire node-ID), found by
    fastscan with its known address, or identified as non-configured;
 3. after NMT reset communication addressed to each of those node-IDs (a pending node-ID applied);
@@ -88,11 +88,21 @@ class LssCustody:
     def _others(self) -> list[int]:
         return sorted(set(self.candidates) - {self.target, UNCONFIGURED_NODE_ID})
 
+    def answering(self, node_ids: list[int]) -> int | None:
+        """The node-ID of ``node_ids`` that answers an SDO read of 1000h, all asked at once and the answer waited
+        for the SDO answer window (it ends when one comes: the device owes its answer wherever it is)."""
+        mark = self.dut.frames.mark()
+        for node_id in node_ids:
+            self.dut.network.send_message(SDO_REQUEST_BASE + node_id, upload_request(0x1000, 0))
+        responses = [SDO_RESPONSE_BASE + node_id for node_id in node_ids]
+        first = self.dut.frames.wait_for(lambda m: any(_from(m, r) for r in responses), self.dut.sdo_timeout, mark)
+        return None if first is None else first.arbitration_id - SDO_RESPONSE_BASE
+
     def locate(self) -> Found | None:
         """Where the device is now (see the module docstring); None where no look found it."""
-        for node_id in [self.target, *self._others()]:  # each waits what the device owes (plus the margin)
-            if self.answers_at(node_id, self.dut.sdo_silence_s):
-                return Found(node_id, f"answers SDO at node-ID {node_id}")
+        node_id = self.answering([self.target, *self._others()])
+        if node_id is not None:
+            return Found(node_id, f"answers SDO at node-ID {node_id}")
         found = self._by_lss()
         if found is not None:
             return found

@@ -7,11 +7,13 @@ from __future__ import annotations
 import can
 
 import encoder_conformance.dut.nmt.commands as commands
+import encoder_conformance.dut.nmt.heartbeat_state as heartbeat_state
 import encoder_conformance.dut.nmt.nmt_states as nmt_states
 from encoder_conformance.dut.custody.settings_journal import SettingsJournal
 from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.link.notes import Notes
+from encoder_conformance.dut.nmt.nmt_frames import target_state
 
 #: the states ``transition`` reaches
 STATES = tuple(nmt_states.STATES)
@@ -39,6 +41,12 @@ class NmtFace:
             nmt_states.start_operational(self._dut, journal, notes)
         else:
             nmt_states.reach(self._dut, journal, notes, state)
+
+    def settle(self, after: Mark, command: str) -> bool:
+        """After NMT ``command`` sent at ``after``: until the heartbeat reports the state it leads to, at most the
+        profile's settle time (``heartbeat_state.settle``); True once it did. Judges nothing: a test that needs the
+        state seen uses ``transition`` or ``confirm``."""
+        return heartbeat_state.settle(self._dut, after, target_state(command))
 
     def back_to_preoperational(self, period_ms: int | None = None) -> None:
         """The put-back after a test: NMT enter pre-operational, seen in the heartbeat where ``period_ms`` (1017h)

@@ -52,6 +52,17 @@ def wait_state(dut: DeviceLink, after: Mark, state: int, window_s: float) -> int
     return newest_state(dut, after)
 
 
+def settle(dut: DeviceLink, after: Mark, state: int) -> bool:
+    """After an NMT command at ``after``: until a heartbeat reports ``state``, at most the profile's settle time
+    (``nmt_settle_ms``); True once one did. Without a heartbeat producer nothing on the bus shows the state: the
+    settle time is waited out (False). A heartbeat slower than the settle time ends the wait at it, as before."""
+    settle_s = dut.profile.timing.nmt_settle_ms / 1000
+    if dut.profile.capabilities.heartbeat_producer:
+        return dut.wait_heartbeat(after, settle_s, state=state) is not None
+    dut.frames.quiet_period(lambda m: False, settle_s)  # no event shows the state: the profile's settle time
+    return False
+
+
 def period_seen_s(dut: DeviceLink) -> float | None:
     """The producer's period as the newest two heartbeats of the log show it (None: fewer than two)."""
     beats = dut.frames.before(dut.frames.mark(), lambda m: is_state_beat(dut, m), LOOK_BACK)

@@ -22,8 +22,10 @@ def pdo_stimulus(dut: DeviceLink, shaft: ShaftDrive | None, syncs: int = 10,
     stays a valid reference (devices without an offset object are given back by their position at rest).
 
     Each pause is an observation window on the frame log (the device's answers are what the caller
-    inspects), not a wait for the device. With ``until``, the stimulus ends at the first frame it matches
-    (a test that expects TPDOs needs no more).
+    inspects), not a wait for the device: the SYNC spacing is the bus cycle the stimulus paces, and after the
+    last SYNC the PDO silence window in which a TPDO that must not come would show. With ``until`` (a test that
+    expects TPDOs), the stimulus ends at the first frame it matches, waited for up to the PDO answer window after
+    the last SYNC (a frame the device owes: never a silence window).
     """
     turned = 0.0
     mark = dut.frames.mark()
@@ -40,7 +42,7 @@ def pdo_stimulus(dut: DeviceLink, shaft: ShaftDrive | None, syncs: int = 10,
         if until is None:
             dut.frames.quiet_period(lambda m: False, dut.pdo_silence_s)
         else:
-            dut.frames.wait_for(until, dut.pdo_silence_s, mark)
+            dut.frames.wait_for(until, dut.pdo_answer_s, mark)
     finally:
         if shaft is not None and turned:
             shaft.turn_by(-turned)

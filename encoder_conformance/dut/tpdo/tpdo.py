@@ -4,7 +4,7 @@ device has them now, the predicate of its frames and the windows they are waited
 from __future__ import annotations
 
 from encoder_conformance.cia.cia301 import PDO_MAPPING_OFFSET, TPDO_COMMUNICATION, can_id_of
-from encoder_conformance.dut.link.device import DeviceLink, answer_window
+from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Predicate, received_on
 
 #: TPDOs 1..512 (communication parameters 1800h..19FFh, CiA 301 §7.5.2.37)
@@ -37,7 +37,7 @@ class TpdoParameters:
     @property
     def answer_s(self) -> float:
         """How long a TPDO the device owes (after a SYNC, an RTR) is waited for."""
-        return answer_window(self.dut.profile.timing.pdo_response_max_ms / 1000)
+        return self.dut.pdo_answer_s
 
     @property
     def silence_s(self) -> float:
