@@ -59,3 +59,34 @@ def test_listener_is_the_direct_dispatcher_and_hears_no_own_frames(served_host):
     host.bus.queue._dispatch = heard.append  # type: ignore[union-attr]  # what reaches the host from now on
     host.bus.send(can.Message(arbitration_id=0x77, data=b"\x01", is_extended_id=False))
     assert not heard, "the host heard its own frame"
+
+
+def test_own_frames_reach_each_listener_as_virtual_bus_send_would():
+    """The twin's frames go on the channel as ``VirtualBus.send`` puts them (put_on_virtual_channel, without its
+    deep copy): each other listener gets a copy of its own, stamped when sent, named by the channel, marked
+    received; the sender hears nothing."""
+    from encoder_conformance.sim.engine.host import put_on_virtual_channel
+
+    channel = f"host-test-{uuid.uuid4().hex}"
+    sender = can.Bus(interface="virtual", channel=channel)
+    one, two = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
+    try:
+        frame = can.Message(arbitration_id=0x185, data=b"\x01\x02\x03", is_extended_id=False)
+        before = time.time()
+        put_on_virtual_channel(sender, frame)  # type: ignore[arg-type]  # can.Bus(...) is a VirtualBus here
+        got = [bus.recv(WAIT_S) for bus in (one, two)]
+        assert sender.recv(0) is None, "the sender heard its own frame"
+        assert all(m is not None for m in got)
+        first, second = got
+        assert first is not second
+        assert first.data is not second.data
+        assert first.data is not frame.data
+        for message in got:
+            assert (message.arbitration_id, bytes(message.data), message.dlc) == (0x185, b"\x01\x02\x03", 3)
+            assert message.channel == channel
+            assert message.is_rx
+            assert not message.is_extended_id
+            assert before <= message.timestamp <= time.time()
+    finally:
+        for bus in (sender, one, two):
+            bus.shutdown()
