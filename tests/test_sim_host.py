@@ -61,19 +61,20 @@ def test_listener_is_the_direct_dispatcher_and_hears_no_own_frames(served_host):
     assert not heard, "the host heard its own frame"
 
 
-def test_own_frames_reach_each_listener_as_virtual_bus_send_would():
-    """The twin's frames go on the channel as ``VirtualBus.send`` puts them (put_on_virtual_channel, without its
-    deep copy): each other listener gets a copy of its own, stamped when sent, named by the channel, marked
-    received; the sender hears nothing."""
-    from encoder_conformance.sim.engine.host import put_on_virtual_channel
+def test_virtual_channel_copies_as_virtual_bus_send_would():
+    """The twin's virtual channel sends as ``VirtualBus.send`` does, without its deep copy (virtual_channel.py): each
+    other listener gets a copy of its own, stamped when sent, named by the channel, marked received; the sender
+    hears nothing. The host's bus and the buses python-can-remote opens for testers are of that kind."""
+    from encoder_conformance.sim.engine.virtual_channel import CopyingVirtualBus, server_config
 
     channel = f"host-test-{uuid.uuid4().hex}"
-    sender = can.Bus(interface="virtual", channel=channel)
+    sender = can.Bus(channel=channel, **server_config())  # as python-can-remote's server opens it
     one, two = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
     try:
+        assert isinstance(sender, CopyingVirtualBus)
         frame = can.Message(arbitration_id=0x185, data=b"\x01\x02\x03", is_extended_id=False)
         before = time.time()
-        put_on_virtual_channel(sender, frame)  # type: ignore[arg-type]  # can.Bus(...) is a VirtualBus here
+        sender.send(frame)
         got = [bus.recv(WAIT_S) for bus in (one, two)]
         assert sender.recv(0) is None, "the sender heard its own frame"
         assert all(m is not None for m in got)
@@ -90,3 +91,12 @@ def test_own_frames_reach_each_listener_as_virtual_bus_send_would():
     finally:
         for bus in (sender, one, two):
             bus.shutdown()
+
+
+def test_host_and_served_testers_use_the_copying_channel(served_host):
+    from encoder_conformance.sim.engine.virtual_channel import CopyingVirtualBus, server_config
+
+    host, _ = served_host
+    assert isinstance(host.bus, CopyingVirtualBus)
+    assert host._remote is not None
+    assert host._remote.config["interface"] == server_config()["interface"]

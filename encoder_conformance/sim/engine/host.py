@@ -16,7 +16,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from queue import Full, Queue
+from queue import Queue
 from typing import TYPE_CHECKING, Any, cast
 
 import can
@@ -28,6 +28,7 @@ from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.faults import FaultSet
 from encoder_conformance.sim.engine.node import SimulatedNode
 from encoder_conformance.sim.engine.scheduler import DeadlineScheduler
+from encoder_conformance.sim.engine.virtual_channel import open_channel, server_config
 
 if TYPE_CHECKING:
     from can_remote.server import RemoteServer
@@ -54,7 +55,9 @@ class SimulatorHost:
 
     def __init__(self, channel: str, interface: str = "virtual", **bus_kwargs: Any) -> None:
         self.channel = channel
-        self.bus = can.Bus(interface=interface, channel=channel, **bus_kwargs)
+        # python-can's virtual bus (the default), its frames copied without deepcopy: virtual_channel.py
+        self.bus = (open_channel(channel, **bus_kwargs) if interface == "virtual"
+                    else can.Bus(interface=interface, channel=channel, **bus_kwargs))
         self.scheduler = DeadlineScheduler()
         self.nodes: list[SimulatedNode] = []
         self._primary_of: dict[int, SimulatedNode] = {}  # id(sibling) -> the node whose quirk added it
@@ -123,10 +126,7 @@ class SimulatorHost:
             msg = can.Message(arbitration_id=cob_id, data=data, is_extended_id=extended)
             with self._send_lock:
                 try:
-                    if isinstance(self.bus, VirtualBus):
-                        put_on_virtual_channel(self.bus, msg)
-                    else:
-                        self.bus.send(msg)
+                    self.bus.send(msg)
                 except can.CanError as exc:
                     log.warning("send failed: %s", exc)
             others = [other for other in self.nodes if other is not origin]
@@ -165,7 +165,7 @@ class SimulatorHost:
 
         logging.getLogger("can_remote").setLevel(logging.WARNING)
         self._dispatch_in_sender_thread()
-        self._remote = RemoteServer(host, port, interface="virtual", channel=self.channel)
+        self._remote = RemoteServer(host, port, channel=self.channel, **server_config())
         # a short poll: shutdown() waits for the serving loop to notice (the default 0.5 s is a run's end)
         server = self._remote
         threading.Thread(target=lambda: server.serve_forever(poll_interval=SERVER_POLL_S), name="remote-server",
@@ -201,30 +201,6 @@ class SimulatorHost:
             self.bus.shutdown()
         except Exception as exc:  # pragma: no cover - shutdown must not raise
             print(f"bus shutdown: {exc}", file=sys.stderr)
-
-
-def put_on_virtual_channel(bus: VirtualBus, msg: can.Message) -> None:
-    """What ``VirtualBus.send`` does (each listener of the channel gets its own copy, stamped now), with the copy
-    made by Message's constructor instead of ``copy.deepcopy``: the deep copy of a frame (its data bytearray
-    through the copy protocol) cost ~28 µs against ~5 µs on the 2-core machine, and the twin sends every
-    heartbeat, TPDO and answer this way (tens of thousands of frames in a full run)."""
-    bus._check_if_open()
-    timestamp = msg.timestamp if bus.preserve_timestamps else time.time()
-    all_sent = True
-    for listener in bus.channel:
-        if listener is bus.queue and not bus.receive_own_messages:
-            continue
-        copy = can.Message(
-            timestamp=timestamp, arbitration_id=msg.arbitration_id, is_extended_id=msg.is_extended_id,
-            is_remote_frame=msg.is_remote_frame, is_error_frame=msg.is_error_frame, channel=bus.channel_id,
-            dlc=msg.dlc, data=bytearray(msg.data), is_fd=msg.is_fd, is_rx=listener is not bus.queue,
-            bitrate_switch=msg.bitrate_switch, error_state_indicator=msg.error_state_indicator, check=False)
-        try:
-            listener.put(copy, block=True, timeout=None)
-        except Full:
-            all_sent = False
-    if not all_sent:
-        raise can.CanOperationError("Could not send message to one or more recipients")
 
 
 def with_serial_number(profile: DeviceProfile, serial: int) -> DeviceProfile:
