@@ -59,3 +59,44 @@ def test_listener_is_the_direct_dispatcher_and_hears_no_own_frames(served_host):
     host.bus.queue._dispatch = heard.append  # type: ignore[union-attr]  # what reaches the host from now on
     host.bus.send(can.Message(arbitration_id=0x77, data=b"\x01", is_extended_id=False))
     assert not heard, "the host heard its own frame"
+
+
+def test_virtual_channel_copies_as_virtual_bus_send_would():
+    """The twin's virtual channel sends as ``VirtualBus.send`` does, without its deep copy (virtual_channel.py): each
+    other listener gets a copy of its own, stamped when sent, named by the channel, marked received; the sender
+    hears nothing. The host's bus and the buses python-can-remote opens for testers are of that kind."""
+    from encoder_conformance.sim.engine.virtual_channel import CopyingVirtualBus, server_config
+
+    channel = f"host-test-{uuid.uuid4().hex}"
+    sender = can.Bus(channel=channel, **server_config())  # as python-can-remote's server opens it
+    one, two = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
+    try:
+        assert isinstance(sender, CopyingVirtualBus)
+        frame = can.Message(arbitration_id=0x185, data=b"\x01\x02\x03", is_extended_id=False)
+        before = time.time()
+        sender.send(frame)
+        got = [bus.recv(WAIT_S) for bus in (one, two)]
+        assert sender.recv(0) is None, "the sender heard its own frame"
+        assert all(m is not None for m in got)
+        first, second = got
+        assert first is not second
+        assert first.data is not second.data
+        assert first.data is not frame.data
+        for message in got:
+            assert (message.arbitration_id, bytes(message.data), message.dlc) == (0x185, b"\x01\x02\x03", 3)
+            assert message.channel == channel
+            assert message.is_rx
+            assert not message.is_extended_id
+            assert before <= message.timestamp <= time.time()
+    finally:
+        for bus in (sender, one, two):
+            bus.shutdown()
+
+
+def test_host_and_served_testers_use_the_copying_channel(served_host):
+    from encoder_conformance.sim.engine.virtual_channel import CopyingVirtualBus, server_config
+
+    host, _ = served_host
+    assert isinstance(host.bus, CopyingVirtualBus)
+    assert host._remote is not None
+    assert host._remote.config["interface"] == server_config()["interface"]

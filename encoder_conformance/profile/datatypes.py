@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 from canopen.objectdictionary import datatypes as dt
 
 #: Canonical CiA 301 names -> canopen data-type code.
@@ -51,6 +53,7 @@ _SIZES_BITS: dict[str, int] = {
 STRING_TYPES = frozenset({"VISIBLE_STRING", "OCTET_STRING", "UNICODE_STRING", "DOMAIN"})
 
 
+@lru_cache(maxsize=256)  # asked for every value the twin encodes (TPDO payloads, position reads); ~40 names
 def canonical_name(name: str) -> str:
     """Return the canonical CiA name of ``name`` or raise ValueError naming the choices."""
     upper = name.strip().upper()
@@ -61,6 +64,7 @@ def canonical_name(name: str) -> str:
     return upper
 
 
+@lru_cache(maxsize=256)
 def size_bytes(name: str) -> int | None:
     """Size in bytes of a fixed-size type, None for strings and domains."""
     bits = _SIZES_BITS.get(canonical_name(name))

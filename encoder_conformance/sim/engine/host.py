@@ -28,6 +28,7 @@ from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.faults import FaultSet
 from encoder_conformance.sim.engine.node import SimulatedNode
 from encoder_conformance.sim.engine.scheduler import DeadlineScheduler
+from encoder_conformance.sim.engine.virtual_channel import open_channel, server_config
 
 if TYPE_CHECKING:
     from can_remote.server import RemoteServer
@@ -54,7 +55,9 @@ class SimulatorHost:
 
     def __init__(self, channel: str, interface: str = "virtual", **bus_kwargs: Any) -> None:
         self.channel = channel
-        self.bus = can.Bus(interface=interface, channel=channel, **bus_kwargs)
+        # python-can's virtual bus (the default), its frames copied without deepcopy: virtual_channel.py
+        self.bus = (open_channel(channel, **bus_kwargs) if interface == "virtual"
+                    else can.Bus(interface=interface, channel=channel, **bus_kwargs))
         self.scheduler = DeadlineScheduler()
         self.nodes: list[SimulatedNode] = []
         self._primary_of: dict[int, SimulatedNode] = {}  # id(sibling) -> the node whose quirk added it
@@ -162,7 +165,7 @@ class SimulatorHost:
 
         logging.getLogger("can_remote").setLevel(logging.WARNING)
         self._dispatch_in_sender_thread()
-        self._remote = RemoteServer(host, port, interface="virtual", channel=self.channel)
+        self._remote = RemoteServer(host, port, channel=self.channel, **server_config())
         # a short poll: shutdown() waits for the serving loop to notice (the default 0.5 s is a run's end)
         server = self._remote
         threading.Thread(target=lambda: server.serve_forever(poll_interval=SERVER_POLL_S), name="remote-server",
