@@ -7,7 +7,7 @@ from __future__ import annotations
 import can
 
 from encoder_conformance.cia.cia301 import NMT_COB_ID, STATE_NAMES, NmtCommand, NmtState
-from encoder_conformance.dut.link.device import DeviceLink
+from encoder_conformance.dut.link.device import DeviceLink, answer_window
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.nmt.commands import send_command
 
@@ -17,9 +17,16 @@ SDO_STATES = frozenset({NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL})
 LOOK_BACK = 2000
 
 
-def state_window_s(dut: DeviceLink, period_ms: float) -> float:
+def state_change_s(dut: DeviceLink, period_ms: float) -> float:
     """How long a state change may take to show in the heartbeat: the settle time plus two heartbeat periods."""
     return (dut.profile.timing.nmt_settle_ms + 2 * period_ms) / 1000
+
+
+def state_window_s(dut: DeviceLink, period_ms: float) -> float:
+    """How long the heartbeat reporting a state change is waited for: a frame the device owes within
+    ``state_change_s``, so its answer window (the wait ends when it comes). Under a busy process a tester saw no
+    heartbeat at all for 120 ms at 1017h = 10 ms, a false failure of the transition."""
+    return answer_window(state_change_s(dut, period_ms))
 
 
 def describe(state: int | None) -> str:

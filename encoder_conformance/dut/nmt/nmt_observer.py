@@ -15,7 +15,8 @@ from encoder_conformance.deadline import Deadline
 from encoder_conformance.dut.link.device import DeviceLink
 from encoder_conformance.dut.link.frames import Mark
 from encoder_conformance.dut.nmt.commands import send_command
-from encoder_conformance.dut.nmt.nmt_states import confirm, window_s
+from encoder_conformance.dut.nmt.heartbeat_state import state_change_s
+from encoder_conformance.dut.nmt.nmt_states import confirm
 from encoder_conformance.dut.nmt.persistent_error import raise_if_held_out_of
 from encoder_conformance.dut.sdo.sdo_frames import upload_request
 
@@ -68,7 +69,7 @@ class HeartbeatObserver(_Commands):
     @property
     def window_s(self) -> float:
         """How long a state change may take to show: settle time plus two heartbeat periods."""
-        return window_s(self.dut, self.period_ms)
+        return state_change_s(self.dut, self.period_ms)
 
     def expect_state(self, after: Mark, state: int, why: str) -> None:
         confirm(self.dut, after, state, self.period_ms, why)  # names the state the heartbeat reports instead
