@@ -6,6 +6,7 @@ import ast
 from pathlib import Path
 
 import encoder_conformance.sim.engine.node
+from encoder_conformance.open_points import variants
 from encoder_conformance.sim.engine.faults import FaultSet, assemble, implemented_faults
 from encoder_conformance.sim.engine.heartbeat import HeartbeatProducer
 from encoder_conformance.sim.fault_catalogue import SIMULATOR_DEVIATIONS as FAULTS
@@ -14,10 +15,12 @@ SIM = Path(encoder_conformance.sim.engine.node.__file__).parent
 
 
 def test_every_catalogued_fault_has_exactly_one_implementation():
+    """A fault breaks one behaviour; a conformant variant is a reading of the whole device and may shape several (the
+    SYNC producer variant: 1005h's rules and the first SYNC's time)."""
     implemented = implemented_faults()
     assert sorted(set(FAULTS) - set(implemented)) == [], "faults in the catalogue without an implementation"
     assert sorted(set(implemented) - set(FAULTS)) == [], "implementations of faults the catalogue lacks"
-    twice = {name: owners for name, owners in implemented.items() if len(owners) != 1}
+    twice = {name: owners for name, owners in implemented.items() if len(owners) != 1 and name not in variants()}
     assert twice == {}, "faults implemented in more than one behaviour"
 
 
