@@ -1,16 +1,13 @@
 """suite_runner: a pytest session in a forked child gets the folder and environment asked for, its output is
-kept, its exit code returned, and one that hangs is killed after the time-out (as subprocess.run does); the fork
-server preloads no more modules with asserts than it did before SESSION_PRELOAD (pytest rewrites those in a session)."""
+kept, its exit code returned, and one that hangs is killed after the time-out (as subprocess.run does)."""
 
 from __future__ import annotations
 
-import json
 import subprocess
-import sys
 
 import pytest
 
-from encoder_conformance.runs.suite_runner import PRELOAD, SESSION_PRELOAD, run_pytest
+from encoder_conformance.runs.suite_runner import run_pytest
 
 SESSION = '''
 import os
@@ -57,32 +54,3 @@ def test_failing_session_returns_its_exit_code(folder):
 def test_hanging_session_is_killed_after_the_timeout(folder):
     with pytest.raises(subprocess.TimeoutExpired):
         run_pytest(["test_hang.py", "-q", "-p", "no:cacheprovider"], folder, folder / "out.txt", 3)
-
-
-#: modules with assert statements, of distributions pytest rewrites (their pytest11 plugins), that the fork server
-#: imported before SESSION_PRELOAD came: the profile schema and the device's and twin's modules, which the command
-#: line (the profile) or the twin imports before pytest too
-UNREWRITTEN_BEFORE = {
-    "encoder_conformance.profile.schema", "encoder_conformance.profile.value_domain",
-    "encoder_conformance.dut.nmt.nmt_states", "encoder_conformance.dut.sdo.sdo_client",
-    "encoder_conformance.dut.custody.write_plan", "encoder_conformance.sim.process",
-    "encoder_conformance.sim.engine.encoder", "encoder_conformance.sim.engine.timer_link"}
-_WITH_ASSERTS = """
-import importlib, json, re, sys
-for name in sys.argv[1:]:
-    importlib.import_module(name)
-def asserts(module):
-    path = getattr(module, "__file__", None) or ""
-    return path.endswith(".py") and re.search(r"^\\s*assert\\b", open(path, encoding="utf-8").read(), re.M)
-rewritten = ("encoder_conformance", "_hypothesis_pytestplugin", "pytest_html", "pytest_metadata")
-print(json.dumps(sorted(n for n, m in list(sys.modules.items()) if n.startswith(rewritten) and asserts(m))))
-"""
-
-
-def test_the_session_preload_leaves_asserts_to_pytest():
-    """A module whose asserts pytest rewrites in a user's session (the suite helpers' checks, the custody, the LSS
-    steps) is not imported by the fork server's SESSION_PRELOAD: a failing assert there reads as in a user's run."""
-    done = subprocess.run([sys.executable, "-c", _WITH_ASSERTS, *PRELOAD], capture_output=True, text=True,
-                          timeout=120, check=True)
-    assert set(json.loads(done.stdout)) <= UNREWRITTEN_BEFORE
-    assert set(SESSION_PRELOAD) <= set(PRELOAD)

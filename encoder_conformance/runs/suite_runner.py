@@ -33,28 +33,11 @@ from encoder_conformance.sim.twin import SERVE_MODULE
 ENTRY_POINT_LIBRARIES = ("hypothesis", "pytest_html", "pytest_metadata")
 #: the modules of the plugins' distributions the server imports (hypothesis imports its _hypothesis_globals)
 PRELOADED_DISTRIBUTION_MODULES = ("encoder_conformance", *ENTRY_POINT_LIBRARIES, "_hypothesis_globals")
-#: what a session still imported after PRELOAD's first list, and whose asserts pytest does not rewrite anyway: pytest's
-#: own plugins, the plugins' libraries, the tester's bus client, the standard modules they use, and the plugin's
-#: modules without an assert statement (nor one among the modules they import). A session imported 152 more
-#: modules; preloading these took 0.62 -> 0.53 s of a targeted session's CPU (median of 5, test_identity, WDGA).
-#: Modules with asserts (plugin/suite_helpers/checks.py, the custody, the LSS steps) stay to the session, which
-#: rewrites them as in a user's run: tests/test_suite_runner.py checks the list stays so
-SESSION_PRELOAD = [
-    "_pytest.junitxml", "_pytest.pastebin", "_pytest.helpconfig", "_pytest.faulthandler", "_pytest.skipping",
-    "_pytest.unittest", "_pytest.warnings", "_pytest.setuponly", "_pytest.setupplan", "_pytest.threadexception",
-    "_pytest.tracemalloc", "_pytest.unraisableexception", "pdb", "pytest_html.plugin", "pytest_metadata.plugin",
-    "can_remote", "xml.etree.ElementTree", "tomllib", "statistics", "http.server",
-    *(f"encoder_conformance.{name}" for name in (
-        "dut.bench.power_on", "dut.custody.restore_record", "dut.link.connection", "dut.sdo.startup_frames",
-        "dut.store.boot_memory", "dut.store.restart_watch", "dut.store.store_watch", "dut.tpdo.periodic_capture",
-        "history.db", "history.sync", "plugin.acceptance", "plugin.fixtures.emcy", "plugin.fixtures.evidence",
-        "plugin.fixtures.simulator", "plugin.fixtures.tpdo", "plugin.former_spellings", "plugin.hypothesis_profiles",
-        "plugin.interrupt", "plugin.junit_coverage", "plugin.progress", "plugin.selection", "plugin.shuffle"))]
 #: imported once in the fork server (the heavy imports of a session)
 PRELOAD = ["pytest", "_pytest.assertion.rewrite", "_pytest.python", "jinja2", "allure_commons", "attr", "can",
            "canopen", "pydantic", "yaml", "encoder_conformance.profile.loader", "encoder_conformance.dut.device",
            "encoder_conformance.sim.process", "encoder_conformance.plugin.hooks",
-           SERVE_MODULE, *ENTRY_POINT_LIBRARIES, *SESSION_PRELOAD]
+           SERVE_MODULE, *ENTRY_POINT_LIBRARIES]
 #: how long a child may take to stop after SIGTERM before it is killed
 STOP_GRACE_S = 5.0
 
