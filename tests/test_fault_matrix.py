@@ -52,17 +52,21 @@ def _functions(result, outcome: str) -> set[str]:
 
 
 @pytest.fixture(scope="module")
-def main_matrix(tmp_path_factory, full_runs):
+def main_matrix(tmp_path_factory, full_runs, fault_runs):
     """Every fault that can show on the main profile (faults of quirks it lacks go to the complements). The
     baseline is the session's full run of the main profile's twin (tests/suite_session.py), shared with
-    test_twins and test_shuffled_order: the same command the matrix ran for it, but for --tb."""
+    test_twins and test_shuffled_order: the same command the matrix ran for it, but for --tb. Each fault's run
+    is the session's too (the strictly judged ones are test_inferred_walk's --strict-inferred runs)."""
     def baseline() -> RunResult:
         run = full_runs(MAIN_PROFILE)
         return read_run(None, run.folder / "report", run.completed)
 
+    def fault_run(fault: str) -> RunResult:
+        return read_run(fault, *fault_runs(MAIN_PROFILE, fault))
+
     faults = faults_for(_effects(MAIN_PROFILE))
     return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=PARALLEL_RUNS,
-                      targeted=True, baseline_run=baseline)
+                      targeted=True, baseline_run=baseline, fault_run=fault_run)
 
 
 @pytest.fixture(scope="module")

@@ -98,6 +98,13 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     """One pytest run of suites/ (``targeted``: the fault's own modules) against the twin with ``fault``
     (strict about inferred rules where the fault is in JUDGED_STRICTLY). ``together``: further deviations the
     twin plays in the same run (the variant matrix's conformant variants; their modules are run too)."""
+    folder, completed, command = run_session(profile, fault, workdir, select, targeted, together)
+    return read_run(fault, folder, completed, select, command)
+
+
+def run_session(profile: str, fault: str | None, workdir: Path, select: str | None = None,
+                targeted: bool = False, together: tuple[str, ...] = ()) -> tuple[Path, SessionResult, str]:
+    """run_suite's session, not read yet: its report folder, how it ended and its command line."""
     faults = (fault, *together) if fault else together
     folder = workdir / (f"{faults[0]}+{len(together)}" if together else fault or "no-fault")
     command = [*_suite_paths(faults, targeted), "-q", "-p", "no:cacheprovider",
@@ -110,7 +117,7 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     if select:
         command += ["-k", select]
     completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=matrix_env())
-    return read_run(fault, folder, completed, select, " ".join(command))
+    return folder, completed, " ".join(command)
 
 
 def read_run(fault: str | None, folder: Path, completed: SessionResult, select: str | None = None,
@@ -128,17 +135,19 @@ def read_run(fault: str | None, folder: Path, completed: SessionResult, select: 
 
 def run_matrix(profile: str, faults: list[str], workdir: Path, select: str | None = None,
                workers: int = 2, targeted: bool = False,
-               baseline_run: Callable[[], RunResult] | None = None) -> tuple[RunResult, list[RunResult]]:
+               baseline_run: Callable[[], RunResult] | None = None,
+               fault_run: Callable[[str], RunResult] | None = None) -> tuple[RunResult, list[RunResult]]:
     """The fault-free baseline plus one run per fault (``workers`` runs in parallel; the baseline is one of
     them, not a run before the others).
 
     ``targeted``: each fault runs only against the suite modules it is made for (the baseline
     still runs everything), which proves the same two things at a fraction of the time. ``baseline_run``: where
-    the caller has the fault-free run already (or shares it with others), what gives it instead of a run here.
+    the caller has the fault-free run already (or shares it with others), what gives it instead of a run here;
+    ``fault_run``: likewise a fault's run (the same command as here).
     """
     with ThreadPoolExecutor(max_workers=workers) as pool:
         baseline = pool.submit(baseline_run or (lambda: run_suite(profile, None, workdir, select)))
-        results = list(pool.map(lambda f: run_suite(profile, f, workdir, select, targeted), faults))
+        results = list(pool.map(fault_run or (lambda f: run_suite(profile, f, workdir, select, targeted)), faults))
         return baseline.result(), results
 
 
