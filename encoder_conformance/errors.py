@@ -39,6 +39,9 @@ The exit code a class leads to is set where it is caught (``exit_codes.py`` name
           +-- BuildError                the preload library cannot be built; also a RuntimeError (vcan/build.py)
           +-- HubError                  the hub cannot be started or reached; also a RuntimeError (vcan/runtime.py)
           +-- HubStop                   SIGTERM/SIGINT: the hub process leaves its loop (vcan/hub.py)
+          |   the simulator process
+          +-- SimulatorStop             SIGTERM: the simulator leaves its wait, no lock taken in the handler
+                                        (sim/engine/serve.py)
 
     BaseException
      +-- TypedSkip                      pytest's skip (its Skipped, an outcome, not an error) that says why: a scope
@@ -171,6 +174,11 @@ class HubError(EncoderConformanceError, RuntimeError):
 
 class HubStop(EncoderConformanceError):
     """SIGTERM or SIGINT reached the vcan hub process: leave the relay loop and clean up."""
+
+
+class SimulatorStop(EncoderConformanceError):
+    """SIGTERM reached a simulator process: raised in its main thread out of its wait (an ``Event.set()`` in the
+    handler deadlocked a twin whose main thread held that Event's lock inside the wait)."""
 
 
 class RunInterrupted(KeyboardInterrupt):

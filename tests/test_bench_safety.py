@@ -5,7 +5,7 @@ stored configuration (tests/bench_twin.py), as a bench engineer runs it.
   a power cycle, and passes everything a twin in factory state passes;
 - Ctrl-C at any moment (1-12 s, inside the factory-state preparation and a store test's power cycle)
   ends the run within 2 s with exit 130 and nothing left changed, in use or stored; two runs at a
-  time beside a busy process;
+  time, a busy process spinning from just before each Ctrl-C until that run has ended;
 - a run killed hard (SIGKILL) is finished by ``encoder-conformance restore --from`` its snapshot;
 - a device killed or frozen mid-run ends the run with one reason and exit code 69 within 5 s, no
   traceback; an endpoint that accepts the connection and never answers: a start-up error within 10 s.
@@ -29,7 +29,7 @@ from bench_twin import CUSTOMER_VALUES, REPO, as_found_problems, start_twin, wai
 
 from encoder_conformance.dut.link.connection import OPEN_TIMEOUT_S
 from encoder_conformance.exit_codes import RunExit
-from encoder_conformance.runs.host_load import busy_process
+from encoder_conformance.runs.host_load import BusyGate
 
 #: seconds after the start of the run at which Ctrl-C arrives (the suites start about 1.5 s in)
 INTERRUPT_AT_S = [1.0, 2.0, 3.0, 4.5, 6.0, 7.5, 9.0]  # 10.5 s and 12 s came after the end of faster runs
@@ -46,6 +46,8 @@ CTRL_C_LIMIT_S = 2.0  # the run's own clock, interrupt to verdict (run-outcome.j
 #: from send_signal to communicate() for a run that stopped in time
 HARNESS_MARGIN_S = 0.5
 LOST_LIMIT_S = 5.0
+#: the busy process spins this long before a Ctrl-C at a time (before one after a test's line: from that line on)
+BUSY_LEAD_S = 0.5
 
 
 def _outcomes(junit: Path) -> dict[str, str]:
@@ -95,8 +97,9 @@ def test_stored_configuration_passes_what_factory_state_passes(full_runs):
     assert not lost, f"pass in factory state, not with the customer's configuration: {lost}"
 
 
-def _interrupted_run(folder: Path, at: float | str) -> dict:
-    """Start a run, send SIGINT at ``at`` seconds (or when that test starts), check the device afterwards."""
+def _interrupted_run(folder: Path, at: float | str, busy: BusyGate) -> dict:
+    """Start a run, send SIGINT at ``at`` seconds (or when that test starts), check the device afterwards. The
+    busy process spins from just before the signal until the run has ended (what the 2 s bound is about)."""
     twin = start_twin(folder, CUSTOMER_VALUES)
     try:
         before, stored_before = twin.read_everything(), twin.stored()
@@ -104,14 +107,15 @@ def _interrupted_run(folder: Path, at: float | str) -> dict:
         seen: list[str] = []
         if isinstance(at, str):
             assert wait_for_line(run, at, 120, seen), f"{at} never ended:\n{''.join(seen[-20:])}"
-            threading.Event().wait(0.05)  # inside the next test, after its first writes
         else:
-            threading.Event().wait(at)
-        sent = time.monotonic()
-        ended_before = run.poll() is not None
-        run.send_signal(signal.SIGINT)
-        output, _ = run.communicate(timeout=30)
-        ended = time.monotonic() - sent
+            threading.Event().wait(at - BUSY_LEAD_S)
+        with busy.held():
+            threading.Event().wait(0.05 if isinstance(at, str) else BUSY_LEAD_S)  # a line: inside the next test
+            sent = time.monotonic()
+            ended_before = run.poll() is not None
+            run.send_signal(signal.SIGINT)
+            output, _ = run.communicate(timeout=30)
+            ended = time.monotonic() - sent
         outcome_file = folder / "report" / "run-outcome.json"
         outcome = json.loads(outcome_file.read_text(encoding="utf-8")) if outcome_file.exists() else {}
         return {"returncode": run.returncode, "seconds": ended, "output": "".join(seen) + output,
@@ -124,9 +128,11 @@ def _interrupted_run(folder: Path, at: float | str) -> dict:
 
 @pytest.fixture(scope="module")
 def interrupted_runs(tmp_path_factory) -> dict[float | str, dict]:
-    """Each moment a run of its own against a twin of its own, two at a time, beside a busy process."""
-    with busy_process(), ThreadPoolExecutor(max_workers=2) as pool:
-        futures = {at: pool.submit(_interrupted_run, tmp_path_factory.mktemp("sigint"), at) for at in MOMENTS}
+    """Each moment a run of its own against a twin of its own, two at a time; a busy process spins around each
+    Ctrl-C (BusyGate: one core, held by either run; beside the whole fixture it stretched the runs' way to their
+    moments and the as-found reads, and their length varied by tens of seconds)."""
+    with BusyGate() as busy, ThreadPoolExecutor(max_workers=2) as pool:
+        futures = {at: pool.submit(_interrupted_run, tmp_path_factory.mktemp("sigint"), at, busy) for at in MOMENTS}
         return {at: future.result() for at, future in futures.items()}
 
 

@@ -12,7 +12,14 @@ import pytest
 
 from encoder_conformance.plugin.acceptance import GOODS_IN_ONLY
 from encoder_conformance.profile.loader import load_profile
-from encoder_conformance.runs.fault_matrix import CONTENT_ROOT, format_matrix, run_matrix, run_until_caught
+from encoder_conformance.runs.fault_matrix import (
+    CONTENT_ROOT,
+    RunResult,
+    format_matrix,
+    read_run,
+    run_matrix,
+    run_until_caught,
+)
 from encoder_conformance.sim.fault_catalogue import FAULTS, faults_for
 from tests.suite_session import PARALLEL_RUNS
 
@@ -45,11 +52,21 @@ def _functions(result, outcome: str) -> set[str]:
 
 
 @pytest.fixture(scope="module")
-def main_matrix(tmp_path_factory):
-    """Every fault that can show on the main profile (faults of quirks it lacks go to the complements)."""
+def main_matrix(tmp_path_factory, full_runs, fault_runs):
+    """Every fault that can show on the main profile (faults of quirks it lacks go to the complements). The
+    baseline is the session's full run of the main profile's twin (tests/suite_session.py), shared with
+    test_twins and test_shuffled_order: the same command the matrix ran for it, but for --tb. Each fault's run
+    is the session's too (the strictly judged ones are test_inferred_walk's --strict-inferred runs)."""
+    def baseline() -> RunResult:
+        run = full_runs(MAIN_PROFILE)
+        return read_run(None, run.folder / "report", run.completed)
+
+    def fault_run(fault: str) -> RunResult:
+        return read_run(fault, *fault_runs(MAIN_PROFILE, fault))
+
     faults = faults_for(_effects(MAIN_PROFILE))
     return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=PARALLEL_RUNS,
-                      targeted=True)
+                      targeted=True, baseline_run=baseline, fault_run=fault_run)
 
 
 @pytest.fixture(scope="module")
@@ -111,7 +128,7 @@ def test_skipped_tests_are_covered_by_a_complement(complement_matrices):
 
 def test_a_matrix_run_until_caught_is_the_same_whatever_the_workers():
     """Runs started beside the one that completed the matrix are dropped: the matrix one worker would give."""
-    from encoder_conformance.runs.fault_matrix import RunResult, _as_if_one_at_a_time
+    from encoder_conformance.runs.fault_matrix import _as_if_one_at_a_time
 
     def run(fault: str, *failed: str) -> RunResult:
         return RunResult(fault, 1, {**{t: "failed" for t in failed}, "m::other": "passed"})

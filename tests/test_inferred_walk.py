@@ -11,7 +11,6 @@ by the walk, and the places that choose the basis at run time are the known ones
 from __future__ import annotations
 
 import ast
-import os
 import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -22,9 +21,10 @@ from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.plugin import suite_helpers
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
 from encoder_conformance.run_summary import RunSummary
-from encoder_conformance.runs.suite_runner import run_pytest
+from encoder_conformance.runs.fault_matrix import matrix_env
+from encoder_conformance.runs.suite_runner import SessionResult, run_pytest
 from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
-from tests.suite_session import PARALLEL_RUNS
+from tests.suite_session import PARALLEL_RUNS, FaultRuns
 
 PROFILE = "wachendorff-wdga-mt"
 #: the suites' helpers beside their modules (a basis chosen there counts as the suites')
@@ -47,16 +47,24 @@ DYNAMIC_BASIS = {
 }
 
 
-def _run(fault: str, strict: bool, workdir: Path) -> dict[str, str]:
-    """One targeted run of ``fault``: test name -> failed / error / warning (passed and skipped left out)."""
-    folder = workdir / f"{fault}-{'strict' if strict else 'default'}"
+def _session(fault: str, strict: bool, workdir: Path, fault_runs: FaultRuns) -> tuple[Path, SessionResult]:
+    """One targeted run of ``fault``: its report folder and how it ended. A --strict-inferred run on the main
+    profile is the fault matrix's run of that fault (the same command: its modules, --strict-inferred)."""
     profile = PROFILE_OF.get(fault, PROFILE)
+    if strict and profile == PROFILE:
+        return fault_runs(PROFILE, fault)
+    folder = workdir / f"{fault}-{'strict' if strict else 'default'}"
     command = [*(str(SUITES_DIR / f"{m}.py") for m in TARGET_MODULES[fault]), "-q", "-p", "no:cacheprovider",
                "--ec-profile", str(CONTENT_ROOT / profile) if "/" in profile else profile,
                "--ec-report-dir", str(folder), "--tb=no", "--ec-history", "off", "--ec-sim-fault", fault,
                *([STRICT_OPTION] if strict else [])]
-    env = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
-    result = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=env)
+    # the matrix's environment, as the shared runs: the same hypothesis examples with and without strict
+    return folder, run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=matrix_env())
+
+
+def _run(fault: str, strict: bool, workdir: Path, fault_runs: FaultRuns) -> dict[str, str]:
+    """One targeted run of ``fault``: test name -> failed / error / warning (passed and skipped left out)."""
+    folder, result = _session(fault, strict, workdir, fault_runs)
     junit = folder / "junit.xml"
     assert junit.exists(), result.output[-3000:]
     stopped = RunSummary.read(folder).could_not_test
@@ -73,12 +81,13 @@ def _run(fault: str, strict: bool, workdir: Path) -> dict[str, str]:
 
 
 @pytest.fixture(scope="module")
-def walk(tmp_path_factory) -> dict[tuple[str, bool], dict[str, str]]:
-    """Every strictly judged fault, without and with --strict-inferred (a few runs at a time)."""
+def walk(tmp_path_factory, fault_runs) -> dict[tuple[str, bool], dict[str, str]]:
+    """Every strictly judged fault, without and with --strict-inferred (a few runs at a time; the strict runs on
+    the main profile shared with the fault matrix, tests/suite_session.py)."""
     workdir = tmp_path_factory.mktemp("inferred-walk")
     runs = [(fault, strict) for fault in sorted(JUDGED_STRICTLY) for strict in (False, True)]
     with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
-        results = list(pool.map(lambda run: _run(*run, workdir), runs))
+        results = list(pool.map(lambda run: _run(*run, workdir, fault_runs), runs))
     return dict(zip(runs, results, strict=True))
 
 

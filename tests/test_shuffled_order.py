@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
+from encoder_conformance.runs.fault_matrix import matrix_env
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import TARGET_MODULES
 from tests.suite_session import PARALLEL_RUNS
@@ -53,19 +54,29 @@ def _run(folder: Path, variant: str | None, shuffled: bool) -> dict[str, str]:
                "--ec-report-dir", str(folder), "--ec-history", "off"]
     command += ["--ec-sim-fault", variant] if variant else []
     command += ["--ec-shuffle", SEED] if shuffled else []
-    completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600)
+    # the environment of the shared usual-order run (tests/suite_session.py): the same hypothesis examples
+    completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=matrix_env())
+    return _read(folder, completed.output)
+
+
+def _read(folder: Path, output: str) -> dict[str, str]:
     junit = folder / "junit.xml"
-    assert junit.exists(), completed.output[-4000:]
+    assert junit.exists(), output[-4000:]
     return _outcomes(junit)
 
 
 @pytest.fixture(scope="module")
-def pairs(tmp_path_factory):
-    """(what, usual order, shuffled) for the twin and each variant; a few suite sessions at a time."""
+def pairs(tmp_path_factory, full_runs):
+    """(what, usual order, shuffled) for the twin and each variant; a few suite sessions at a time. The twin's
+    usual order is the session's full run of the WDGA twin (tests/suite_session.py, shared with test_twins and
+    the fault matrix's baseline)."""
     jobs = [(variant, shuffled) for variant in (None, *VARIANTS) for shuffled in (False, True)]
 
     def one(job: tuple[str | None, bool]) -> dict[str, str]:
         variant, shuffled = job
+        if variant is None and not shuffled:
+            run = full_runs(PROFILE)
+            return _read(run.folder / "report", run.completed.output)
         return _run(tmp_path_factory.mktemp(f"{variant or 'twin'}-{'shuffled' if shuffled else 'usual'}"), *job)
 
     with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:

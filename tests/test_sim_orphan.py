@@ -1,5 +1,6 @@
 """A simulator started by a tester never outlives it: killed with SIGKILL (no clean-up of its own), the
-tester's end of the simulator's stdin closes and the simulator stops, freeing its ports."""
+tester's end of the simulator's stdin closes and the simulator stops, freeing its ports; a forked simulator that
+does not end on SIGTERM is waited for only as long as asked (then killed), not for ever."""
 
 from __future__ import annotations
 
@@ -53,3 +54,38 @@ def test_simulator_stops_when_its_tester_is_killed(start: str):
     finally:
         if tester.poll() is None:
             tester.kill()
+
+
+STUBBORN = """
+import signal, subprocess, time
+from encoder_conformance.sim.forked import fork_simulator
+
+def run():
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a simulator stuck in its stop (seen: a lock in a handler)
+    print("READY", flush=True)
+    time.sleep(60)
+    return 0
+
+child = fork_simulator(run, None)
+child.stdout.readline()
+child.terminate()
+start = time.monotonic()
+try:
+    child.wait(timeout=0.3)
+    print("ENDED")
+except subprocess.TimeoutExpired:
+    print("TIMEOUT", round(time.monotonic() - start, 2))
+child.kill()
+print("CODE", child.wait())
+"""
+
+
+def test_a_forked_simulator_that_does_not_end_is_waited_for_only_as_asked():
+    """ForkedProcess.wait(timeout) returns at the timeout: the child closed multiprocessing's sentinel pipe with
+    every inherited descriptor, and a join(timeout) then blocked in waitpid until the session's own timeout."""
+    completed = subprocess.run([sys.executable, "-c", STUBBORN], cwd=REPO, capture_output=True, text=True,
+                               timeout=30)
+    lines = completed.stdout.split("\n")
+    assert lines[0].startswith("TIMEOUT "), completed.stdout + completed.stderr
+    assert float(lines[0].split()[1]) < 5.0
+    assert lines[1] == f"CODE {-signal.SIGKILL}", completed.stdout

@@ -28,11 +28,12 @@ def _expected_cost(profile_id: str) -> float:
 
 
 @pytest.fixture(scope="module")
-def twin_runs(tmp_path_factory):
-    """One full suite run per profile against its own twin (a few in parallel)."""
+def twin_runs(full_runs):
+    """One full suite run per profile against its own twin (a few in parallel); the session's runs
+    (tests/suite_session.py): the WDGA's was run already for the fault matrix's baseline."""
     def one(profile: str):
-        folder = tmp_path_factory.mktemp(Path(profile).stem)
-        return profile, folder, *run_suite(folder, "--ec-profile", profile)
+        run = full_runs(profile)
+        return profile, run.folder, run.completed, run.seconds
 
     with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
         ordered = sorted(PROFILES, key=_expected_cost, reverse=True)

@@ -14,6 +14,7 @@ import json
 import os
 import re
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,7 +23,7 @@ from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.plugin.hypothesis_profiles import PROFILE_ENV as HYPOTHESIS_PROFILE_ENV
 from encoder_conformance.plugin.junit_coverage import CLASS_NAME as COVERAGE_CASE_CLASS
 from encoder_conformance.plugin.verdicts import STRICT_OPTION
-from encoder_conformance.runs.suite_runner import run_pytest
+from encoder_conformance.runs.suite_runner import SessionResult, run_pytest
 from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
 
 _ENTRY_PARAM = re.compile(r"\[0x[0-9A-F]{4}\.[0-9A-F]{2} .*\]$")  # names may hold brackets: "Kv [1/s]"
@@ -97,6 +98,13 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     """One pytest run of suites/ (``targeted``: the fault's own modules) against the twin with ``fault``
     (strict about inferred rules where the fault is in JUDGED_STRICTLY). ``together``: further deviations the
     twin plays in the same run (the variant matrix's conformant variants; their modules are run too)."""
+    folder, completed, command = run_session(profile, fault, workdir, select, targeted, together)
+    return read_run(fault, folder, completed, select, command)
+
+
+def run_session(profile: str, fault: str | None, workdir: Path, select: str | None = None,
+                targeted: bool = False, together: tuple[str, ...] = ()) -> tuple[Path, SessionResult, str]:
+    """run_suite's session, not read yet: its report folder, how it ended and its command line."""
     faults = (fault, *together) if fault else together
     folder = workdir / (f"{faults[0]}+{len(together)}" if together else fault or "no-fault")
     command = [*_suite_paths(faults, targeted), "-q", "-p", "no:cacheprovider",
@@ -109,27 +117,37 @@ def run_suite(profile: str, fault: str | None, workdir: Path, select: str | None
     if select:
         command += ["-k", select]
     completed = run_pytest(command, CONTENT_ROOT, folder / "pytest-output.txt", timeout=600, env=matrix_env())
+    return folder, completed, " ".join(command)
+
+
+def read_run(fault: str | None, folder: Path, completed: SessionResult, select: str | None = None,
+             command: str = "") -> RunResult:
+    """The outcomes of a finished session whose report folder is ``folder`` (its JUnit file and run outcome)."""
     junit = folder / "junit.xml"
     outcomes = _parse_junit(junit) if junit.exists() else {}
     preflight = _preflight_outcome(folder)
     if preflight == "failed" or select is None:  # a run limited by -k does not claim the start-up check
         outcomes[PREFLIGHT] = preflight
     if not outcomes or outcomes == {PREFLIGHT: "passed"}:
-        raise RuntimeError(f"no results from pytest {' '.join(command)}:\n{completed.output[-6000:]}")
+        raise RuntimeError(f"no results from pytest {command or folder}:\n{completed.output[-6000:]}")
     return RunResult(fault, completed.returncode, outcomes)
 
 
 def run_matrix(profile: str, faults: list[str], workdir: Path, select: str | None = None,
-               workers: int = 2, targeted: bool = False) -> tuple[RunResult, list[RunResult]]:
+               workers: int = 2, targeted: bool = False,
+               baseline_run: Callable[[], RunResult] | None = None,
+               fault_run: Callable[[str], RunResult] | None = None) -> tuple[RunResult, list[RunResult]]:
     """The fault-free baseline plus one run per fault (``workers`` runs in parallel; the baseline is one of
     them, not a run before the others).
 
     ``targeted``: each fault runs only against the suite modules it is made for (the baseline
-    still runs everything), which proves the same two things at a fraction of the time.
+    still runs everything), which proves the same two things at a fraction of the time. ``baseline_run``: where
+    the caller has the fault-free run already (or shares it with others), what gives it instead of a run here;
+    ``fault_run``: likewise a fault's run (the same command as here).
     """
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        baseline = pool.submit(run_suite, profile, None, workdir, select)
-        results = list(pool.map(lambda f: run_suite(profile, f, workdir, select, targeted), faults))
+        baseline = pool.submit(baseline_run or (lambda: run_suite(profile, None, workdir, select)))
+        results = list(pool.map(fault_run or (lambda f: run_suite(profile, f, workdir, select, targeted)), faults))
         return baseline.result(), results
 
 

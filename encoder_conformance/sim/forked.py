@@ -19,6 +19,7 @@ import gc
 import logging
 import multiprocessing
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -54,10 +55,21 @@ class ForkedProcess:
         return self._process.exitcode
 
     def wait(self, timeout: float | None = None) -> int:
-        self._process.join(timeout)
+        """The exit code; ``timeout``: TimeoutExpired if the child lives on. Waited on the process itself (a pidfd):
+        the child closed multiprocessing's sentinel pipe with every inherited descriptor, so join(timeout) saw its
+        end at once and then blocked in waitpid, and a twin that did not end hung its session (seen: 600 s)."""
+        pid = self._process.pid
+        if timeout is not None and self._process.exitcode is None and pid is not None:
+            pidfd = os.pidfd_open(pid)
+            try:
+                ended, _, _ = select.select([pidfd], [], [], timeout)
+            finally:
+                os.close(pidfd)
+            if not ended:
+                raise subprocess.TimeoutExpired("simulator", timeout)
+        self._process.join()
         code = self._process.exitcode
-        if code is None:
-            raise subprocess.TimeoutExpired("simulator", timeout or 0.0)
+        assert code is not None  # joined
         return code
 
     def terminate(self) -> None:

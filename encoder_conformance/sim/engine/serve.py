@@ -23,6 +23,7 @@ from pathlib import Path
 import can
 
 from encoder_conformance.cia.cia305 import MAX_NODE_ID, UNCONFIGURED_NODE_ID
+from encoder_conformance.errors import SimulatorStop
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.profile.quirk_effects import SecondNode
 from encoder_conformance.profile.schema import DeviceProfile
@@ -138,15 +139,19 @@ def serve(
             print(f"control channel on {control_address[0]}:{control_address[1]}")
         print("Ctrl-C stops the simulator.", flush=True)
     stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    if ready_line:  # started by a tester (sim/process.py): stop when it is gone (its end of our stdin closes)
-        threading.Thread(target=_stop_at_end_of_input, args=(stop,), name="parent-watch", daemon=True).start()
+    reason = "the tester gone"
     try:
+        signal.signal(signal.SIGTERM, _terminated)
+        if ready_line:  # started by a tester (sim/process.py): stop when it is gone (its end of our stdin closes)
+            threading.Thread(target=_stop_at_end_of_input, args=(stop,), name="parent-watch", daemon=True).start()
         while not stop.wait(1.0):
             pass
     except KeyboardInterrupt:
-        pass
-    log.info("stopping: %s", "SIGTERM or the tester gone" if stop.is_set() else "Ctrl-C")
+        reason = "Ctrl-C"
+    except SimulatorStop:
+        reason = "SIGTERM"
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second one ends the process at once
+    log.info("stopping: %s", reason)
     host.shutdown()  # the memory is written on every store, so nothing is left to save here
     sys.stdout.flush()
     sys.stderr.flush()
@@ -166,6 +171,12 @@ def _open_host(can_bus: tuple[str, str] | None) -> SimulatorHost:
                 if interface == "socketcan" else "")
         raise ValueError(f"--can-interface {interface} --can-channel {channel}: cannot open the bus: {exc}{hint}") \
             from None
+
+
+def _terminated(*_: object) -> None:
+    """SIGTERM: raised in the main thread out of its wait; the handler takes no lock (an ``Event.set()`` here
+    deadlocked a twin whose main thread held that Event's lock inside ``stop.wait()``, seen in a fault matrix)."""
+    raise SimulatorStop
 
 
 def _stop_at_end_of_input(stop: threading.Event) -> None:
