@@ -146,6 +146,13 @@ def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> 
     return result
 
 
+@pytest.hookimpl(wrapper=True, tryfirst=True)
+def pytest_runtest_teardown(item: pytest.Item, nextitem: pytest.Item | None) -> Generator[None, object, object]:
+    if _active(item.config) and nextitem is None and not lifecycle.ended_early(item.config):
+        late_frames.linger(item.config)  # the last test: before the session's fixtures end (the twin, the give-back)
+    return (yield)
+
+
 def pytest_runtest_setup(item: pytest.Item) -> None:
     if _active(item.config):
         bus_trace.mark_set_up_start(item)  # before the fixtures: their frames belong in the test's trace

@@ -73,12 +73,16 @@ def judge(item: pytest.Item, report: pytest.TestReport) -> None:
         report.user_properties.append(("verdict_source", failing[0].window.basis))
 
 
-def settle(config: pytest.Config) -> None:
-    """At the session's end (the bus still open): listen out the newest window's linger, then the late frames no
-    running test took become run-level checks (a FAIL each)."""
+def linger(config: pytest.Config) -> None:
+    """In the last test's teardown, before the session's fixtures end (the twin, the give-back and its resets):
+    listen out the newest window's linger (a silence window: frames that must not come)."""
     custody = lifecycle.custody_of(config)
-    if custody is not None and custody.dut.usable and (linger := custody.dut.frames.late.linger_s()) > 0:
-        custody.dut.frames.quiet_period(lambda m: False, linger)  # a silence window: frames that must not come
+    if custody is not None and custody.dut.usable and (seconds := custody.dut.frames.late.linger_s()) > 0:
+        custody.dut.frames.quiet_period(lambda m: False, seconds)
+
+
+def settle(config: pytest.Config) -> None:
+    """At the session's end: the late frames no running test took become run-level checks (a FAIL each)."""
     summary = run_record.summary_of(config)
     state = lifecycle.state_of(config)
     for late in _take(config, None):
