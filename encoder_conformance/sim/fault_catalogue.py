@@ -216,8 +216,9 @@ FAULT_GROUPS: list[tuple[tuple[str, ...], dict[str, str]]] = [
         ("test_lss",),
         {
             "lss_configure_not_answered": "configure node-ID is carried out but never answered",
-            "lss_inquire_late_in_waiting": "inquire node-ID in the waiting state is answered 330 ms later (after the "
-                                           "tester's LSS silence window: caught by late-frame attribution)",
+            "lss_inquire_late_in_waiting": "inquire node-ID in the waiting state is answered late, just before the "
+                                           "master's next LSS frame (after the tester's window: caught by late-frame "
+                                           "attribution)",
             "lss_node_id_range_unchecked": "configure node-ID accepts 0 and 128..254 (error 0)",
             "lss_bit_timing_unchecked": "configure bit timing accepts any table and index (error 0)",
             "lss_bit_timing_refused": "configure bit timing refuses every index (error 1)",

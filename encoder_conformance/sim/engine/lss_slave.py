@@ -10,7 +10,6 @@ are the small classes at the bottom.
 from __future__ import annotations
 
 import struct
-import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Protocol
@@ -377,18 +376,22 @@ class BitTimingAutoAnd100k(LssSlave):
         return super().bit_timing_valid(table, index) or (table == 0 and index in (5, 9))
 
 
-#: how late ``lss_inquire_late_in_waiting`` answers: after the tester's LSS silence window on every shipped profile
-LATE_ANSWER_S = 0.33
-
-
 @breaks(LssSlave, "lss_inquire_late_in_waiting")
 class InquireLateInWaiting(LssSlave):
-    """Inquire node-ID in the waiting state is answered ``LATE_ANSWER_S`` later (only the late-frame ledger sees it)."""
+    """Inquire node-ID in the waiting state is answered late: just before the slave takes the master's next LSS
+    frame, which the tester sends only once its window for that answer has ended (only the late-frame ledger sees
+    it, whatever the pace of the run)."""
+
+    _withheld: bytes | None = None
+
+    def on_frame(self, data: bytes) -> None:
+        if self._withheld is not None:
+            withheld, self._withheld = self._withheld, None
+            self.answer(withheld)
+        super().on_frame(data)
 
     def _inquire_node_id(self, data: bytes) -> None:
         if self.in_configuration():
             super()._inquire_node_id(data)
             return
-        late = threading.Timer(LATE_ANSWER_S, self._send, (LssCommand.INQUIRE_NODE_ID, bytes([self.node_id()])))
-        late.daemon = True
-        late.start()
+        self._withheld = bytes([LssCommand.INQUIRE_NODE_ID, self.node_id()]).ljust(8, b"\x00")
