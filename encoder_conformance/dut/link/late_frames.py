@@ -52,7 +52,7 @@ from encoder_conformance.cia.cia301 import (
 )
 from encoder_conformance.dut.link.latency_probe import LatencyProbe, TwinLateness
 from encoder_conformance.dut.nmt.nmt_frames import is_command, target_state
-from encoder_conformance.dut.sdo.sdo_frames import ABORT_SCS, answers
+from encoder_conformance.dut.sdo.sdo_frames import ABORT_SCS, BLOCK_CCS, answers
 
 #: how long after a window closed (or a state window opened) a frame is still attributed to it (module docstring)
 HORIZON_S = 5.0
@@ -72,7 +72,6 @@ LATE_RULE = ("attributed by this suite's late-frame rules (our inference: the cl
 NO_SDO_IN_STOPPED = "CiA 301 §7.3.2.2 (services per NMT state: no SDO in stopped)"
 #: the rule a TPDO outside operational breaks (the tests that leave operational, and a TPDO after the state shows)
 NO_PDO_OUTSIDE_OPERATIONAL = "CiA 301 §7.3.2.2 (PDO communication only in operational)"
-BLOCK_CCS = (5, 6)
 #: the NMT commands that reset the node or its communication (CiA 301 §7.3.2.2)
 RESET_COMMANDS = (NmtCommand.RESET_NODE, NmtCommand.RESET_COMMUNICATION)
 #: a boot-up message's one data byte (CiA 301 §7.2.8.3.2.1)

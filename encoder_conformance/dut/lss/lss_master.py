@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import struct
 import time
-from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -42,8 +41,6 @@ from encoder_conformance.dut.link.windows import UNMEASURED_MARGIN_S, Windows
 
 #: the profile's timing figure of an LSS answer (its silence window's name)
 LSS_FIGURE = "lss_response_ms"
-#: the command specifiers of this many last requests are kept (a check that no answer comes sends a few)
-REQUESTS_KEPT = 64
 #: the shortest response window a learned one may be (``LssMaster.learned_window``)
 WINDOW_FLOOR_S = 0.01
 #: after an answer, how long other slaves' copies of it may still arrive (on a real bus identical
@@ -105,7 +102,7 @@ class LssMaster:
         self._windows = windows
         self._silence = False  # inside ``no_answer_expected``
         self.steps = 0  # frames sent (fastscan cost, for the report)
-        self._requested: deque[int] = deque(maxlen=REQUESTS_KEPT)  # the command specifiers of the last requests
+        self._requested: list[int] = []  # the command specifiers sent inside ``no_answer_expected``
         self.latencies: list[float] = []  # seconds each answer took
         self._several = False  # more than one slave answered the fastscan reset: wait for their copies
 
@@ -117,7 +114,8 @@ class LssMaster:
         self._send(MASTER_COB_ID, bytes([command]) + payload.ljust(7, b"\x00")[:7])
         self._sent = mark
         self.steps += 1
-        self._requested.append(command)
+        if self._silence:
+            self._requested.append(command)
         return mark
 
     def _keep_clear_of_answers(self) -> None:
@@ -149,14 +147,15 @@ class LssMaster:
         forbids the answer; not for a probe whose later answer is fine), a slave frame after it and before the
         tester's next LSS request is still charged to the check (the late-frame ledger)."""
         saved, self._silence = self._silence, True
-        first = self.steps
+        outer, self._requested = self._requested, []
         try:
             yield
         finally:
             self._silence = saved
+            requested = self._requested
+            self._requested = outer + requested if saved else []  # an outer context's requests go on
         if basis is not None:
-            sent = self.steps - first
-            self._forbid_answers(list(self._requested)[-sent:] if sent > 0 else [], basis)
+            self._forbid_answers(requested, basis)
 
     def _forbid_answers(self, requests: list[int], basis: str) -> None:
         """Declare the answers to ``requests`` (command specifiers) late from now until a request that may draw
