@@ -21,19 +21,40 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass
 
 CATEGORIES = ("sdo", "send", "answer", "silence", "periodic", "boot-up", "execution", "generation")
 
 
-@dataclass
 class Booking:
-    """One wait being measured; its category may change once its outcome is known (a timed-out answer wait
-    is a silence)."""
+    """One wait being measured, as a context manager; its category may change once its outcome is known (a
+    timed-out answer wait is a silence). A class, not a generator: it wraps every SDO transfer and frame sent, and
+    ``contextlib.contextmanager``'s generator cost several times as much per wait."""
 
-    category: str
+    __slots__ = ("_booked", "_budget", "_cpu", "_outer", "_start", "category")
+
+    def __init__(self, budget: TimeBudget, category: str) -> None:
+        self.category = category
+        self._budget = budget
+        self._booked = False  # a wait of the booking thread (another thread's is not booked)
+        self._outer = False  # the outermost booking of the booking thread: the one that counts
+        self._start = self._cpu = 0.0
+
+    def __enter__(self) -> Booking:
+        budget = self._budget
+        if threading.current_thread() is budget.thread:
+            self._booked, self._outer = True, budget.depth == 0
+            budget.depth += 1
+            if self._outer:
+                self._start, self._cpu = time.perf_counter(), time.process_time()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if not self._booked:
+            return
+        budget = self._budget
+        budget.depth -= 1
+        if self._outer:
+            budget.add(self.category, time.perf_counter() - self._start, time.process_time() - self._cpu)
 
 
 class TimeBudget:
@@ -43,27 +64,17 @@ class TimeBudget:
         self._lock = threading.Lock()
         self._totals = dict.fromkeys(CATEGORIES, 0.0)
         self._cpu = dict.fromkeys(CATEGORIES, 0.0)  # this process's CPU seconds inside each category's waits
-        self._depth = threading.local()
+        self.depth = 0  # bookings open in the booking thread (only that thread changes it)
         self.thread: threading.Thread = threading.main_thread()  # the thread whose waits are booked
 
-    @contextmanager
-    def booking(self, category: str) -> Iterator[Booking]:
-        booking = Booking(category)
-        if threading.current_thread() is not self.thread:
-            yield booking
-            return
-        depth = getattr(self._depth, "value", 0)
-        self._depth.value = depth + 1
-        start, cpu = time.perf_counter(), time.process_time()
-        try:
-            yield booking
-        finally:
-            self._depth.value = depth
-            if depth == 0:
-                elapsed, used = time.perf_counter() - start, time.process_time() - cpu
-                with self._lock:
-                    self._totals[booking.category] = self._totals.get(booking.category, 0.0) + elapsed
-                    self._cpu[booking.category] = self._cpu.get(booking.category, 0.0) + used
+    def booking(self, category: str) -> Booking:
+        """``with budget.booking("answer") as booking:`` books the wait's seconds to ``booking.category``."""
+        return Booking(self, category)
+
+    def add(self, category: str, seconds: float, cpu: float) -> None:
+        with self._lock:
+            self._totals[category] = self._totals.get(category, 0.0) + seconds
+            self._cpu[category] = self._cpu.get(category, 0.0) + cpu
 
     def snapshot(self) -> dict[str, float]:
         with self._lock:
