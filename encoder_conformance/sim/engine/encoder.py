@@ -81,14 +81,14 @@ class EncoderFunction:
         entries' types and the decisions below do not change while the node lives): where none of them changed,
         it would read the same keys and give the same result."""
         values = self.store.values
-        fingerprint = (self._offset, *[values.get(key) for key in self._settings_read])
+        fingerprint = (self._offset, tuple(map(values.get, self._settings_read)))
         memo = self._settings_memo
         if memo is not None and memo[0] == fingerprint:
             return memo[1]
         read: list[Key] = []
         settings = self._read_settings(read)
         self._settings_read = read
-        self._settings_memo = ((self._offset, *[values.get(key) for key in read]), settings)
+        self._settings_memo = ((self._offset, tuple(map(values.get, read))), settings)
         return settings
 
     def _read_settings(self, read: list[Key]) -> EncoderSettings:
