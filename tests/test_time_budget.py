@@ -83,7 +83,8 @@ def test_a_run_reports_its_budget(tmp_path: Path):
     assert budget["owed"]["periodic"] > 0.5, "the heartbeat capture is owed to the device"
     heartbeat = next(t for t in budget["costliest"] if "heartbeat_period" in t["nodeid"])
     assert heartbeat["why"].startswith("periodic")
-    assert "time budget:" in completed.output and "s to the first test" in completed.output
+    assert "time budget:" in completed.output
+    assert "s to the first test" in completed.output
     html = (tmp_path / "report" / "report.html").read_text(encoding="utf-8")
     assert "id='time-budget'" in html
     assert "id='silence-windows'" in html, "the report shows each window and its source"

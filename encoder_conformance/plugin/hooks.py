@@ -137,7 +137,7 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         # what a conformance run has built so far (modules, profile, ~700 items) lives until its end: the
         # garbage collector's full passes during the tests need not walk it again and again
         gc.freeze()
-        gc.enable()
+    gc.enable()  # paused since session start, or since the command line's start (cli/main.py GC_PAUSED)
 
 
 @pytest.hookimpl(wrapper=True)
