@@ -6,6 +6,7 @@ from __future__ import annotations
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 from encoder_conformance.paths import SUITES_DIR
 from encoder_conformance.plugin import hypothesis_profiles
@@ -49,3 +50,13 @@ def test_a_module_that_may_use_hypothesis_loads_the_profile_first(monkeypatch):
     hypothesis_profiles.before_import(SUITES_DIR / "test_sdo_fuzz.py")
     hypothesis_profiles.before_import(REPO / "tests" / "test_plugin.py")
     assert loaded == ["loaded", "loaded"], "a listed suite module and any module outside the suites load it"
+
+
+def test_each_session_chooses_its_profile_again(monkeypatch):
+    """A process may run several sessions (in-process pytest): each loads the profile its environment names."""
+    seen: list[list[str]] = []
+    monkeypatch.setattr(hypothesis_profiles, "_LOADED", ["ci"])
+    monkeypatch.setattr(hypothesis_profiles, "load", lambda: seen.append(list(hypothesis_profiles._LOADED)) or "dev")
+    config = SimpleNamespace(getoption=lambda name, default=None: default, option=SimpleNamespace(verbose=0))
+    hypothesis_profiles.configure(config)  # hypothesis is imported in this process: the profile is loaded now
+    assert seen == [[]], "the last session's profile is forgotten before this one's is loaded"

@@ -34,7 +34,7 @@ SUITES_USING_HYPOTHESIS = frozenset({"test_encoder_properties.py", "test_nmt_sta
 #: hypothesis's pytest options: given one, its plugin imports hypothesis at configure time
 HYPOTHESIS_OPTIONS = ("hypothesis_profile", "hypothesis_verbosity", "hypothesis_show_statistics", "hypothesis_seed",
                       "hypothesis_explain")
-_LOADED: list[str] = []  # the profile this process loaded, once
+_LOADED: list[str] = []  # the profile this session loaded (a process may run several sessions, one at a time)
 
 
 def register() -> None:
@@ -53,7 +53,7 @@ def register() -> None:
 
 
 def load() -> str:
-    """Register the profiles and load the chosen one (once in a process); its name."""
+    """Register the profiles and load the chosen one (once in a session); its name."""
     if _LOADED:
         return _LOADED[0]
     from hypothesis import settings
@@ -68,6 +68,7 @@ def load() -> str:
 def configure(config: pytest.Config) -> None:
     """At configure time: load now where hypothesis is imported already or will be by its plugin (one of its
     options given; ``-v`` shows its profile in the header), else wait for a module that uses it."""
+    _LOADED.clear()  # a new session chooses again (HYPOTHESIS_PROFILE may differ from the last one's)
     given = any(config.getoption(dest, None) for dest in HYPOTHESIS_OPTIONS)
     if "hypothesis" in sys.modules or given or getattr(config.option, "verbose", 0) >= 1:
         load()
