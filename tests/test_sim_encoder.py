@@ -347,3 +347,19 @@ def test_fault_deviates_from_the_conformant_twin(boot, fault):
     scenario, conformant, faulty = DEVIATIONS[fault]
     assert scenario(boot(())) == conformant, "the conformant twin"
     assert scenario(boot((fault,))) == faulty, f"the twin with {fault}"
+
+
+def test_settings_are_read_again_when_a_value_they_read_changes() -> None:
+    """The settings are remembered between reads (encoder.py) and computed again once any value they were read
+    from changes, however it was changed (here: straight into the store, as a reload does)."""
+    from encoder_conformance.sim.engine.scheduler import DeadlineScheduler
+
+    node = SimulatedNode(load_profile(WDGA).profile, DeadlineScheduler(), lambda *args, **kwargs: None)
+    encoder = node.encoder
+    first = encoder.settings()
+    assert encoder.settings() is first  # nothing changed: the remembered settings
+    node.store.set((OPERATING, 0), node.store.get((OPERATING, 0)) ^ CCW)
+    turned = encoder.settings()
+    assert turned.scaling.ccw != first.scaling.ccw
+    node.store.set((CAM1_LOW, 1), 1234)
+    assert encoder.settings().cam_channels != turned.cam_channels

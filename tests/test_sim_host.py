@@ -100,3 +100,28 @@ def test_host_and_served_testers_use_the_copying_channel(served_host):
     assert isinstance(host.bus, CopyingVirtualBus)
     assert host._remote is not None
     assert host._remote.config["interface"] == server_config()["interface"]
+
+
+def test_frames_to_a_remote_tester_are_sent_at_once_and_not_echoed(served_host):
+    """Each tester's bus on the server sends the channel's frames at once, in the sender's thread
+    (``CopyingVirtualBus.send_directly``): none waits on its queue, the tester hears the host's frames and not
+    its own, and a second tester hears the first one's."""
+    host, tester = served_host
+    other = can.Bus(interface="remote", channel=tester.channel, receive_own_messages=False)
+    try:
+        deadline = time.monotonic() + WAIT_S
+        while len(host._remote.clients) < 2 and time.monotonic() < deadline:  # the second connection served
+            time.sleep(0.01)
+        buses = [protocol.bus for protocol in host._remote.clients]
+        adapt = ("python-can-remote no longer opens each tester's bus before adding it to RemoteServer.clients, "
+                 "or VirtualBus keeps no list of queues: CopyingVirtualBus.send_directly must be adapted")
+        assert len(buses) == 2, adapt
+        assert all(bus._direct in bus.channel and bus.queue not in bus.channel for bus in buses), adapt
+        host.bus.send(can.Message(arbitration_id=0x701, data=b"\x05", is_extended_id=False))
+        tester.send(can.Message(arbitration_id=0x123, data=b"\x01", is_extended_id=False))
+        assert _reply(tester, 0x701) is not None
+        assert _reply(other, 0x701) is not None
+        assert _reply(other, 0x123) is not None, "a tester's frame did not reach the other tester"
+        assert _reply(tester, 0x123) is None, "a tester heard its own frame"
+    finally:
+        other.shutdown()

@@ -16,6 +16,7 @@ import can
 import canopen
 
 from encoder_conformance.dut.link.frames import FrameLog
+from encoder_conformance.dut.link.remote_masking import unmask_on_loopback
 from encoder_conformance.dut.link.tracing_bus import TracingBus
 from encoder_conformance.errors import BusSetupError
 
@@ -57,6 +58,7 @@ def connect(kwargs: dict[str, Any], describe: str, frame_log: FrameLog) -> canop
     """A connected canopen Network on a TracingBus, whose frames (both directions) go to ``frame_log``."""
     # the tester's own frames are logged as it sends them; echoed back they would pass for another node's
     bus = open_bus({**kwargs, "receive_own_messages": False}, describe)
+    unmask_on_loopback(bus)  # python-can-remote to a server on this host: no per-byte masking (remote_masking.py)
     # cast: a TracingBus stands in for the bus it wraps (send and recv traced, every other attribute forwarded)
     network = canopen.Network(cast(can.BusABC, TracingBus(bus, frame_log, kwargs.get("channel"))))
     network.NOTIFIER_CYCLE = NOTIFIER_CYCLE_S

@@ -28,7 +28,7 @@ from encoder_conformance.profile.schema import DeviceProfile
 from encoder_conformance.sim.engine.faults import FaultSet
 from encoder_conformance.sim.engine.node import SimulatedNode
 from encoder_conformance.sim.engine.scheduler import DeadlineScheduler
-from encoder_conformance.sim.engine.virtual_channel import open_channel, server_config
+from encoder_conformance.sim.engine.virtual_channel import CopyingVirtualBus, open_channel, server_config
 
 if TYPE_CHECKING:
     from can_remote.server import RemoteServer
@@ -48,6 +48,18 @@ class _DirectDispatch:
     def put(self, msg: can.Message, block: bool = True, timeout: float | None = None) -> None:
         with self._lock:
             self._dispatch(msg)
+
+
+class _ClientsSentDirectly(list[Any]):
+    """python-can-remote's server's list of connected testers (``RemoteServer.clients``): each tester's bus is
+    told, as it joins the list, to send it the frames of the bus at once (``CopyingVirtualBus.send_directly``).
+    The server appends each connection's protocol to the list once its bus is open, before it starts serving."""
+
+    def append(self, protocol: Any) -> None:
+        bus = getattr(protocol, "bus", None)
+        if isinstance(bus, CopyingVirtualBus):
+            bus.send_directly(protocol.send_msg)
+        super().append(protocol)
 
 
 class SimulatorHost:
@@ -166,6 +178,7 @@ class SimulatorHost:
         logging.getLogger("can_remote").setLevel(logging.WARNING)
         self._dispatch_in_sender_thread()
         self._remote = RemoteServer(host, port, channel=self.channel, **server_config())
+        self._remote.clients = _ClientsSentDirectly()  # frames to a tester sent in the sender's thread
         # a short poll: shutdown() waits for the serving loop to notice (the default 0.5 s is a run's end)
         server = self._remote
         threading.Thread(target=lambda: server.serve_forever(poll_interval=SERVER_POLL_S), name="remote-server",
