@@ -25,6 +25,21 @@ def test_nested_waits_count_once_under_the_outer_booking():
     assert totals["answer"] == 0
 
 
+def test_the_testers_own_cpu_inside_a_wait_is_told_apart():
+    """What the tester's process computes while a wait is booked is owed by the category's meaning, but shown
+    beside it as the tester's CPU; a wait that only sleeps costs it next to nothing."""
+    budget = TimeBudget()
+    with budget.booking("sdo"):
+        deadline = time.process_time() + 0.03
+        while time.process_time() < deadline:  # stands in for the SDO client's own work
+            pass
+    with budget.booking("silence"):
+        time.sleep(0.03)
+    cpu, totals = budget.cpu_snapshot(), budget.snapshot()
+    assert 0.03 <= cpu["sdo"] <= totals["sdo"] + 0.01
+    assert cpu["silence"] < 0.02 < totals["silence"]
+
+
 def test_waits_of_other_threads_are_not_booked():
     """A background capture's waits overlap the test's own: only the test thread books."""
     budget = TimeBudget()
@@ -75,6 +90,8 @@ def test_a_run_reports_its_budget(tmp_path: Path):
     assert abs(budget["wall_s"] - budget["owed_s"] - budget["tester_s"]) < 0.01
     assert abs(budget["wall_s"] - budget["outside_tests_s"] - budget["inside_tests_s"]) < 0.01
     assert 0 <= budget["tester_share_inside"] <= 1
+    assert 0 < budget["owed_tester_cpu_s"] < budget["owed_s"]
+    assert budget["owed_tester_cpu"].keys() <= budget["owed"].keys()
     sdo = next(w for w in budget["windows"] if w["name"] == "sdo_response_max_ms")
     assert sdo["seconds"] > 0
     assert "measured SDO p99" in sdo["source"], "each window names the figure it came from"

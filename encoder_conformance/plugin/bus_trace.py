@@ -24,7 +24,7 @@ import pytest
 from encoder_conformance.dut.link.frames import FrameLog, Mark
 
 _UNSETTLED = pytest.StashKey[dict[int, "BusTrace"]]()
-#: the run's frame log (set by the bus_trace fixture) and where each test's set-up starts in it
+#: the run's frame log (set by the evidence fixture) and where each test's set-up starts in it
 FRAME_LOG = pytest.StashKey[FrameLog]()
 SET_UP_FROM = pytest.StashKey[Mark]()
 

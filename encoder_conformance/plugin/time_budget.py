@@ -113,6 +113,7 @@ def budget(config: pytest.Config) -> dict[str, Any] | None:
         "outside_tests_s": round(wall - in_tests, 3),  # start-up, collection, reports
         "inside_tests_s": round(in_tests, 3),
         "tester_share_inside": round(_tester_inside(run.tests) / in_tests, 3) if in_tests > 0 else None,
+        **_owed_cpu(),
         "tests": len(run.tests),
         "tester_per_test_median_ms": _median_ms([t.tester for t in run.tests]),
         "areas": {name: {key: round(value, 3) for key, value in values.items()} for name, values in areas.items()},
@@ -125,6 +126,13 @@ def budget(config: pytest.Config) -> dict[str, Any] | None:
 def _tester_inside(tests: list[TestCost]) -> float:
     """The tester's seconds inside the tests: each test's time less what it owed the device."""
     return sum(t.tester for t in tests)
+
+
+def _owed_cpu() -> dict[str, Any]:
+    """Of the owed seconds, the tester process's own CPU time during them, in total and per category: owed by
+    the categories' meaning, the tester's work all the same (its SDO client, receive thread, frame log)."""
+    cpu = {name: round(seconds, 3) for name, seconds in BUDGET.cpu_snapshot().items() if seconds > 0}
+    return {"owed_tester_cpu_s": round(sum(cpu.values()), 3), "owed_tester_cpu": cpu}
 
 
 def _windows(windows: Windows | None) -> dict[str, Any]:
