@@ -4,6 +4,7 @@ slots a foreground module reserves left free by background sessions."""
 from __future__ import annotations
 
 import threading
+from pathlib import Path
 
 from encoder_conformance.runs.session_slots import SessionSlots
 
@@ -80,3 +81,32 @@ def test_without_a_limit_nothing_waits():
         _start(slots, True, event, leave)
     assert all(event.wait(WAIT_S) for event in entered)
     leave.set()
+
+
+def test_the_foreground_waiting_for_a_background_result_lifts_its_reservation():
+    """A background job holds a result's lock while it waits for a slot the foreground reserved; the foreground
+    then asks for that result: the reservation must not hold meanwhile (seen: a deadlock in the fault matrix)."""
+    from encoder_conformance.runs.session_slots import SESSION_SLOTS
+    from tests.suite_session import PARALLEL_RUNS, _Once
+
+    once: _Once[str, int] = _Once(lambda name: Path(name))
+    locked = threading.Event()
+
+    def make() -> int:
+        locked.set()
+        with SESSION_SLOTS.held():
+            return 1
+
+    def background() -> None:
+        SESSION_SLOTS.mark_background()
+        once._once("run", make)
+
+    with SESSION_SLOTS.reserved(PARALLEL_RUNS):
+        thread = threading.Thread(target=background, daemon=True)
+        thread.start()
+        assert locked.wait(WAIT_S)
+        result: list[int] = []
+        asker = threading.Thread(target=lambda: result.append(once._once("run", lambda: 2)), daemon=True)
+        asker.start()
+        asker.join(WAIT_S)
+    assert result == [1], "the foreground never got the background's result"

@@ -5,7 +5,7 @@ runs the slow modules' sessions ahead while other modules run). Each pool's own 
 machine's load; these slots do. A part of the slots can be reserved for the foreground (the test running now,
 which starts processes of its own): background sessions then take only the rest, and a foreground session
 waiting for a slot goes before every background one. No library offers a priority semaphore with reservations;
-this is a condition variable and three counters.
+this is a condition variable and four counters.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ class SessionSlots:
         self._running = 0
         self._reserved = 0
         self._foreground_waiting = 0
+        self._depending = 0
         self._changed = threading.Condition()
         self._local = threading.local()
 
@@ -62,10 +63,30 @@ class SessionSlots:
                 self._reserved -= slots
                 self._changed.notify_all()
 
+    def is_background(self) -> bool:
+        return getattr(self._local, "background", False)
+
+    @contextmanager
+    def depending(self) -> Iterator[None]:
+        """A foreground thread waits inside for what another thread makes, maybe a background one: reservations do
+        not hold meanwhile (a background session the foreground waits for must not wait for a reserved slot). A
+        background thread waiting for another changes nothing."""
+        if self.is_background():
+            yield
+            return
+        with self._changed:
+            self._depending += 1
+            self._changed.notify_all()
+        try:
+            yield
+        finally:
+            with self._changed:
+                self._depending -= 1
+
     @contextmanager
     def held(self) -> Iterator[None]:
         """One slot for the time of one session."""
-        background = getattr(self._local, "background", False)
+        background = self.is_background()
         with self._changed:
             if not background:
                 self._foreground_waiting += 1
@@ -87,7 +108,8 @@ class SessionSlots:
             return True
         if not background:
             return self._running < self._limit
-        return self._foreground_waiting == 0 and self._running < self._limit - self._reserved
+        reserved = 0 if self._depending else self._reserved
+        return self._foreground_waiting == 0 and self._running < self._limit - reserved
 
 
 #: the process's slots (no limit unless a caller sets one: the self-tests do)
