@@ -451,3 +451,18 @@ def test_effect_table_in_profile_readme_is_current():
         "device_profiles/README.md's effect table is out of date: replace it with the output of "
         "`encoder-conformance profile effects`"
     )
+
+
+def test_a_profile_loaded_again_is_the_loaded_one_until_a_file_of_its_chain_changes(tmp_path):
+    """A second load (the run's forked twin loads the run's profile) takes the one loaded, as named this time;
+    an edited file, its own or one it extends, is read again."""
+    parent = write(tmp_path, "probe.yaml", GOOD)
+    child = write(tmp_path, "probe-child.yaml", "schema_version: 1\nid: probe-child\nextends: probe\n")
+    first = load_profile(child)
+    again = load_profile(str(child))
+    assert again.profile is first.profile
+    assert again.path == Path(str(child))
+    parent.write_text(GOOD.replace("title: Probe encoder", "title: Probe encoder, edited"), encoding="utf-8")
+    edited = load_profile(child)
+    assert edited.profile is not first.profile
+    assert edited.profile.title == "Probe encoder, edited"

@@ -90,6 +90,7 @@ def test_a_run_reports_its_budget(tmp_path: Path):
     assert abs(budget["wall_s"] - budget["owed_s"] - budget["tester_s"]) < 0.01
     assert abs(budget["wall_s"] - budget["outside_tests_s"] - budget["inside_tests_s"]) < 0.01
     assert 0 <= budget["tester_share_inside"] <= 1
+    assert 0 < budget["startup_s"] <= budget["outside_tests_s"], "start-up to the first test: outside the tests"
     assert 0 < budget["owed_tester_cpu_s"] < budget["owed_s"]
     assert budget["owed_tester_cpu"].keys() <= budget["owed"].keys()
     sdo = next(w for w in budget["windows"] if w["name"] == "sdo_response_max_ms")
@@ -100,6 +101,7 @@ def test_a_run_reports_its_budget(tmp_path: Path):
     heartbeat = next(t for t in budget["costliest"] if "heartbeat_period" in t["nodeid"])
     assert heartbeat["why"].startswith("periodic")
     assert "time budget:" in completed.output
+    assert "s to the first test" in completed.output
     html = (tmp_path / "report" / "report.html").read_text(encoding="utf-8")
     assert "id='time-budget'" in html
     assert "id='silence-windows'" in html, "the report shows each window and its source"

@@ -50,14 +50,16 @@ if TYPE_CHECKING:
     )
     from encoder_conformance.plugin import history_hook as history
     from encoder_conformance.plugin import options as opts
-else:  # imported at their first use: only in a session of ours (plugin/activation.py)
+else:  # imported at their first use, then in place of their LazyModule: only in a session of ours (activation.py)
     (allure_labels, allure_run, bus_trace, hypothesis_profiles, junit_coverage, late_frames, lifecycle, outcomes,
      reporting, run_record, selection, shuffle, skips, time_budget, twin_launch, verdicts, history, opts) = (
-        LazyModule(f"encoder_conformance.plugin.{name}") for name in (
-            "allure_labels", "allure_run", "bus_trace", "hypothesis_profiles", "junit_coverage", "late_frames",
-            "lifecycle",
-            "outcomes", "reporting", "run_record", "selection", "shuffle", "skips", "time_budget", "twin_launch",
-            "verdicts", "history_hook", "options"))
+        LazyModule(f"encoder_conformance.plugin.{name}", globals(), alias) for name, alias in (
+            ("allure_labels", "allure_labels"), ("allure_run", "allure_run"), ("bus_trace", "bus_trace"),
+            ("hypothesis_profiles", "hypothesis_profiles"), ("junit_coverage", "junit_coverage"),
+            ("late_frames", "late_frames"), ("lifecycle", "lifecycle"), ("outcomes", "outcomes"),
+            ("reporting", "reporting"), ("run_record", "run_record"), ("selection", "selection"),
+            ("shuffle", "shuffle"), ("skips", "skips"), ("time_budget", "time_budget"), ("twin_launch", "twin_launch"),
+            ("verdicts", "verdicts"), ("history_hook", "history"), ("options", "opts")))
 
 pytest_plugins = ["encoder_conformance.plugin.progress"]
 
@@ -86,7 +88,7 @@ def pytest_configure(config: pytest.Config) -> None:
     _OURS[0] = _active(config)
     if not _active(config):
         return
-    hypothesis_profiles.load()  # ci, bench, soak, dev (HYPOTHESIS_PROFILE)
+    hypothesis_profiles.configure(config)  # ci, bench, soak, dev (HYPOTHESIS_PROFILE): now, or before it is used
     for marker in MARKERS:
         config.addinivalue_line("markers", marker)
     try:
@@ -107,6 +109,11 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     lifecycle.start(session.config)
     if lifecycle.state_of(session.config) is not None:
         gc.disable()  # until the tests are collected (a full pass during collection took 60-100 ms): see below
+
+
+def pytest_collectstart(collector: pytest.Collector) -> None:
+    if isinstance(collector, pytest.Module) and _active(collector.config):
+        hypothesis_profiles.before_import(collector.path)  # the module may use hypothesis: its profile first
 
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
@@ -130,7 +137,7 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         # what a conformance run has built so far (modules, profile, ~700 items) lives until its end: the
         # garbage collector's full passes during the tests need not walk it again and again
         gc.freeze()
-        gc.enable()
+    gc.enable()  # paused since session start, or since the command line's start (cli/main.py GC_PAUSED)
 
 
 @pytest.hookimpl(wrapper=True)

@@ -2,7 +2,9 @@
 ``dut/link/time_budget.py``) and the rest, the tester's; per area and in total; the tests that cost most, and why.
 
 The run's wall time is the process's (interpreter start, imports and collection included, as a user waits
-for them), read from /proc on Linux, else from the session's start.
+for them), read from /proc on Linux, else from the session's start. ``startup_s`` is the part of it before the first
+test began (interpreter, imports, option checks, collection: the tester's fixed cost; the device's own start-up
+checks run in the first test's set-up, after it).
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ class TestCost:
 @dataclass
 class RunBudget:
     session_started: float = field(default_factory=time.monotonic)
+    first_test_started: float | None = None  # time.monotonic() as the first test began
     tests: list[TestCost] = field(default_factory=list)
     windows: Windows | None = None  # the device's silence windows and the measurement they came from
 
@@ -80,6 +83,8 @@ def measure(item: pytest.Item) -> Iterator[None]:
     if run is None:
         yield
         return
+    if run.first_test_started is None:
+        run.first_test_started = time.monotonic()
     before, started = BUDGET.snapshot(), time.perf_counter()
     try:
         yield
@@ -98,6 +103,7 @@ def budget(config: pytest.Config) -> dict[str, Any] | None:
     owed = {name: round(seconds, 3) for name, seconds in BUDGET.snapshot().items() if seconds > 0}
     owed_total = sum(owed.values())
     in_tests = sum(t.seconds for t in run.tests)
+    first = run.first_test_started
     areas: dict[str, dict[str, float]] = {}
     for cost in run.tests:
         area = areas.setdefault(area_of(cost.nodeid), {"seconds": 0.0, "owed": 0.0, "tests": 0})
@@ -111,6 +117,7 @@ def budget(config: pytest.Config) -> dict[str, Any] | None:
         "tester_s": round(wall - owed_total, 3),
         "tester_share": round((wall - owed_total) / wall, 3) if wall > 0 else None,
         "outside_tests_s": round(wall - in_tests, 3),  # start-up, collection, reports
+        "startup_s": None if first is None else round(wall - (time.monotonic() - first), 3),  # to the first test
         "inside_tests_s": round(in_tests, 3),
         "tester_share_inside": round(_tester_inside(run.tests) / in_tests, 3) if in_tests > 0 else None,
         **_owed_cpu(),
@@ -154,5 +161,6 @@ def terminal_line(config: pytest.Config) -> str | None:
     owed = ", ".join(f"{name} {seconds:.1f} s" for name, seconds in sorted(data["owed"].items(), key=lambda i: -i[1]))
     return (f"time budget: {data['wall_s']:.1f} s, of which owed to the device {data['owed_s']:.1f} s ({owed}); "
             f"tester {data['tester_s']:.1f} s ({100 * (data['tester_share'] or 0):.0f} %, "
-            f"{data['outside_tests_s']:.1f} s outside the tests, median {data['tester_per_test_median_ms']} ms per "
-            f"test; {100 * (data['tester_share_inside'] or 0):.0f} % of the time inside the tests)")
+            f"{data['outside_tests_s']:.1f} s outside the tests, {data['startup_s']:.1f} s to the first test, "
+            f"median {data['tester_per_test_median_ms']} ms per test; "
+            f"{100 * (data['tester_share_inside'] or 0):.0f} % of the time inside the tests)")

@@ -49,7 +49,7 @@ class EffectParams(BaseModel):
     """Base of the parameter models: strict keys, immutable. A subclass that sets ``effect`` is an effect's model
     (registered in EFFECT_MODELS); one that does not is a shared base (NoParams, ObjectList, ObjectAt)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
     effect: ClassVar[str]
 
     @classmethod

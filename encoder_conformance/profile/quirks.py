@@ -1,16 +1,22 @@
 """Profile quirks: a documented deviation, optionally with an effect the simulator and suites act on.
 
-``Quirk`` is a union discriminated by ``effect``: a quirk with an effect carries that effect's typed
+``Quirk`` is a quirk chosen by its ``effect``: a quirk with an effect carries that effect's typed
 parameters (``quirk_effects.py``); a quirk without one is documentation only (free-form params),
 yet it still appears in the report as a documented deviation. ``effect_table()`` renders the
 effects for device_profiles/README.md, so the table can never drift from the models.
+
+Each effect's quirk class is made the first time a quirk names the effect (``quirk_class``), not at import: the
+44 classes and a union of them cost ~0.15 s of every run's start-up, and a profile uses a handful. A quirk is
+validated by its own class (a validation error keeps its location under the quirk's key).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Annotated, Any, Literal, TypeAlias, Union
+from functools import cache
+from typing import TYPE_CHECKING, Annotated, Any, Literal, TypeAlias
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, TypeAdapter, create_model
+from pydantic import BaseModel, ConfigDict, Field, PlainValidator, TypeAdapter, create_model
+from pydantic_core import PydanticCustomError
 
 from encoder_conformance.profile.quirk_effects import EFFECT_MODELS, EffectParams
 
@@ -53,7 +59,10 @@ def _quirk_class(model: type[EffectParams]) -> type[QuirkBase]:
     )
 
 
-QUIRK_CLASSES: dict[str, type[QuirkBase]] = {name: _quirk_class(model) for name, model in EFFECT_MODELS.items()}
+@cache
+def quirk_class(effect: str) -> type[QuirkBase]:
+    """The quirk class of an effect (KeyError for an unknown one), made at its first use."""
+    return _quirk_class(EFFECT_MODELS[effect])
 
 
 def _effect_tag(value: Any) -> str:
@@ -61,21 +70,24 @@ def _effect_tag(value: Any) -> str:
     return DOCUMENTATION_ONLY if effect is None else str(effect)
 
 
+def _validate_quirk(value: Any) -> QuirkBase:
+    """A quirk by its effect's class; an effect no model names is an ``unknown_effect`` error."""
+    if isinstance(value, QuirkBase):
+        return value
+    tag = _effect_tag(value)
+    if tag == DOCUMENTATION_ONLY:
+        return DocumentedQuirk.model_validate(value)
+    if tag not in EFFECT_MODELS:
+        raise PydanticCustomError("unknown_effect",
+                                  f"unknown quirk effect; known effects: {', '.join(sorted(EFFECT_MODELS))}")
+    return quirk_class(tag).model_validate(value)  # its errors keep their locations, under the quirk's key
+
+
 if TYPE_CHECKING:
-    # The checker cannot follow a union built at run time: to it, a quirk is what every member is, a QuirkBase.
+    # The checker cannot follow a class chosen at run time: to it, a quirk is what every class is, a QuirkBase.
     Quirk: TypeAlias = QuirkBase
 else:
-    Quirk = Annotated[
-        Union[  # a runtime union of the generated classes
-            (*(Annotated[cls, Tag(name)] for name, cls in QUIRK_CLASSES.items()),
-             Annotated[DocumentedQuirk, Tag(DOCUMENTATION_ONLY)])
-        ],
-        Discriminator(
-            _effect_tag,
-            custom_error_type="unknown_effect",
-            custom_error_message=f"unknown quirk effect; known effects: {', '.join(sorted(EFFECT_MODELS))}",
-        ),
-    ]
+    Quirk = Annotated[QuirkBase, PlainValidator(_validate_quirk)]
 _QUIRK: TypeAdapter[QuirkBase] = TypeAdapter(Quirk)
 
 

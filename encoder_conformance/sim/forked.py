@@ -97,6 +97,7 @@ def _serve(run: Callable[[], int], stdin_fd: int, stdout_fd: int, log_path: str 
     """In the child: a session of its own, the three standard streams, nothing else inherited; then ``run``."""
     faulthandler.disable()  # pytest's writes to a descriptor of the parent's
     gc.freeze()  # the parent's heap (a whole pytest session) is never garbage: collections skip it
+    gc.enable()  # the run forks it while its collector pauses for the collection (plugin/hooks.py)
     os.setsid()  # the terminal's Ctrl-C reaches only the run, which gives the device back first
     for number in (signal.SIGTERM, signal.SIGHUP, signal.SIGPIPE, signal.SIGCHLD):
         signal.signal(number, signal.SIG_DFL)
