@@ -2,7 +2,9 @@
 in this process or a child process, records into a temporary history database instead. ``preload_library``:
 the user-space SocketCAN bus's library, built once (its tests skip where it cannot be built). ``full_runs``: the
 full suites against a profile's fault-free twin, once per session; ``fault_runs``: a fault's targeted run, once
-per session (tests/suite_session.py)."""
+per session (tests/suite_session.py); ``runs_ahead``: the slow modules' sessions, started in the background when the
+session starts (tests/runs_ahead.py), beside the other modules, which leave ``FOREGROUND_SLOTS`` (a module
+attribute, default 1) of the session slots free for their own processes."""
 
 from __future__ import annotations
 
@@ -11,8 +13,15 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.history.db import ENV_VAR
+from encoder_conformance.runs.session_slots import SESSION_SLOTS
 from encoder_conformance.vcan import BuildError, library
-from tests.suite_session import FaultRuns, FullRuns
+from tests.runs_ahead import RunsAhead
+from tests.suite_session import PARALLEL_RUNS, FaultRuns, FullRuns
+
+#: session slots a module leaves to its own processes where it declares none (the slow modules declare 0)
+FOREGROUND_SLOTS = 1
+#: lines for the terminal summary (the session's fixtures end before it is written)
+_SUMMARY: list[str] = []
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -40,3 +49,39 @@ def full_runs(tmp_path_factory) -> FullRuns:
 def fault_runs(tmp_path_factory) -> FaultRuns:
     """A fault's targeted run against a profile's twin, run once in the whole self-test session."""
     return FaultRuns(tmp_path_factory.mktemp)
+
+
+@pytest.fixture(scope="session")
+def runs_ahead(tmp_path_factory, full_runs, fault_runs):
+    """The slow modules' sessions, made once, most of them in the background ahead of their module."""
+    ahead = RunsAhead(tmp_path_factory.mktemp, full_runs, fault_runs)
+    yield ahead
+    ahead.close()
+    if ahead.summary_worth_printing():
+        _SUMMARY.append(ahead.summary())
+
+
+def pytest_terminal_summary(terminalreporter):
+    for line in _SUMMARY:
+        terminalreporter.write_line(line)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _slow_sessions_started_ahead(request, runs_ahead):
+    """Starts every session the selected slow modules declare (``sessions_ahead``), in collection order, at most
+    PARALLEL_RUNS suite sessions at a time in the whole process."""
+    SESSION_SLOTS.set_limit(PARALLEL_RUNS)
+    modules = list(dict.fromkeys(item.module for item in request.session.items if hasattr(item, "module")))
+    for module in modules:
+        declare = getattr(module, "sessions_ahead", None)
+        if declare is not None:
+            runs_ahead.start(declare(runs_ahead))
+    yield
+    SESSION_SLOTS.set_limit(None)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _foreground_slots(request):
+    """While a module runs, background sessions leave it the slots it declares (FOREGROUND_SLOTS)."""
+    with SESSION_SLOTS.reserved(getattr(request.module, "FOREGROUND_SLOTS", FOREGROUND_SLOTS)):
+        yield

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Generic, TypeVar
 
 from encoder_conformance.runs.fault_matrix import matrix_env, run_session
+from encoder_conformance.runs.session_slots import SESSION_SLOTS
 from encoder_conformance.runs.suite_runner import SessionResult, run_pytest
 
 REPO = Path(__file__).resolve().parents[1]
@@ -62,10 +63,17 @@ class _Once(Generic[K, V]):
     def _once(self, key: K, make: Callable[[], V]) -> V:
         with self._guard:
             lock = self._locks.setdefault(key, threading.Lock())
-        with lock:
+        if not lock.acquire(blocking=False):
+            # another thread makes it (a background one, maybe waiting for a slot the foreground reserved): while
+            # the foreground waits for it, reservations do not hold (runs/session_slots.py: else a deadlock)
+            with SESSION_SLOTS.depending():
+                lock.acquire()
+        try:
             if key not in self._done:
                 self._done[key] = make()
             return self._done[key]
+        finally:
+            lock.release()
 
 
 class FullRuns(_Once[str, FullRun]):

@@ -30,6 +30,7 @@ from bench_twin import CUSTOMER_VALUES, REPO, as_found_problems, start_twin, wai
 from encoder_conformance.dut.link.connection import OPEN_TIMEOUT_S
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.runs.host_load import BusyGate
+from tests.suite_session import PARALLEL_RUNS
 
 #: seconds after the start of the run at which Ctrl-C arrives (the suites start about 1.5 s in)
 INTERRUPT_AT_S = [1.0, 2.0, 3.0, 4.5, 6.0, 7.5, 9.0]  # 10.5 s and 12 s came after the end of faster runs
@@ -41,6 +42,9 @@ INTERRUPT_AFTER = ["test_object_dictionary.py::test_undeclared_subindex_aborts",
                    "test_lss.py::test_configured_device_not_identified_as_non_configured"]
 STORE_POWER_CYCLE, LSS_UNCONFIGURED = INTERRUPT_AFTER[1:3]
 MOMENTS: list[float | str] = [*INTERRUPT_AT_S, *INTERRUPT_AFTER]
+#: no background session starts while this module runs (tests/runs_ahead.py): it times Ctrl-C beside a busy
+#: process of its own, and its fixtures run two destructive runs at a time
+FOREGROUND_SLOTS = PARALLEL_RUNS
 CTRL_C_LIMIT_S = 2.0  # the run's own clock, interrupt to verdict (run-outcome.json stopped_after_s)
 #: what this harness measures on top (process exit, its own wake-up beside a busy process): CI saw 2.08 s
 #: from send_signal to communicate() for a run that stopped in time

@@ -23,6 +23,9 @@ from encoder_conformance.runs.fault_matrix import (
 from encoder_conformance.sim.fault_catalogue import FAULTS, faults_for
 from tests.suite_session import PARALLEL_RUNS
 
+#: its sessions run ahead (tests/runs_ahead.py); while it runs, no background session starts: the complement
+#: matrices, made one after another from the main matrix's results, are the critical path then
+FOREGROUND_SLOTS = PARALLEL_RUNS
 MAIN_PROFILE = "wachendorff-wdga-mt"
 #: profiles with what the WDGA lacks, tried in order: a write-only object; a store-by-reboot command;
 #: every LSS service (identify, fastscan); the quirks other families document (guarding/heartbeat
@@ -49,6 +52,14 @@ def _effects(profile: str) -> frozenset[str]:
 
 def _functions(result, outcome: str) -> set[str]:
     return {name.split("::")[1].split("[")[0] for name, o in result.outcomes.items() if o == outcome}
+
+
+def sessions_ahead(runs) -> dict:
+    """The main matrix's sessions (tests/runs_ahead.py): the fault-free run and each fault's run."""
+    jobs = {("full", MAIN_PROFILE): lambda: runs.full_runs(MAIN_PROFILE)}
+    for fault in faults_for(_effects(MAIN_PROFILE)):
+        jobs[("fault", MAIN_PROFILE, fault)] = lambda fault=fault: runs.fault_runs(MAIN_PROFILE, fault)
+    return jobs
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import ast
 import xml.etree.ElementTree as ET
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -24,7 +23,7 @@ from encoder_conformance.run_summary import RunSummary
 from encoder_conformance.runs.fault_matrix import matrix_env
 from encoder_conformance.runs.suite_runner import SessionResult, run_pytest
 from encoder_conformance.sim.fault_catalogue import JUDGED_STRICTLY, TARGET_MODULES
-from tests.suite_session import PARALLEL_RUNS, FaultRuns
+from tests.suite_session import FaultRuns
 
 PROFILE = "wachendorff-wdga-mt"
 #: the suites' helpers beside their modules (a basis chosen there counts as the suites')
@@ -80,15 +79,23 @@ def _run(fault: str, strict: bool, workdir: Path, fault_runs: FaultRuns) -> dict
     return outcomes
 
 
+#: its sessions run ahead (tests/runs_ahead.py): the foreground keeps no slot of the background's
+FOREGROUND_SLOTS = 0
+
+
+def sessions_ahead(runs) -> dict:
+    """Every strictly judged fault, without and with --strict-inferred (the strict runs on the main profile shared
+    with the fault matrix, tests/suite_session.py)."""
+    workdir = runs.mktemp("inferred-walk")
+    return {("inferred-walk", fault, strict): lambda f=fault, s=strict: _run(f, s, workdir, runs.fault_runs)
+            for fault in sorted(JUDGED_STRICTLY) for strict in (False, True)}
+
+
 @pytest.fixture(scope="module")
-def walk(tmp_path_factory, fault_runs) -> dict[tuple[str, bool], dict[str, str]]:
-    """Every strictly judged fault, without and with --strict-inferred (a few runs at a time; the strict runs on
-    the main profile shared with the fault matrix, tests/suite_session.py)."""
-    workdir = tmp_path_factory.mktemp("inferred-walk")
-    runs = [(fault, strict) for fault in sorted(JUDGED_STRICTLY) for strict in (False, True)]
-    with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
-        results = list(pool.map(lambda run: _run(*run, workdir, fault_runs), runs))
-    return dict(zip(runs, results, strict=True))
+def walk(runs_ahead) -> dict[tuple[str, bool], dict[str, str]]:
+    """(fault, strict) -> its outcomes (a few runs at a time, most ahead)."""
+    return {(fault, strict): outcomes for (_, fault, strict), outcomes
+            in runs_ahead.results(sessions_ahead(runs_ahead)).items()}
 
 
 def test_no_inferred_rule_fails_a_device_without_strict(walk):

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import os
 import xml.etree.ElementTree as ET
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -20,7 +19,6 @@ from encoder_conformance.paths import CONTENT_ROOT, SUITES_DIR
 from encoder_conformance.runs.fault_matrix import matrix_env
 from encoder_conformance.runs.suite_runner import run_pytest
 from encoder_conformance.sim.fault_catalogue import TARGET_MODULES
-from tests.suite_session import PARALLEL_RUNS
 
 PROFILE = "wachendorff-wdga-mt"
 #: CI runs one order every time (replayable); set ENCODER_CONFORMANCE_SHUFFLE_SEED to try others
@@ -65,23 +63,29 @@ def _read(folder: Path, output: str) -> dict[str, str]:
     return _outcomes(junit)
 
 
-@pytest.fixture(scope="module")
-def pairs(tmp_path_factory, full_runs):
-    """(what, usual order, shuffled) for the twin and each variant; a few suite sessions at a time. The twin's
-    usual order is the session's full run of the WDGA twin (tests/suite_session.py, shared with test_twins and
-    the fault matrix's baseline)."""
-    jobs = [(variant, shuffled) for variant in (None, *VARIANTS) for shuffled in (False, True)]
+#: its sessions run ahead (tests/runs_ahead.py): the foreground keeps no slot of the background's
+FOREGROUND_SLOTS = 0
 
-    def one(job: tuple[str | None, bool]) -> dict[str, str]:
-        variant, shuffled = job
+
+def sessions_ahead(runs) -> dict:
+    """(what, shuffled) -> its outcomes, for the twin and each variant. The twin's usual order is the session's
+    full run of the WDGA twin (tests/suite_session.py, shared with test_twins and the fault matrix's baseline)."""
+    def one(variant: str | None, shuffled: bool) -> dict[str, str]:
         if variant is None and not shuffled:
-            run = full_runs(PROFILE)
+            run = runs.full_runs(PROFILE)
             return _read(run.folder / "report", run.completed.output)
-        return _run(tmp_path_factory.mktemp(f"{variant or 'twin'}-{'shuffled' if shuffled else 'usual'}"), *job)
+        return _run(runs.mktemp(f"{variant or 'twin'}-{'shuffled' if shuffled else 'usual'}"), variant, shuffled)
 
-    with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
-        results = list(pool.map(one, jobs))
-    return [(variant or "twin", results[2 * i], results[2 * i + 1]) for i, variant in enumerate((None, *VARIANTS))]
+    return {("shuffled-order", variant, shuffled): lambda v=variant, s=shuffled: one(v, s)
+            for variant in (None, *VARIANTS) for shuffled in (False, True)}
+
+
+@pytest.fixture(scope="module")
+def pairs(runs_ahead):
+    """(what, usual order, shuffled) for the twin and each variant (a few suite sessions at a time, most ahead)."""
+    results = runs_ahead.results(sessions_ahead(runs_ahead))
+    return [(variant or "twin", results[("shuffled-order", variant, False)], results[("shuffled-order", variant, True)])
+            for variant in (None, *VARIANTS)]
 
 
 def test_the_variants_exist():

@@ -27,6 +27,15 @@ def _expected_cost(profile_id: str) -> float:
     return load_profile(profile_id).profile.simulator.bootup_delay_ms
 
 
+#: its sessions run ahead (tests/runs_ahead.py): the foreground keeps no slot of the background's
+FOREGROUND_SLOTS = 0
+
+
+def sessions_ahead(runs) -> dict:
+    """Each profile's full run, the slow twins first."""
+    return {("full", p): lambda p=p: runs.full_runs(p) for p in sorted(PROFILES, key=_expected_cost, reverse=True)}
+
+
 @pytest.fixture(scope="module")
 def twin_runs(full_runs):
     """One full suite run per profile against its own twin (a few in parallel); the session's runs

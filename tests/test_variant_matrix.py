@@ -14,9 +14,18 @@ import pytest
 
 from encoder_conformance.open_points import all_readings
 from encoder_conformance.paths import SUITES_DIR
-from encoder_conformance.runs.variant_matrix import REPRESENTATIVE_PROFILES, format_runs, plan, run_variants
+from encoder_conformance.runs.variant_matrix import (
+    REPRESENTATIVE_PROFILES,
+    combine,
+    format_runs,
+    in_plan_order,
+    plan,
+    run_shared,
+)
 from encoder_conformance.sim.fault_catalogue import FAULTS, TARGET_MODULES, VARIANTS
-from tests.suite_session import PARALLEL_RUNS
+
+#: its sessions run ahead (tests/runs_ahead.py): the foreground keeps no slot of the background's
+FOREGROUND_SLOTS = 0
 
 #: a source a vendor can look up: a CiA document with its version and a section or table, or a manual's section
 _CITABLE = re.compile(r"(CiA 30[1-9]|CiA 4\d\d)( v\d[\d.]*)? (§|table |figure )\d|manual|M §|§\d")
@@ -53,9 +62,18 @@ def test_every_reading_applies_to_some_representative_profile():
     assert sorted({r.point for r in all_readings()} - planned) == []
 
 
+def sessions_ahead(runs) -> dict:
+    """The variant matrix's runs (runs/variant_matrix.py run_variants: the readings combine puts on one twin)."""
+    workdir = runs.mktemp("variants")
+    return {("variants", profile, tuple(r.point for r in readings)):
+            lambda profile=profile, readings=readings: run_shared(profile, readings, workdir)
+            for profile, readings in combine(plan(REPRESENTATIVE_PROFILES))}
+
+
 @pytest.fixture(scope="module")
-def variant_runs(tmp_path_factory):
-    return run_variants(plan(REPRESENTATIVE_PROFILES), tmp_path_factory.mktemp("variants"), workers=PARALLEL_RUNS)
+def variant_runs(runs_ahead):
+    """As run_variants, most runs made ahead."""
+    return in_plan_order(plan(REPRESENTATIVE_PROFILES), runs_ahead.results(sessions_ahead(runs_ahead)).values())
 
 
 def test_every_conformant_variant_passes_on_every_profile_where_it_applies(variant_runs):
@@ -68,7 +86,6 @@ def test_every_conformant_variant_passes_on_every_profile_where_it_applies(varia
 def test_readings_share_a_twin_only_where_no_variant_hides_another():
     """combine(): every (reading, profile) runs exactly once; readings on one twin override no method in common
     (a mixin in front would hide the other's), and a shared twin plays one profile."""
-    from encoder_conformance.runs.variant_matrix import combine
     from encoder_conformance.sim.twin import overridden_methods
 
     pairs = plan(REPRESENTATIVE_PROFILES)

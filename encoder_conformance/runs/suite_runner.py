@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from encoder_conformance.plugin.option_table import imported_before_pytest, unused_plugins
+from encoder_conformance.runs.session_slots import SESSION_SLOTS
 from encoder_conformance.sim.twin import SERVE_MODULE
 
 #: the libraries of the pytest plugins a session loads through entry points (not the plugin modules themselves)
@@ -83,20 +84,22 @@ def _session(args: list[str], cwd: str, env: dict[str, str], output: str) -> Non
 def run_pytest(args: Sequence[str], cwd: Path, output: Path, timeout: float,
                env: Mapping[str, str] | None = None) -> SessionResult:
     """One pytest session with ``args`` in ``cwd``; its output is kept in ``output``. Raises
-    subprocess.TimeoutExpired (the child killed) after ``timeout`` seconds, as subprocess.run does."""
+    subprocess.TimeoutExpired (the child killed) after ``timeout`` seconds, as subprocess.run does. The session
+    runs in one of the process's session slots (runs/session_slots.py); ``timeout`` counts from its start."""
     output.parent.mkdir(parents=True, exist_ok=True)
     argv = [*unused_plugins(list(args)), *imported_before_pytest(PRELOADED_DISTRIBUTION_MODULES), *args]
     child = _forkserver().Process(target=_session, name="pytest-session",
                                   args=(argv, str(cwd), dict(os.environ if env is None else env), str(output)))
-    child.start()
-    child.join(timeout)
-    if child.exitcode is None:
-        child.terminate()
-        child.join(STOP_GRACE_S)
+    with SESSION_SLOTS.held():
+        child.start()
+        child.join(timeout)
         if child.exitcode is None:
-            child.kill()
-            child.join()
-        raise subprocess.TimeoutExpired(["pytest", *args], timeout, _read(output))
+            child.terminate()
+            child.join(STOP_GRACE_S)
+            if child.exitcode is None:
+                child.kill()
+                child.join()
+            raise subprocess.TimeoutExpired(["pytest", *args], timeout, _read(output))
     return SessionResult(child.exitcode, _read(output))
 
 

@@ -10,6 +10,7 @@ are not, and every run must have judged at least one test (a variant that only s
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -139,23 +140,29 @@ def _restricted(result: RunResult, modules: tuple[str, ...]) -> RunResult:
 def run_variants(pairs: list[tuple[OpenReading, str]], workdir: Path, workers: int = 2) -> list[VariantRun]:
     """Each variant against its modules on its profile, ``workers`` suite sessions at a time.
 
-    Variants that can share a twin (``combine``) run together, once; a shared run with a failure is run again
-    one variant at a time, so that each failure is charged to the reading that shows it."""
-
-    def one(run: tuple[str, list[OpenReading]]) -> list[VariantRun]:
-        profile, readings = run
-        folder = workdir / Path(profile).stem
-        folder.mkdir(parents=True, exist_ok=True)
-        variants = tuple(r.variant for r in readings)
-        result = run_suite(profile, variants[0], folder, targeted=True, together=variants[1:])
-        shared = [VariantRun(r, profile, _restricted(result, r.modules)) for r in readings]
-        if len(readings) == 1 or all(run.ok for run in shared):
-            return shared
-        return [VariantRun(r, profile, run_suite(profile, r.variant, folder, targeted=True)) for r in readings]
-
-    order = {(reading.point, profile): n for n, (reading, profile) in enumerate(pairs)}
+    Variants that can share a twin (``combine``) run together, once (``run_shared``)."""
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        runs = [run for batch in pool.map(one, combine(pairs)) for run in batch]
+        batches = list(pool.map(lambda run: run_shared(run[0], run[1], workdir), combine(pairs)))
+    return in_plan_order(pairs, batches)
+
+
+def run_shared(profile: str, readings: list[OpenReading], workdir: Path) -> list[VariantRun]:
+    """The readings ``combine`` put on one twin, in one run; a shared run with a failure is run again one variant
+    at a time, so that each failure is charged to the reading that shows it."""
+    folder = workdir / Path(profile).stem
+    folder.mkdir(parents=True, exist_ok=True)
+    variants = tuple(r.variant for r in readings)
+    result = run_suite(profile, variants[0], folder, targeted=True, together=variants[1:])
+    shared = [VariantRun(r, profile, _restricted(result, r.modules)) for r in readings]
+    if len(readings) == 1 or all(run.ok for run in shared):
+        return shared
+    return [VariantRun(r, profile, run_suite(profile, r.variant, folder, targeted=True)) for r in readings]
+
+
+def in_plan_order(pairs: list[tuple[OpenReading, str]], batches: Iterable[list[VariantRun]]) -> list[VariantRun]:
+    """The runs of ``run_shared``'s batches in the order of ``pairs``."""
+    order = {(reading.point, profile): n for n, (reading, profile) in enumerate(pairs)}
+    runs = [run for batch in batches for run in batch]
     return sorted(runs, key=lambda run: order[(run.reading.point, run.profile)])
 
 
