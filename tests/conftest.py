@@ -4,7 +4,7 @@ the user-space SocketCAN bus's library, built once (its tests skip where it cann
 full suites against a profile's fault-free twin, once per session; ``fault_runs``: a fault's targeted run, once
 per session (tests/suite_session.py); ``runs_ahead``: the slow modules' sessions, started in the background when the
 session starts (tests/runs_ahead.py), beside the other modules, which leave ``FOREGROUND_SLOTS`` (a module
-attribute, default 1) of the session slots free for their own processes."""
+attribute, default 2) of the session slots free for their own processes."""
 
 from __future__ import annotations
 
@@ -18,8 +18,10 @@ from encoder_conformance.vcan import BuildError, library
 from tests.runs_ahead import RunsAhead
 from tests.suite_session import PARALLEL_RUNS, FaultRuns, FullRuns
 
-#: session slots a module leaves to its own processes where it declares none (the slow modules declare 0)
-FOREGROUND_SLOTS = 1
+#: session slots a module leaves to its own processes where it declares none (the slow modules declare 0). Two:
+#: with one, the background's three sessions beside the quick modules' own runs slowed the full twin runs past a
+#: minute (test_twins: FRABA c2-st 69 s, SIKO 1012 82 s against 35-50 s four at a time alone)
+FOREGROUND_SLOTS = 2
 #: lines for the terminal summary (the session's fixtures end before it is written)
 _SUMMARY: list[str] = []
 

@@ -75,7 +75,7 @@ def _full_run(folder: Path, customer: dict | None) -> dict:
 
 
 @pytest.fixture(scope="module")
-def full_runs(tmp_path_factory) -> dict[str, dict]:
+def destructive_runs(tmp_path_factory) -> dict[str, dict]:
     """A complete destructive run against a twin with a customer configuration and one in factory state."""
     with ThreadPoolExecutor(max_workers=2) as pool:
         customer = pool.submit(_full_run, tmp_path_factory.mktemp("customer"), CUSTOMER_VALUES)
@@ -83,18 +83,18 @@ def full_runs(tmp_path_factory) -> dict[str, dict]:
         return {"customer": customer.result(), "factory": factory.result()}
 
 
-def test_destructive_run_leaves_the_customer_configuration(full_runs):
+def test_destructive_run_leaves_the_customer_configuration(destructive_runs):
     """All five stored customer values, the whole memory and every value as found, also after a power cycle."""
-    run = full_runs["customer"]
+    run = destructive_runs["customer"]
     for (index, sub), value in CUSTOMER_VALUES.items():
         assert run["stored_before"][f"0x{index:04X}.{sub}"] == value
     assert not run["problems"], "the run changed the device:\n" + "\n".join(run["problems"][:20])
     assert "device restored as found" in run["output"]
 
 
-def test_stored_configuration_passes_what_factory_state_passes(full_runs):
+def test_stored_configuration_passes_what_factory_state_passes(destructive_runs):
     """A device with a stored configuration passes every test a factory-state device passes."""
-    customer, factory = full_runs["customer"], full_runs["factory"]
+    customer, factory = destructive_runs["customer"], destructive_runs["factory"]
     assert factory["returncode"] == RunExit.PASSED, factory["output"][-3000:]
     assert customer["returncode"] == RunExit.PASSED, customer["output"][-3000:]
     lost = [t for t, o in factory["outcomes"].items() if o == "passed" and customer["outcomes"].get(t) != "passed"]
