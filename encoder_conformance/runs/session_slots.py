@@ -37,17 +37,8 @@ class SessionSlots:
         with self._changed:
             return self._running
 
-    @contextmanager
-    def background(self) -> Iterator[None]:
-        """Sessions this thread starts inside are background ones (a pool's initializer calls ``mark_background``)."""
-        self.mark_background()
-        try:
-            yield
-        finally:
-            self._local.background = False
-
     def mark_background(self) -> None:
-        """This thread's sessions are background ones from now on."""
+        """This thread's sessions are background ones from now on (a background pool's initializer calls it)."""
         self._local.background = True
 
     @contextmanager
