@@ -146,12 +146,28 @@ def test_station_toml_errors_name_the_file_and_key(tmp_path, text, expected):
 # -- accept runs against twins -----------------------------------------------------------------------------
 
 def _accept(tmp_path: Path, profile: str, *args: str) -> tuple[subprocess.CompletedProcess[str], RunSummary]:
+    """The acceptance's result and summary; taken once more where only the host's lateness kept it from PASS (an
+    inconclusive check judged nothing about the device, so PASS WITH WARNINGS for that reason proves nothing of
+    the suite either way; seen on a loaded CI host)."""
+    result, summary = _accept_once(tmp_path, profile, *args)
+    if _only_inconclusive(summary):
+        result, summary = _accept_once(tmp_path, profile, *args)
+    return result, summary
+
+
+def _only_inconclusive(summary: RunSummary) -> bool:
+    areas = summary.areas()
+    return (any(a.inconclusive for a in areas)
+            and not any(a.failed or a.warnings or a.not_testable for a in areas) and not summary.internal_errors())
+
+
+def _accept_once(tmp_path: Path, profile: str, *args: str) -> tuple[subprocess.CompletedProcess[str], RunSummary]:
     folder = tmp_path / "report"
     command = [sys.executable, "-m", "encoder_conformance", "accept", "--profile", profile, *args]
     if "--station" not in args:
         command += ["--report-dir", str(folder)]
     result = subprocess.run(command, cwd=REPO, capture_output=True, text=True, timeout=120)
-    found = sorted(tmp_path.rglob("run-summary.json"))
+    found = sorted(tmp_path.rglob("run-summary.json"), key=lambda path: path.stat().st_mtime_ns)
     assert found, f"no run-summary.json\n{result.stdout}\n{result.stderr}"
     return result, RunSummary.read(found[-1])
 
@@ -163,7 +179,7 @@ def test_accept_passes_with_station_settings_recorded(tmp_path):
                        encoding="utf-8")
     result, summary = _accept(tmp_path, "wachendorff-wdga-mt", "--station", str(station))
     assert result.returncode == RunExit.PASSED, result.stdout + result.stderr
-    assert summary.overall == "PASS"
+    assert summary.overall == "PASS", result.stdout[-3000:]
     assert summary.kind == "accept"
     assert (summary.station, summary.operator, summary.serial) == ("goods-in-2", "J. Meyer", "12345656")
     assert summary.settings["node-id"] == f"5 (from station {station})"

@@ -90,6 +90,7 @@ def test_a_run_reports_its_budget(tmp_path: Path):
     assert abs(budget["wall_s"] - budget["owed_s"] - budget["tester_s"]) < 0.01
     assert abs(budget["wall_s"] - budget["outside_tests_s"] - budget["inside_tests_s"]) < 0.01
     assert 0 <= budget["tester_share_inside"] <= 1
+    assert budget["host_wait_s"] is None or 0 <= budget["host_wait_s"] < budget["wall_s"]
     assert 0 < budget["startup_s"] <= budget["outside_tests_s"], "start-up to the first test: outside the tests"
     assert 0 < budget["owed_tester_cpu_s"] < budget["owed_s"]
     assert budget["owed_tester_cpu"].keys() <= budget["owed"].keys()

@@ -7,6 +7,7 @@ the notes.
 
 from __future__ import annotations
 
+import json
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -50,15 +51,27 @@ def twin_runs(full_runs):
     return results
 
 
+def _host_wait_s(folder: Path) -> float:
+    """What the host's load added to a run (its run-summary.json time_budget.host_wait_s: the test thread ready to
+    run while the host ran something else); 0 where the platform does not say."""
+    budget = json.loads((folder / "report" / "run-summary.json").read_text(encoding="utf-8"))["time_budget"]
+    return budget.get("host_wait_s") or 0.0
+
+
 def test_each_full_run_takes_well_under_a_minute(twin_runs, capsys):
-    """Prints each profile's run time and pytest summary; every run stays under 60 s."""
+    """Prints each profile's run time, the host's share of it and the pytest summary; every run's own time (its wall
+    time less what the host's load added) stays under 60 s. The runs share the host with the other self-tests:
+    their wall time says as much about that load as about the suite (seen: 68-84 s for runs of 35-45 s)."""
+    own = {}
     with capsys.disabled():
-        print("\nfull suite against each twin (run time, pytest summary):")
-        for profile, (_, completed, seconds) in sorted(twin_runs.items()):
-            lines = completed.output.strip().splitlines()
-            print(f"  {Path(profile).stem:32s} {seconds:5.1f} s  {lines[-1] if lines else '(no output)'}")
-    slow = {p: round(s) for p, (_, _, s) in twin_runs.items() if s >= 60}
-    assert not slow, f"runs of a minute or more: {slow}"
+        print("\nfull suite against each twin (run time, of it waiting for the host, pytest summary):")
+        for profile, (folder, completed, seconds) in sorted(twin_runs.items()):
+            waited = _host_wait_s(folder)
+            own[profile] = seconds - waited
+            last = (completed.output.strip().splitlines() or ["(no output)"])[-1]
+            print(f"  {Path(profile).stem:32s} {seconds:5.1f} s {waited:5.1f} s  {last}")
+    slow = {p: round(s) for p, s in own.items() if s >= 60}
+    assert not slow, f"runs of a minute or more of their own time: {slow}"
 
 
 @pytest.mark.parametrize("profile", PROFILES, ids=lambda profile: Path(profile).stem)

@@ -4,7 +4,9 @@
 The run's wall time is the process's (interpreter start, imports and collection included, as a user waits
 for them), read from /proc on Linux, else from the session's start. ``startup_s`` is the part of it before the first
 test began (interpreter, imports, option checks, collection: the tester's fixed cost; the device's own start-up
-checks run in the first test's set-up, after it).
+checks run in the first test's set-up, after it). ``host_wait_s`` is the time the thread that runs the tests was
+ready to run but the host ran something else (Linux schedstat; None elsewhere): what a loaded host added to the wall
+time, so that a run's own cost can be told from its host's load.
 """
 
 from __future__ import annotations
@@ -65,6 +67,14 @@ def _process_age_s() -> float | None:
         return None
 
 
+def _host_wait_s() -> float | None:
+    """Seconds this thread has waited on a run queue since it started (Linux schedstat), None elsewhere."""
+    try:
+        return int(Path("/proc/thread-self/schedstat").read_text().split()[1]) / 1e9
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 def start(config: pytest.Config) -> None:
     config.stash[KEY] = RunBudget()
 
@@ -119,6 +129,7 @@ def budget(config: pytest.Config) -> dict[str, Any] | None:
         "outside_tests_s": round(wall - in_tests, 3),  # start-up, collection, reports
         "startup_s": None if first is None else round(wall - (time.monotonic() - first), 3),  # to the first test
         "inside_tests_s": round(in_tests, 3),
+        "host_wait_s": None if (waited := _host_wait_s()) is None else round(waited, 3),
         "tester_share_inside": round(_tester_inside(run.tests) / in_tests, 3) if in_tests > 0 else None,
         **_owed_cpu(),
         "tests": len(run.tests),
@@ -163,4 +174,16 @@ def terminal_line(config: pytest.Config) -> str | None:
             f"tester {data['tester_s']:.1f} s ({100 * (data['tester_share'] or 0):.0f} %, "
             f"{data['outside_tests_s']:.1f} s outside the tests, {data['startup_s']:.1f} s to the first test, "
             f"median {data['tester_per_test_median_ms']} ms per test; "
-            f"{100 * (data['tester_share_inside'] or 0):.0f} % of the time inside the tests)")
+            f"{100 * (data['tester_share_inside'] or 0):.0f} % of the time inside the tests)" + _host_wait_text(data))
+
+
+#: a host wait shorter than this share of the run is a host's ordinary scheduling, not worth a word
+HOST_WAIT_WORTH_SAYING = 0.05
+
+
+def _host_wait_text(data: dict[str, Any]) -> str:
+    """'; of the run, the host kept the tests waiting 14.0 s (load beside the run)' where that is a notable share."""
+    waited = data.get("host_wait_s")
+    if not waited or waited < HOST_WAIT_WORTH_SAYING * data["wall_s"]:
+        return ""
+    return f"; the host kept the tests waiting {waited:.1f} s of it (other load on the host)"

@@ -31,6 +31,7 @@ from encoder_conformance.sim.control import parse_address
 from encoder_conformance.sim.engine.control_server import serve_control
 from encoder_conformance.sim.engine.faults import FaultSet
 from encoder_conformance.sim.engine.host import SimulatorHost
+from encoder_conformance.sim.engine.host_priority import raise_twin_priority
 from encoder_conformance.sim.engine.sim_log import configure_logging, log
 
 
@@ -100,6 +101,7 @@ def serve(
     # tolerance (reference/python-stack-measured.md §6: p99 4.9 ms -> 1.8 ms).
     sys.setswitchinterval(0.0005)
     configure_logging()
+    log.info("%s", raise_twin_priority())  # before any thread starts: they inherit it
     host = _open_host(can_bus)
     try:  # the ports first: a port in use is one line, before any node has powered on
         if can_bus is None:
