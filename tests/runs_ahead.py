@@ -1,8 +1,10 @@
 """The slow modules' suite sessions, started in the background when the self-test session starts (shared helper).
 
 Each slow module (a matrix, the twins' full runs) declares its sessions in a module-level function
-``sessions_ahead(runs: RunsAhead) -> {key: make}``. At session start the conftest starts every declared session of
-the selected modules in a background pool, in collection order (the order their fixtures will ask); they take
+``sessions_ahead(runs: RunsAhead) -> {key: make}``; a module whose slow part starts no suite session (a wheel's
+install) declares it as ``work_ahead``, started at once in a pool of its own. At session start the conftest starts
+every declared session of the selected modules in a background pool, in collection order (the order their fixtures
+will ask); they take
 only the session slots the foreground leaves free (encoder_conformance/runs/session_slots.py). A module's fixture
 asks for the same keys (``runs.results``) and gets each result made once: waited for where it is running, made
 there (in the foreground, before any background session) where it has not started. Before, each slow module ran
@@ -22,6 +24,9 @@ from typing import Any
 from encoder_conformance.runs.session_slots import SESSION_SLOTS
 from tests.suite_session import PARALLEL_RUNS, FaultRuns, FullRuns, _Once
 
+#: threads for the jobs that start no suite session (``start(..., side=True)``)
+SIDE_WORKERS = 2
+
 
 class RunsAhead(_Once[Hashable, Any]):
     """Results of the slow modules' sessions, made once per self-test session, most of them ahead of time."""
@@ -32,6 +37,7 @@ class RunsAhead(_Once[Hashable, Any]):
         self.full_runs = full_runs
         self.fault_runs = fault_runs
         self._pool: ThreadPoolExecutor | None = None
+        self._side_pool: ThreadPoolExecutor | None = None
         self._made = {"background": 0, "foreground": 0}
         self._counting = threading.Lock()
         self._waited_s = 0.0
@@ -45,13 +51,22 @@ class RunsAhead(_Once[Hashable, Any]):
 
         return super()._once(key, counted)
 
-    def start(self, jobs: Mapping[Hashable, Callable[[], Any]]) -> None:
-        """Makes each job in the background (errors are left for the foreground's own call to raise)."""
-        if self._pool is None:
-            self._pool = ThreadPoolExecutor(max_workers=PARALLEL_RUNS, thread_name_prefix="ahead",
-                                            initializer=SESSION_SLOTS.mark_background)
+    def start(self, jobs: Mapping[Hashable, Callable[[], Any]], side: bool = False) -> None:
+        """Makes each job in the background (errors are left for the foreground's own call to raise). ``side``:
+        jobs that start no suite session (a wheel's build and install), in a pool of their own that starts them at
+        once, not behind the sessions waiting for a slot."""
+        if side:
+            if self._side_pool is None:
+                self._side_pool = ThreadPoolExecutor(max_workers=SIDE_WORKERS, thread_name_prefix="ahead-side",
+                                                     initializer=SESSION_SLOTS.mark_background)
+            pool = self._side_pool
+        else:
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(max_workers=PARALLEL_RUNS, thread_name_prefix="ahead",
+                                                initializer=SESSION_SLOTS.mark_background)
+            pool = self._pool
         for key, make in jobs.items():
-            self._pool.submit(self._once, key, make)
+            pool.submit(self._once, key, make)
 
     def results(self, jobs: Mapping[Hashable, Callable[[], Any]], workers: int = PARALLEL_RUNS) -> dict[Hashable, Any]:
         """Each job's result, in the order given: those not started yet are made here, ``workers`` at a time."""
@@ -60,6 +75,11 @@ class RunsAhead(_Once[Hashable, Any]):
             results = dict(zip(jobs, pool.map(lambda job: self._once(*job), jobs.items()), strict=True))
         self._waited_s += time.monotonic() - start
         return results
+
+    def one(self, key: Hashable, make: Callable[[], Any]) -> Any:
+        """One job's result, made once: waited for where it is being made, made here where it has not started (a
+        background job that needs another's result asks this way)."""
+        return self._once(key, make)
 
     def summary_worth_printing(self) -> bool:
         return any(self._made.values())
@@ -71,5 +91,6 @@ class RunsAhead(_Once[Hashable, Any]):
 
     def close(self) -> None:
         """Drops the jobs not started; waits for the running ones (a session is never left behind)."""
-        if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
+        for pool in (self._pool, self._side_pool):
+            if pool is not None:
+                pool.shutdown(wait=True, cancel_futures=True)

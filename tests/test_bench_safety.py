@@ -21,8 +21,10 @@ import sys
 import threading
 import time
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import pytest
 from bench_twin import CUSTOMER_VALUES, REPO, as_found_problems, start_twin, wait_for_line
@@ -30,6 +32,7 @@ from bench_twin import CUSTOMER_VALUES, REPO, as_found_problems, start_twin, wai
 from encoder_conformance.dut.link.connection import OPEN_TIMEOUT_S
 from encoder_conformance.exit_codes import RunExit
 from encoder_conformance.runs.host_load import BusyGate
+from encoder_conformance.runs.session_slots import SESSION_SLOTS
 from tests.suite_session import PARALLEL_RUNS
 
 #: seconds after the start of the run at which Ctrl-C arrives (the suites start about 1.5 s in)
@@ -74,13 +77,35 @@ def _full_run(folder: Path, customer: dict | None) -> dict:
         twin.close()
 
 
+def sessions_ahead(runs) -> dict:
+    """The runs whose checks take no time limit (tests/runs_ahead.py): the complete destructive runs and the hard
+    crashes with their restore. The Ctrl-C runs stay here: they time the stop beside a busy process of their own."""
+    jobs = {("bench-safety", "destructive", name): lambda name=name, values=values: _held(
+                _full_run, runs.mktemp(name), values) for name, values in (("customer", CUSTOMER_VALUES),
+                                                                           ("factory", None))}
+    for after in (STORE_POWER_CYCLE, LSS_UNCONFIGURED):
+        jobs[("bench-safety", "crash", after)] = lambda after=after: _held(_crash_and_restore, runs.mktemp("crash"),
+                                                                            after)
+    return jobs
+
+
+def _held(run: Callable[..., dict], *args: Any) -> dict:
+    """``run(*args)`` holding a session slot (encoder_conformance/runs/session_slots.py), as a suite session does."""
+    with SESSION_SLOTS.held():
+        return run(*args)
+
+
 @pytest.fixture(scope="module")
-def destructive_runs(tmp_path_factory) -> dict[str, dict]:
+def bench_runs(runs_ahead) -> dict[tuple[str, str], dict]:
+    """The destructive runs ("destructive", "customer"/"factory") and the hard crashes ("crash", the test after
+    whose line the run is killed), two at a time, most made ahead."""
+    return {key[1:]: run for key, run in runs_ahead.results(sessions_ahead(runs_ahead), workers=2).items()}
+
+
+@pytest.fixture(scope="module")
+def destructive_runs(bench_runs) -> dict[str, dict]:
     """A complete destructive run against a twin with a customer configuration and one in factory state."""
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        customer = pool.submit(_full_run, tmp_path_factory.mktemp("customer"), CUSTOMER_VALUES)
-        factory = pool.submit(_full_run, tmp_path_factory.mktemp("factory"), None)
-        return {"customer": customer.result(), "factory": factory.result()}
+    return {name: bench_runs[("destructive", name)] for name in ("customer", "factory")}
 
 
 def test_destructive_run_leaves_the_customer_configuration(destructive_runs):
@@ -101,13 +126,20 @@ def test_stored_configuration_passes_what_factory_state_passes(destructive_runs)
     assert not lost, f"pass in factory state, not with the customer's configuration: {lost}"
 
 
+def _up_to(at: float | str) -> list[str]:
+    """A run's selection for a moment: the whole suite for a moment in time; for the moment after a test's line,
+    that test's module only (the signal lands in the module's next test all the same; the modules before it took
+    ~30 s of each such run and prove nothing about the moment)."""
+    return [] if isinstance(at, float) else ["-k", at.split(".py::")[0]]
+
+
 def _interrupted_run(folder: Path, at: float | str, busy: BusyGate) -> dict:
     """Start a run, send SIGINT at ``at`` seconds (or when that test starts), check the device afterwards. The
     busy process spins from just before the signal until the run has ended (what the 2 s bound is about)."""
     twin = start_twin(folder, CUSTOMER_VALUES)
     try:
         before, stored_before = twin.read_everything(), twin.stored()
-        run = twin.start_run(folder / "report", "-v")
+        run = twin.start_run(folder / "report", "-v", *_up_to(at))
         seen: list[str] = []
         if isinstance(at, str):
             assert wait_for_line(run, at, 120, seen), f"{at} never ended:\n{''.join(seen[-20:])}"
@@ -162,33 +194,47 @@ def test_ctrl_c_figures_printed(interrupted_runs, capsys):
     assert len(interrupted_runs) == len(MOMENTS)
 
 
-@pytest.mark.parametrize("after", [STORE_POWER_CYCLE, LSS_UNCONFIGURED], ids=["store power cycle", "LSS node-ID 255"])
-def test_restore_command_finishes_after_a_hard_crash(tmp_path, after):
-    """SIGKILL during the power cycle of the store/restore suite, or while the LSS suite has made the device
-    unconfigured (node-ID 255 stored); 'restore --from' the snapshot (with the bench's power commands) gives
-    the node-ID back by LSS and puts everything back."""
-    twin = start_twin(tmp_path / "twin", CUSTOMER_VALUES)
+def _crash_and_restore(folder: Path, after: str) -> dict:
+    """A run killed (SIGKILL) after ``after``'s line, then 'restore --from' its snapshot with the bench's power
+    commands; what came of it and what is left changed."""
+    twin = start_twin(folder / "twin", CUSTOMER_VALUES)
     try:
         before, stored_before = twin.read_everything(), twin.stored()
-        run = twin.start_run(tmp_path / "report", "-v")
+        run = twin.start_run(folder / "report", "-v", *_up_to(after))
         seen: list[str] = []
-        assert wait_for_line(run, after, 120, seen), "".join(seen[-20:])
+        reached = wait_for_line(run, after, 120, seen)
+        if not reached:
+            run.kill()
+            run.communicate(timeout=10)
+            return {"reached": False, "seen": "".join(seen[-20:])}
         threading.Event().wait(0.05)
         run.kill()
         run.communicate(timeout=10)
-        snapshot = tmp_path / "report" / "device-snapshot.json"
-        assert snapshot.exists()
+        snapshot = folder / "report" / "device-snapshot.json"
+        if not snapshot.exists():
+            return {"reached": True, "snapshot": False}
         restore = subprocess.run([sys.executable, "-m", "encoder_conformance", "restore", "--from", str(snapshot),
                                   "--can-interface", "remote", "--can-channel", twin.channel,
                                   "--power-on-cmd", twin.power_command("power-on"),
                                   "--power-off-cmd", twin.power_command("power-off")],
                                  cwd=REPO, capture_output=True, text=True, timeout=120)
-        assert restore.returncode == RunExit.PASSED, restore.stdout + restore.stderr
-        assert "device restored as found" in restore.stdout
-        problems = as_found_problems(twin, before, stored_before)
-        assert not problems, "left changed:\n" + "\n".join(problems[:20])
+        return {"reached": True, "snapshot": True, "returncode": restore.returncode,
+                "output": restore.stdout + restore.stderr, "problems": as_found_problems(twin, before, stored_before)}
     finally:
         twin.close()
+
+
+@pytest.mark.parametrize("after", [STORE_POWER_CYCLE, LSS_UNCONFIGURED], ids=["store power cycle", "LSS node-ID 255"])
+def test_restore_command_finishes_after_a_hard_crash(bench_runs, after):
+    """SIGKILL during the power cycle of the store/restore suite, or while the LSS suite has made the device
+    unconfigured (node-ID 255 stored); 'restore --from' the snapshot (with the bench's power commands) gives
+    the node-ID back by LSS and puts everything back."""
+    crash = bench_runs[("crash", after)]
+    assert crash["reached"], crash.get("seen")
+    assert crash["snapshot"], "no device-snapshot.json"
+    assert crash["returncode"] == RunExit.PASSED, crash["output"]
+    assert "device restored as found" in crash["output"]
+    assert not crash["problems"], "left changed:\n" + "\n".join(crash["problems"][:20])
 
 
 def _lost_device_run(folder: Path, how: str) -> tuple[subprocess.CompletedProcess[str], float]:

@@ -9,7 +9,6 @@ simulated twin of the draft passes the conformance suites with no failure, judge
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -19,7 +18,7 @@ from encoder_conformance.profile import datatypes
 from encoder_conformance.profile.eds import export_eds, objects_from_eds, profile_draft_from_eds, write_profile_draft
 from encoder_conformance.profile.loader import load_profile
 from tests.sim_rig import twin_of
-from tests.suite_session import PARALLEL_RUNS, run_suite
+from tests.suite_session import SessionResult, run_suite
 
 EDS_DIR = Path(__file__).parent / "data" / "eds"
 CORPUS = sorted([*EDS_DIR.glob("*.eds"), *(EDS_DIR / "vendors").glob("*.eds")])
@@ -79,19 +78,24 @@ def _probed_draft_file(eds: Path, twin_profile: Path, folder: Path) -> Path:
     return out
 
 
-@pytest.fixture(scope="module")
-def twin_runs(tmp_path_factory):
-    """The suites against the twin of each draft (a few at a time): the twin plays the draft the EDS gives, the
-    suites judge it by that draft as the live probe corrected it (so the probe's corrections are tested too)."""
-    def one(eds: Path):
-        folder = tmp_path_factory.mktemp(eds.stem)
-        plain = _draft_file(eds, folder)
-        probed = _probed_draft_file(eds, plain, folder)
-        variants = [arg for name in TWIN_VARIANTS.get(eds.stem, ()) for arg in ("--ec-sim-fault", name)]
-        return eds.stem, run_suite(folder, "--ec-profile", str(probed), "--ec-sim-profile", str(plain), *variants)[0]
+def _draft_twin_run(eds: Path, folder: Path) -> SessionResult:
+    """The suites against the twin of the draft the EDS gives, judged by that draft as the live probe corrected it
+    (so the probe's corrections are tested too)."""
+    plain = _draft_file(eds, folder)
+    probed = _probed_draft_file(eds, plain, folder)
+    variants = [arg for name in TWIN_VARIANTS.get(eds.stem, ()) for arg in ("--ec-sim-fault", name)]
+    return run_suite(folder, "--ec-profile", str(probed), "--ec-sim-profile", str(plain), *variants)[0]
 
-    with ThreadPoolExecutor(max_workers=PARALLEL_RUNS) as pool:
-        return dict(pool.map(one, CORPUS))
+
+def sessions_ahead(runs) -> dict:
+    """Each corpus file's draft twin run (tests/runs_ahead.py)."""
+    return {("eds-corpus", eds.stem): lambda eds=eds: _draft_twin_run(eds, runs.mktemp(eds.stem)) for eds in CORPUS}
+
+
+@pytest.fixture(scope="module")
+def twin_runs(runs_ahead):
+    """The suites against the twin of each draft (a few at a time, most made ahead)."""
+    return {key[1]: completed for key, completed in runs_ahead.results(sessions_ahead(runs_ahead)).items()}
 
 
 @pytest.mark.parametrize("name", IDS)

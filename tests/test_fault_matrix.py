@@ -55,15 +55,18 @@ def _functions(result, outcome: str) -> set[str]:
 
 
 def sessions_ahead(runs) -> dict:
-    """The main matrix's sessions (tests/runs_ahead.py): the fault-free run and each fault's run."""
+    """The main matrix's sessions (tests/runs_ahead.py): the fault-free run and each fault's run; then the
+    complement matrices, which wait for the main matrix's results in the background, not in this module's turn."""
     jobs = {("full", MAIN_PROFILE): lambda: runs.full_runs(MAIN_PROFILE)}
     for fault in faults_for(_effects(MAIN_PROFILE)):
         jobs[("fault", MAIN_PROFILE, fault)] = lambda fault=fault: runs.fault_runs(MAIN_PROFILE, fault)
+    jobs[("fault-matrix", "main")] = lambda: _main_matrix(runs.mktemp, runs.full_runs, runs.fault_runs)
+    jobs[("fault-matrix", "complements")] = lambda: _complement_matrices(
+        runs.one(("fault-matrix", "main"), jobs[("fault-matrix", "main")]), runs.mktemp)
     return jobs
 
 
-@pytest.fixture(scope="module")
-def main_matrix(tmp_path_factory, full_runs, fault_runs):
+def _main_matrix(mktemp, full_runs, fault_runs):
     """Every fault that can show on the main profile (faults of quirks it lacks go to the complements). The
     baseline is the session's full run of the main profile's twin (tests/suite_session.py), shared with
     test_twins and test_shuffled_order: the same command the matrix ran for it, but for --tb. Each fault's run
@@ -76,12 +79,11 @@ def main_matrix(tmp_path_factory, full_runs, fault_runs):
         return read_run(fault, *fault_runs(MAIN_PROFILE, fault))
 
     faults = faults_for(_effects(MAIN_PROFILE))
-    return run_matrix(MAIN_PROFILE, faults, tmp_path_factory.mktemp("matrix-main"), workers=PARALLEL_RUNS,
+    return run_matrix(MAIN_PROFILE, faults, mktemp("matrix-main"), workers=PARALLEL_RUNS,
                       targeted=True, baseline_run=baseline, fault_run=fault_run)
 
 
-@pytest.fixture(scope="module")
-def complement_matrices(main_matrix, tmp_path_factory):
+def _complement_matrices(main_matrix, mktemp):
     """The tests the main profile had to skip, each run on the first complement profile where it applies.
 
     Faults the main matrix never caught run first and always; the others only until each
@@ -96,7 +98,7 @@ def complement_matrices(main_matrix, tmp_path_factory):
     for profile in COMPLEMENT_PROFILES:
         if not uncovered:
             break
-        folder = tmp_path_factory.mktemp("matrix-extra")
+        folder = mktemp("matrix-extra")
         applicable = set(faults_for(_effects(profile)))
         matrix = run_until_caught(profile, [f for f in order if f in applicable], folder,
                                   " or ".join(sorted(uncovered)), workers=PARALLEL_RUNS, must_try=unseen & applicable,
@@ -105,6 +107,21 @@ def complement_matrices(main_matrix, tmp_path_factory):
         uncovered -= _functions(matrix[0], "passed")
         unseen -= {r.fault for r in matrix[1] if r.keys_with("failed") | r.keys_with("error")}
     return matrices, uncovered
+
+
+@pytest.fixture(scope="module")
+def main_matrix(runs_ahead):
+    """The main matrix (made ahead where it could be): _main_matrix."""
+    jobs = sessions_ahead(runs_ahead)
+    return runs_ahead.results({key: jobs[key] for key in [("fault-matrix", "main")]})[("fault-matrix", "main")]
+
+
+@pytest.fixture(scope="module")
+def complement_matrices(main_matrix, runs_ahead):
+    """The complement matrices (made ahead where they could be): _complement_matrices."""
+    jobs = sessions_ahead(runs_ahead)
+    key = ("fault-matrix", "complements")
+    return runs_ahead.results({key: jobs[key]})[key]
 
 
 def test_fault_free_simulator_passes_everything(main_matrix):

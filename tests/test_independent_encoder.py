@@ -26,6 +26,7 @@ from pathlib import Path
 import pytest
 
 from encoder_conformance.dut.bench.actuator import ShaftDrivePlugin
+from encoder_conformance.runs.session_slots import SESSION_SLOTS
 from tests.independent.encoder_function import (
     CamSettings,
     CamSwitch,
@@ -166,17 +167,33 @@ class Bench:
         return self.runs[variant]
 
 
-@pytest.fixture(scope="module")
-def bench(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Bench]:
-    folder = tmp_path_factory.mktemp("independent")
+def _bench_with_every_run(folder: Path) -> Bench:
+    """The bus hub, the EDS, and the suites run against the conformant device and each break, one after another
+    (one device on the bus at a time), holding a session slot (encoder_conformance/runs/session_slots.py)."""
     eds = folder / f"{PROFILE}.eds"
     subprocess.run([sys.executable, "-m", "encoder_conformance", "profile", "to-eds", PROFILE, "-o", str(eds)],
                    cwd=REPO, env=_environment(), check=True, capture_output=True, text=True)
-    hub, channel = _start(["tests.independent.bus_hub"], folder / "bus.log")
-    bench = Bench(folder, channel, eds)
-    yield bench
-    _stop(hub)
-    print(_table(bench.runs))
+    with SESSION_SLOTS.held():
+        hub, channel = _start(["tests.independent.bus_hub"], folder / "bus.log")
+        bench = Bench(folder, channel, eds)
+        try:
+            for variant in ["conformant", *CATCHES]:
+                bench.run(variant)
+        finally:
+            _stop(hub)
+    return bench
+
+
+def sessions_ahead(runs) -> dict:
+    """Every run against the independent device (tests/runs_ahead.py)."""
+    return {("independent-encoder",): lambda: _bench_with_every_run(runs.mktemp("independent"))}
+
+
+@pytest.fixture(scope="module")
+def bench(runs_ahead) -> Iterator[Bench]:
+    made = runs_ahead.results(sessions_ahead(runs_ahead))[("independent-encoder",)]
+    yield made
+    print(_table(made.runs))
 
 
 def _table(runs: dict[str, Run]) -> str:

@@ -11,12 +11,12 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
 
 from encoder_conformance.exit_codes import RunExit
+from encoder_conformance.runs.session_slots import SESSION_SLOTS
 from encoder_conformance.sim.fault_catalogue import VARIANTS
 from tests.bench_twin import CUSTOMER_VALUES, REPO, ExternalTwin, as_found_problems, start_twin
 
@@ -54,12 +54,22 @@ def _bench_run(folder: Path, bench: str) -> dict:
         twin.close()
 
 
+def _bench_session(folder: Path, bench: str) -> dict:
+    """A bench run holding a session slot (encoder_conformance/runs/session_slots.py), as a suite session does."""
+    with SESSION_SLOTS.held():
+        return _bench_run(folder, bench)
+
+
+def sessions_ahead(runs) -> dict:
+    """Each bench's run (tests/runs_ahead.py)."""
+    return {("variant-bench", bench): lambda bench=bench: _bench_session(runs.mktemp(bench.split()[0]), bench)
+            for bench in BENCHES}
+
+
 @pytest.fixture(scope="module")
-def bench_runs(tmp_path_factory) -> dict[str, dict]:
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        futures = {bench: pool.submit(_bench_run, tmp_path_factory.mktemp(bench.split()[0]), bench)
-                   for bench in BENCHES}
-        return {bench: future.result() for bench, future in futures.items()}
+def bench_runs(runs_ahead) -> dict[str, dict]:
+    """Both benches' runs, two at a time (made ahead where they could be)."""
+    return {key[1]: run for key, run in runs_ahead.results(sessions_ahead(runs_ahead), workers=2).items()}
 
 
 def test_the_benches_play_known_variants():

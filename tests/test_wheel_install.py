@@ -31,10 +31,8 @@ def _run(command: list[str], cwd: Path, timeout: float = 300) -> subprocess.Comp
     return subprocess.run(command, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
 
 
-@pytest.fixture(scope="module")
-def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The bin/ folder of a fresh virtual environment with the built wheel installed."""
-    root = tmp_path_factory.mktemp("wheel")
+def _install(root: Path) -> Path:
+    """The bin/ folder of a fresh virtual environment under ``root`` with the built wheel installed."""
     built = _run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(root / "dist"),
                   str(REPO)], cwd=root)
     assert built.returncode == 0, built.stderr
@@ -47,6 +45,17 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
         pytest.skip(f"the package index cannot be reached from here: {done.stderr.strip()[-200:]}")
     assert done.returncode == 0, done.stderr
     return bin_dir
+
+
+def work_ahead(runs) -> dict:
+    """The wheel's build and install (tests/runs_ahead.py): pip's half-minute, beside the other modules."""
+    return {("wheel",): lambda: _install(runs.mktemp("wheel"))}
+
+
+@pytest.fixture(scope="module")
+def installed(runs_ahead) -> Path:
+    """The bin/ folder of a fresh virtual environment with the built wheel installed (made ahead where it can be)."""
+    return runs_ahead.results(work_ahead(runs_ahead))[("wheel",)]
 
 
 def test_the_wheel_carries_suites_fixtures_and_profiles(installed):

@@ -127,7 +127,7 @@ def check_periodic(timestamps: list[float], period_ms: float, tolerance: Heartbe
         may_be_late = 0  # a frame half a period off is a missing or extra one, not a late one
     period_off = abs(fit.fitted_period_ms - period_ms) > allowed
     if host is not None and (period_off or len(late) > may_be_late):
-        _inconclusive_if_host_explains(timestamps, period_ms, allowed, late, period_off, host, what)
+        _inconclusive_if_host_explains(timestamps, period_ms, allowed, late, fit.fitted_period_ms, host, what)
     assert not period_off, (
         f"{what}: period {fit.fitted_period_ms:.2f} ms (fitted over {len(timestamps)} frames; mean interval "
         f"{stats.mean_ms:.2f} ms), expected {period_ms} ms within {allowed:.1f} ms"
@@ -139,14 +139,38 @@ def check_periodic(timestamps: list[float], period_ms: float, tolerance: Heartbe
     )
 
 
+#: the host's bound on the fitted period (host_period_shift_ms) is taken twice over before a period off while the
+#: host was late fails the device: the bound is exact only for a device exactly on its period
+HOST_SHIFT_MARGIN = 2.0
+
+
+def host_period_shift_ms(count: int, worst_ms: float) -> float:
+    """The most a host whose lateness stayed within ``worst_ms`` can move the period fitted over ``count`` frames
+    (``schedule_fit``: Theil-Sen, the median of the pairwise slopes). A frame stamped late by up to ``worst_ms``
+    moves the slope of a pair ``gap`` frames apart by at most ``worst_ms / gap``; more than half of the pairs are at
+    least the returned gap apart, so their median moves no further (about 3.4 x ``worst_ms`` / ``count``: 1 ms for
+    50 frames stamped up to 15 ms late). The twin's timing thread keeps absolute deadlines, so its own lateness
+    does not add up either (sim/engine/scheduler.py)."""
+    pairs = count * (count - 1) // 2
+    for gap in range(count - 1, 0, -1):
+        if (count - gap) * (count - gap + 1) > pairs:  # twice the pairs at least ``gap`` apart: more than half
+            return worst_ms / gap
+    return worst_ms
+
+
 def _inconclusive_if_host_explains(timestamps: list[float], period_ms: float, allowed: float,
-                                   late: list[tuple[int, float]], period_off: bool, host: HostLatency,
+                                   late: list[tuple[int, float]], fitted_ms: float, host: HostLatency,
                                    what: str) -> None:
     """Skip as inconclusive where the tester's host, not the device, explains what would fail."""
+    period_off = abs(fitted_ms - period_ms) > allowed
     window = period_ms / 1000
     unexplained = [(n, o) for n, o in late if host.worst_near(timestamps[n], window) < abs(o) - allowed]
     if period_off and not host.sustained(allowed):
         return  # the period itself is off while the host kept time: the device's
+    worst = max(host.worst_ms, host.twin_worst_ms or 0.0)
+    if period_off and abs(fitted_ms - period_ms) - allowed > HOST_SHIFT_MARGIN * host_period_shift_ms(len(timestamps),
+                                                                                                     worst):
+        return  # off by more than any lateness of the host could move the fitted period: the device's
     if unexplained and not period_off:
         return  # a frame off the schedule while the host was on time: the device's
     not_judged(Hold.HOST_LATE, f"{what} timing cannot be judged, the tester's host was overloaded: "

@@ -101,7 +101,7 @@ def serve(
     # tolerance (reference/python-stack-measured.md §6: p99 4.9 ms -> 1.8 ms).
     sys.setswitchinterval(0.0005)
     configure_logging()
-    log.info("%s", raise_twin_priority())  # before any thread starts: they inherit it
+    priority = raise_twin_priority()  # before any thread starts: they inherit it
     host = _open_host(can_bus)
     try:  # the ports first: a port in use is one line, before any node has powered on
         if can_bus is None:
@@ -129,6 +129,7 @@ def serve(
         "nodes": [{**node.describe(), "serial_number": node.profile.simulator.serial_number}
                   for node in host.nodes],
     }
+    log.info("%s", priority)  # once the ports are taken: a port in use stays a one-line error
     _log_start(host, can_url, control_address)
     if ready_line:
         print("READY " + json.dumps(info), flush=True)
