@@ -73,6 +73,23 @@ def pytest_terminal_summary(terminalreporter):
         terminalreporter.write_line(line)
 
 
+def pytest_collection_modifyitems(session, config, items):
+    """The modules whose results are made ahead (``sessions_ahead``, ``work_ahead``) run after the others, and a
+    module with ``RUNS_LAST`` after those: the quick modules run first, beside the background, which has most of
+    those results ready when their turn comes (a module that waited for them in the middle held every quick module
+    up behind it). Not where ``RUNS_AHEAD_ENV`` is 0."""
+    if os.environ.get(RUNS_AHEAD_ENV) == "0":
+        return
+
+    def turn(item) -> int:
+        module = getattr(item, "module", None)
+        if getattr(module, "RUNS_LAST", False):
+            return 2  # times something against the host's load: after the background is done
+        return 1 if hasattr(module, "sessions_ahead") or hasattr(module, "work_ahead") else 0
+
+    items.sort(key=turn)  # stable: each module's own order, and the modules' among themselves, kept
+
+
 @pytest.fixture(autouse=True, scope="session")
 def _slow_sessions_started_ahead(request, runs_ahead):
     """Starts every session the selected slow modules declare (``sessions_ahead``), in collection order, at most

@@ -48,6 +48,8 @@ MOMENTS: list[float | str] = [*INTERRUPT_AT_S, *INTERRUPT_AFTER]
 #: no background session starts while this module runs (tests/runs_ahead.py): it times Ctrl-C beside a busy
 #: process of its own, and its fixtures run two destructive runs at a time
 FOREGROUND_SLOTS = PARALLEL_RUNS
+#: after every other module (tests/conftest.py): its Ctrl-C runs are timed, best when the background is done
+RUNS_LAST = True
 CTRL_C_LIMIT_S = 2.0  # the run's own clock, interrupt to verdict (run-outcome.json stopped_after_s)
 #: what this harness measures on top (process exit, its own wake-up beside a busy process): CI saw 2.08 s
 #: from send_signal to communicate() for a run that stopped in time

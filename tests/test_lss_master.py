@@ -9,6 +9,7 @@ wire would (CANopenNode drops a request that comes while it is still finishing i
 from __future__ import annotations
 
 import itertools
+import threading
 import time
 import uuid
 from collections.abc import Iterator
@@ -20,6 +21,7 @@ import pytest
 from encoder_conformance.cia.cia305 import MASTER_COB_ID, SLAVE_COB_ID, UNCONFIGURED_NODE_ID, LssState
 from encoder_conformance.dut.link.frames import FrameLog
 from encoder_conformance.dut.lss import lss_master
+from encoder_conformance.dut.lss.lss_find import WIDEST_WINDOW, scan_unconfigured
 from encoder_conformance.dut.lss.lss_master import FRAME_BITS, FRAME_S, LssAddress, LssMaster
 from encoder_conformance.profile.loader import load_profile
 from encoder_conformance.sim.engine.lss_slave import LssSlave
@@ -44,15 +46,22 @@ class LssBus:
 
 @pytest.fixture
 def lss_bus(request) -> Iterator[LssBus]:
-    """``request.param`` (default 1) unconfigured slaves with serials 1000, 1001, ... and a master."""
-    count = getattr(request, "param", 1)
+    """``request.param`` (default 1) unconfigured slaves with serials 1000, 1001, ... and a master; a tuple (count,
+    seconds): slaves whose every answer comes that much later (a loaded bench PC or a slow link)."""
+    count, delay_s = (param, 0.0) if isinstance(param := getattr(request, "param", 1), int) else param
     channel = f"lss-{uuid.uuid4().hex[:8]}"
     slave_side = can.Bus(interface="virtual", channel=channel)
     master_side = can.Bus(interface="virtual", channel=channel)
     node_ids = [UNCONFIGURED_NODE_ID] * count
 
-    def answer(data: bytes) -> None:
+    def send_answer(data: bytes) -> None:
         slave_side.send(can.Message(arbitration_id=SLAVE_COB_ID, data=data, is_extended_id=False))
+
+    def answer(data: bytes) -> None:
+        if delay_s:
+            threading.Timer(delay_s, send_answer, (data,)).start()
+        else:
+            send_answer(data)
 
     slaves = [LssSlave(ALL_SERVICES, lambda n=n: (VENDOR, PRODUCT, REVISION, 1000 + n),
                        lambda n=n: node_ids[n], answer) for n in range(count)]
@@ -112,6 +121,18 @@ def test_fastscan_finds_eight_slaves_in_under_five_seconds(lss_bus):
     assert sorted(found) == list(range(1000, 1008))
     print(f"\nfastscan, eight slaves, vendor and product known: {elapsed:.2f} s, {master.steps} frames")
     assert elapsed < 5.0, f"eight slaves took {elapsed:.2f} s ({master.steps} frames)"
+
+
+@pytest.mark.parametrize("lss_bus", [(2, 0.015)], indirect=True)
+def test_a_scan_whose_answers_come_after_the_window_widens_it_and_finds_every_slave(lss_bus):
+    """Answers 15 ms after each request, a 10 ms window: every fastscan is spoiled until the scan has doubled the
+    window (CI, stop 49: eight slaves under load, three spoiled scans in a row, and 'lss scan' exited 69)."""
+    result = scan_unconfigured(lss_bus.master, (VENDOR, PRODUCT, None, None))
+    assert sorted(address.serial for address in result.devices) == [1000, 1001]
+    assert not result.unresolved
+    assert result.widened_to_s is not None
+    assert 0.015 < result.widened_to_s <= WIDEST_WINDOW * RESPONSE_S
+    assert lss_bus.master.response_s == RESPONSE_S, "the scan gives the window back"
 
 
 def test_selective_switch_inquiry_and_configuration(lss_bus):

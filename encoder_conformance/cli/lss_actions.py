@@ -117,6 +117,9 @@ def scan(options: LssOptions, as_json: bool = False) -> int:
                 print(f"{address.describe()} ({address.serial})")
             print(f"{len(result.devices)} unconfigured device(s) in {result.seconds:.2f} s "
                   f"({result.frames} LSS frames)")
+        if result.widened_to_s is not None:
+            _say(f"lss: answers came later than the response window: the scan waited up to "
+                 f"{result.widened_to_s * 1000:.0f} ms per step (--response-ms {options.response_s * 1000:.0f})")
         if result.unresolved:
             _say("lss: unconfigured devices answered that no fastscan could find: their vendor-ID or product code "
                  "differs from --profile's, or their answers came later than --response-ms")

@@ -6,7 +6,7 @@ global puts them all back in waiting state. Each fastscan first tries the previo
 product, revision and serial + 1 (one step each), which finds a batch of units in a few steps apiece.
 An answer later than the response window misleads a step (it counts for the next one); a fastscan or
 a bisection spoiled that way is noticed (nobody found although devices answered; the revision found
-does not answer) and repeated.
+does not answer) and repeated, a scan's fastscan with the window doubled (up to ``WIDEST_WINDOW`` times).
 """
 
 from __future__ import annotations
@@ -40,6 +40,9 @@ SPOILED_RETRIES = 3
 BISECTIONS = 2
 #: after a fastscan that found nobody, answers are still looked for this many response windows
 LATE_WINDOWS = 2
+#: a fastscan spoiled by answers later than the window is tried again with the window doubled, up to this many
+#: times the one given (--response-ms): the devices' answers show what they need (a loaded bench PC or link)
+WIDEST_WINDOW = 8
 
 Progress = Callable[[int, LssAddress], None]
 
@@ -53,6 +56,7 @@ class ScanResult:
     frames: int = 0
     repeated: LssAddress | None = None  # found twice: it did not stay in configuration state (list incomplete)
     unresolved: bool = False  # unconfigured devices answered that no fastscan could find (list incomplete)
+    widened_to_s: float | None = None  # the response window the late answers made the scan take, if it grew
 
 
 def scan_unconfigured(master: LssMaster, known: Sequence[int | None] = (None, None, None, None),
@@ -63,6 +67,7 @@ def scan_unconfigured(master: LssMaster, known: Sequence[int | None] = (None, No
     master.switch_global(LssState.WAITING)  # a device an earlier session left in configuration state takes part
     guess: tuple[int | None, ...] = (None, None, None, None)
     spoiled = 0
+    given_s = master.response_s
     try:
         while len(result.devices) < MAX_DEVICES:
             mark = master.frames.mark()
@@ -75,6 +80,9 @@ def scan_unconfigured(master: LssMaster, known: Sequence[int | None] = (None, No
                 if spoiled > SPOILED_RETRIES:
                     result.unresolved = True
                     break
+                if master.response_s < WIDEST_WINDOW * given_s:  # answers came after the window: give them more
+                    master.response_s = min(2 * master.response_s, WIDEST_WINDOW * given_s)
+                    result.widened_to_s = master.response_s
                 continue
             spoiled = 0
             if address in result.devices:
@@ -86,6 +94,7 @@ def scan_unconfigured(master: LssMaster, known: Sequence[int | None] = (None, No
             if progress is not None:
                 progress(len(result.devices), address)
     finally:
+        master.response_s = given_s
         master.switch_global(LssState.WAITING)
     result.seconds = time.perf_counter() - start
     result.frames = master.steps - steps
