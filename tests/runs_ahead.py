@@ -26,8 +26,6 @@ from tests.suite_session import PARALLEL_RUNS, FaultRuns, FullRuns, _Once
 
 #: threads for the jobs that start no suite session (``start(..., side=True)``)
 SIDE_WORKERS = 2
-#: sessions the background may run beyond PARALLEL_RUNS while the foreground only waits for its results
-WAITING_EXTRA_SLOTS = 1
 
 
 class RunsAhead(_Once[Hashable, Any]):
@@ -64,26 +62,17 @@ class RunsAhead(_Once[Hashable, Any]):
             pool = self._side_pool
         else:
             if self._pool is None:
-                self._pool = ThreadPoolExecutor(max_workers=PARALLEL_RUNS + WAITING_EXTRA_SLOTS,
-                                                thread_name_prefix="ahead", initializer=SESSION_SLOTS.mark_background)
+                self._pool = ThreadPoolExecutor(max_workers=PARALLEL_RUNS, thread_name_prefix="ahead",
+                                                initializer=SESSION_SLOTS.mark_background)
             pool = self._pool
         for key, make in jobs.items():
             pool.submit(self._once, key, make)
 
     def results(self, jobs: Mapping[Hashable, Callable[[], Any]], workers: int = PARALLEL_RUNS) -> dict[Hashable, Any]:
-        """Each job's result, in the order given: those not started yet are made here, ``workers`` at a time. While
-        the foreground waits here for the background, the background may run ``WAITING_EXTRA_SLOTS`` more sessions:
-        nothing else of the foreground runs meanwhile (measured: the host 35-40 % idle in those minutes)."""
+        """Each job's result, in the order given: those not started yet are made here, ``workers`` at a time."""
         start = time.monotonic()
-        widen = self._pool is not None and not SESSION_SLOTS.is_background()
-        if widen:
-            SESSION_SLOTS.set_limit(PARALLEL_RUNS + WAITING_EXTRA_SLOTS)
-        try:
-            with ThreadPoolExecutor(max_workers=workers) as pool:
-                results = dict(zip(jobs, pool.map(lambda job: self._once(*job), jobs.items()), strict=True))
-        finally:
-            if widen:
-                SESSION_SLOTS.set_limit(PARALLEL_RUNS)
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            results = dict(zip(jobs, pool.map(lambda job: self._once(*job), jobs.items()), strict=True))
         self._waited_s += time.monotonic() - start
         return results
 
