@@ -182,7 +182,7 @@ HOST_WAIT_WORTH_SAYING = 0.05
 
 
 def _host_wait_text(data: dict[str, Any]) -> str:
-    """'; of the run, the host kept the tests waiting 14.0 s (load beside the run)' where that is a notable share."""
+    """'; the host kept the tests waiting 14.0 s of it (other load on the host)' where that is a notable share."""
     waited = data.get("host_wait_s")
     if not waited or waited < HOST_WAIT_WORTH_SAYING * data["wall_s"]:
         return ""

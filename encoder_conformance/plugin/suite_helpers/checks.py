@@ -165,14 +165,14 @@ def _inconclusive_if_host_explains(timestamps: list[float], period_ms: float, al
     if host.clock_step_ms > allowed:  # the stamps themselves jumped (CI, stop 49: one interval of 10087 ms)
         not_judged(Hold.HOST_LATE, f"{what} timing cannot be judged, the host's wall clock (the clock of the frame "
                     f"timestamps) was stepped during the capture: {host.describe()}; tolerance {allowed:.1f} ms")
-    period_off = abs(fitted_ms - period_ms) > allowed
+    beyond_ms = abs(fitted_ms - period_ms) - allowed  # how far the fitted period lies outside the band
+    period_off = beyond_ms > 0
     window = period_ms / 1000
     unexplained = [(n, o) for n, o in late if host.worst_near(timestamps[n], window) < abs(o) - allowed]
     if period_off and not host.sustained(allowed):
         return  # the period itself is off while the host kept time: the device's
     worst = max(host.worst_ms, host.twin_worst_ms or 0.0)
-    if period_off and abs(fitted_ms - period_ms) - allowed > HOST_SHIFT_MARGIN * host_period_shift_ms(len(timestamps),
-                                                                                                     worst):
+    if period_off and beyond_ms > HOST_SHIFT_MARGIN * host_period_shift_ms(len(timestamps), worst):
         return  # off by more than any lateness of the host could move the fitted period: the device's
     if unexplained and not period_off:
         return  # a frame off the schedule while the host was on time: the device's
